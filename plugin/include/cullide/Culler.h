@@ -1,0 +1,41 @@
+// The culler interface and its two implementations: the GPU visibility culler (CULLIDE) and a brute-force CPU
+// reference used as the oracle in tests.
+#pragma once
+
+#include "cullide/Object.h"
+#include "cullide/Result.h"
+#include "cullide/Settings.h"
+
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace cullide {
+
+/// Thrown when no usable EGL/OpenGL is available; the message names what is missing and the package providing it.
+class GlUnavailableError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+class Culler {
+public:
+    virtual ~Culler() = default;
+    Culler() = default;
+    Culler(const Culler&) = delete;
+    Culler& operator=(const Culler&) = delete;
+
+    /// Runs one frame. Object i of `objects` is object i of the result. Invalid objects (non-finite coordinates or
+    /// boxes, out-of-range indices) are listed in Result::rejected and take part in nothing.
+    virtual void run(const std::vector<Object>& objects, Result& result) = 0;
+    virtual const Settings& settings() const = 0;
+};
+
+/// The CULLIDE GPU culler. Throws std::invalid_argument for invalid settings and GlUnavailableError without GL.
+std::unique_ptr<Culler> createGpuCuller(const Settings& settings);
+
+/// All triangle pairs, exact: the oracle. Only margin and threads of the settings are used.
+std::unique_ptr<Culler> createReferenceCuller(const Settings& settings);
+
+}  // namespace cullide

@@ -1,0 +1,48 @@
+// Culler settings. Every field is validated by validate(); the culler factory rejects invalid settings.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+namespace cullide {
+
+enum class Mode {
+    /// Never misses an intersecting (or within-margin) triangle pair at any resolution: conservative coverage,
+    /// conservative depth, bounded float error (see docs/reliability.md).
+    Reliable,
+    /// The paper's plain rasterization at pixel centres: may miss contacts below pixel size.
+    Sampled,
+};
+
+enum class Pipeline {
+    /// Cheapest path that keeps the guarantee: CPU box pre-pass over objects and groups, group boxes on the GPU,
+    /// then triangles of surviving groups; levels stop when the exact stage is cheaper.
+    Auto,
+    /// The paper's pipeline: GPU object level (boxes, then triangles), sub-objects drawn as triangles, triangles.
+    Paper,
+};
+
+struct Settings {
+    Mode mode = Mode::Reliable;
+    Pipeline pipeline = Pipeline::Auto;
+    /// Image-space resolution per view (square), 16..4096.
+    int resolution = 256;
+    /// Sub-object group size k (triangles per group), 1..4096.
+    int groupSize = 32;
+    /// Maximum pruning iterations per level (each iteration draws all three axes, both directions), 1..64.
+    int maxIterations = 4;
+    /// Distance margin d >= 0: triangle pairs closer than d are reported as well.
+    double margin = 0.0;
+    /// Worker threads for the exact stage; 0 = hardware concurrency.
+    unsigned threads = 0;
+    /// Auto pipeline: a level whose input has at most this many triangles goes straight to the exact stage.
+    std::size_t exactThreshold = 256;
+    /// EGL device to use: "" = environment variable CULLIDE_EGL_DEVICE, else the first hardware device, else
+    /// Mesa's software device / surfaceless platform. Also "software", "hardware" or a device index "0", "1", ...
+    std::string device;
+
+    /// Empty string when valid, else a message naming the offending field.
+    std::string validate() const;
+};
+
+}  // namespace cullide

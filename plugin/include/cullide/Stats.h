@@ -1,0 +1,48 @@
+// Per-stage statistics of one culling frame.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+namespace cullide {
+
+/// One GPU pruning level (objects, groups or triangles).
+struct LevelStats {
+    std::string name;                       ///< "objects-box", "objects", "groups", "triangles"
+    std::vector<std::size_t> itemsPerIteration;  ///< items entering each iteration; last entry = survivors
+    std::size_t primitivesDrawn = 0;        ///< primitives submitted (all passes, all axes)
+    std::size_t draws = 0;
+    double cpuMs = 0.0;                     ///< wall time spent on the CPU side of the level (incl. waiting)
+    double gpuMs = 0.0;                     ///< GPU time from timer queries (0 when unavailable)
+};
+
+struct Stats {
+    std::string renderer;   ///< GL_RENDERER of the context used ("cpu-reference" for the reference culler)
+    std::string device;     ///< which EGL device/platform was chosen
+    std::size_t objects = 0;
+    std::size_t triangles = 0;
+    std::size_t rejectedObjects = 0;
+    std::size_t prepassObjectsIn = 0;   ///< objects entering the CPU box pre-pass
+    std::size_t prepassObjectsOut = 0;  ///< objects whose box overlaps another object's box
+    std::size_t prepassGroupsIn = 0;
+    std::size_t prepassGroupsOut = 0;
+    std::vector<LevelStats> levels;
+    std::size_t pcsObjects = 0;
+    std::size_t candidateObjectPairs = 0;
+    std::size_t candidateTrianglePairs = 0;  ///< pairs whose inflated boxes overlap (handed to the exact test)
+    std::size_t exactTests = 0;
+    std::size_t intersectingTrianglePairs = 0;
+    std::size_t draws = 0;
+    std::size_t bytesUploaded = 0;
+    std::size_t bytesReadBack = 0;
+    double prepassMs = 0.0;
+    double uploadMs = 0.0;
+    double gpuLevelsMs = 0.0;  ///< wall time of all GPU levels
+    double gpuMs = 0.0;        ///< GPU time from timer queries, all levels
+    double exactMs = 0.0;
+    double totalMs = 0.0;
+};
+
+}  // namespace cullide

@@ -1,0 +1,38 @@
+// The exact stage: for each potentially colliding mesh pair, candidate triangle pairs by sweep and prune over
+// their surviving triangles' boxes, then the robust triangle test, on worker threads.
+#pragma once
+
+#include "TaskPool.h"
+#include "cullide/Object.h"
+#include "cullide/Result.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace cullide {
+
+struct ExactJob {
+    std::uint32_t a = 0;
+    std::uint32_t b = 0;
+    const std::vector<std::uint32_t>* trianglesA = nullptr;  ///< surviving triangles of object a
+    const std::vector<std::uint32_t>* trianglesB = nullptr;
+};
+
+struct ExactJobResult {
+    std::size_t candidates = 0;          ///< triangle pairs whose boxes (inflated by margin / 2) overlap
+    std::vector<TrianglePair> triangles;  ///< intersecting / within-margin pairs, sorted
+};
+
+class ExactStage {
+public:
+    explicit ExactStage(unsigned threads) : m_pool(threads) {}
+
+    void run(const std::vector<Object>& objects, const std::vector<ExactJob>& jobs, double margin,
+             std::vector<ExactJobResult>& results, Stats& stats);
+
+private:
+    TaskPool m_pool;
+    std::vector<std::vector<TrianglePair>> m_candidates;
+};
+
+}  // namespace cullide

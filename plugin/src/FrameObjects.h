@@ -1,0 +1,35 @@
+// Validation of a frame's objects and the CPU box pre-pass shared by the GPU and the reference culler.
+#pragma once
+
+#include "cullide/Object.h"
+#include "cullide/Result.h"
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+namespace cullide {
+
+struct ValidatedObject {
+    bool valid = false;
+    bool isMesh = false;
+    Aabb box;  ///< world bounds inflated by margin / 2 (empty for meshes without triangles)
+};
+
+/// Checks every object (finite coordinates, indices in range, finite non-empty proxy boxes); invalid ones go to
+/// `rejected` with a message. Boxes are inflated by margin / 2, so two boxes overlap iff their L-infinity
+/// distance is at most the margin.
+std::vector<ValidatedObject> validateObjects(const std::vector<Object>& objects, double margin,
+                                             std::vector<ObjectDiagnostic>& rejected);
+
+/// All pairs (a < b) of valid objects whose boxes overlap, sorted: sweep and prune along the widest axis.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> overlappingPairs(const std::vector<ValidatedObject>& objects);
+
+/// Box of triangle t of `mesh`.
+inline Aabb triangleBounds(const TriangleMesh& mesh, std::uint32_t t) {
+    Aabb b;
+    for (std::uint32_t v : mesh.triangles[t]) b.grow(mesh.vertices[v]);
+    return b;
+}
+
+}  // namespace cullide

@@ -1,0 +1,418 @@
+// CULLIDE: object, sub-object (group) and triangle levels of image-space visibility pruning, then the exact stage.
+#include "ExactStage.h"
+#include "FrameObjects.h"
+#include "Timer.h"
+#include "bindings.h"
+#include "cullide/Culler.h"
+#include "gl/EglContext.h"
+#include "gl/VisibilityPass.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+namespace cullide {
+namespace {
+
+/// Outward rounding of a double to float.
+float floatDown(double v) {
+    float f = static_cast<float>(v);
+    return static_cast<double>(f) > v ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
+}
+float floatUp(double v) {
+    float f = static_cast<float>(v);
+    return static_cast<double>(f) < v ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+}
+
+struct Group {
+    std::uint32_t object;
+    std::uint32_t first;
+    std::uint32_t count;
+    Aabb box;  ///< world, inflated by margin / 2
+};
+
+class GpuCuller final : public Culler {
+public:
+    explicit GpuCuller(const Settings& settings)
+        : m_settings(settings), m_context(settings.device), m_pass(m_context, settings), m_exact(settings.threads) {}
+
+    const Settings& settings() const override { return m_settings; }
+
+    void run(const std::vector<Object>& objects, Result& result) override {
+        Timer total;
+        result.clear();
+        Stats& stats = result.stats;
+        stats.renderer = m_context.renderer();
+        stats.device = m_context.device();
+        const double margin = m_settings.margin;
+        m_objects = &objects;
+
+        // CPU box pre-pass over objects.
+        Timer prepass;
+        m_valid = validateObjects(objects, margin, result.rejected);
+        stats.objects = objects.size();
+        stats.rejectedObjects = result.rejected.size();
+        for (std::size_t i = 0; i < objects.size(); ++i) {
+            if (m_valid[i].valid && m_valid[i].isMesh) stats.triangles += objects[i].mesh->triangles.size();
+            if (m_valid[i].valid) ++stats.prepassObjectsIn;
+        }
+        const bool paper = m_settings.pipeline == Pipeline::Paper;
+        m_pairs = overlappingPairs(m_valid);
+        m_partners.assign(objects.size(), {});
+        for (const auto& [a, b] : m_pairs) {
+            m_partners[a].push_back(b);
+            m_partners[b].push_back(a);
+        }
+        m_active.assign(objects.size(), 0);
+        for (std::size_t i = 0; i < objects.size(); ++i) {
+            const bool participates = paper ? m_valid[i].valid && !m_valid[i].box.isEmpty() : !m_partners[i].empty();
+            m_active[i] = participates ? 1 : 0;
+            stats.prepassObjectsOut += m_active[i];
+        }
+        m_survivingTriangles.assign(objects.size(), {});
+        m_proxyAlive.assign(objects.size(), 0);
+        buildGroups(!paper, stats);
+        stats.prepassMs = prepass.ms();
+
+        Timer upload;
+        uploadGeometry(stats);
+        stats.uploadMs = upload.ms();
+
+        Timer levels;
+        if (paper)
+            runPaperPipeline(stats);
+        else
+            runAutoPipeline(stats);
+        stats.gpuLevelsMs = levels.ms();
+
+        Timer exact;
+        assemblePairs(result);
+        stats.exactMs = exact.ms();
+        stats.pcsObjects = result.pcs.size();
+        stats.candidateObjectPairs = result.pairs.size();
+        stats.totalMs = total.ms();
+        m_objects = nullptr;
+    }
+
+private:
+    const TriangleMesh& meshOf(std::uint32_t o) const { return *(*m_objects)[o].mesh; }
+    bool isMesh(std::uint32_t o) const { return m_valid[o].isMesh; }
+
+    Aabb relative(const Aabb& b) const { return {b.min - m_origin, b.max - m_origin}; }
+
+    /// Groups of k consecutive triangles of every active mesh; with `prepass`, only groups whose box overlaps a
+    /// partner object's box are kept.
+    void buildGroups(bool prepass, Stats& stats) {
+        m_groups.clear();
+        const auto k = static_cast<std::uint32_t>(m_settings.groupSize);
+        for (std::uint32_t o = 0; o < m_valid.size(); ++o) {
+            if (!m_active[o] || !isMesh(o)) continue;
+            const TriangleMesh& mesh = meshOf(o);
+            const auto n = static_cast<std::uint32_t>(mesh.triangles.size());
+            for (std::uint32_t first = 0; first < n; first += k) {
+                Group g{o, first, std::min(k, n - first), {}};
+                for (std::uint32_t t = first; t < first + g.count; ++t) g.box.grow(triangleBounds(mesh, t));
+                g.box = g.box.inflated(0.5 * m_settings.margin);
+                ++stats.prepassGroupsIn;
+                if (prepass && !overlapsPartner(o, g.box)) continue;
+                m_groups.push_back(g);
+            }
+        }
+        stats.prepassGroupsOut = m_groups.size();
+    }
+
+    bool overlapsPartner(std::uint32_t o, const Aabb& box) const {
+        for (std::uint32_t p : m_partners[o])
+            if (box.overlaps(m_valid[p].box)) return true;
+        return false;
+    }
+
+    /// Positions and indices of active meshes, boxes of active objects and of the kept groups, relative to an
+    /// origin at the centre of the active objects (float precision is spent on the scene, not on its offset).
+    void uploadGeometry(Stats& stats) {
+        Aabb all;
+        for (std::uint32_t o = 0; o < m_valid.size(); ++o)
+            if (m_active[o]) all.grow(m_valid[o].box);
+        m_origin = all.isEmpty() ? Vec3::Zero() : Vec3(0.5 * (all.min + all.max));
+        m_geometry.positions.clear();
+        m_geometry.indices.clear();
+        m_geometry.boxes.clear();
+        m_baseTriangle.assign(m_valid.size(), 0);
+        m_objectBox.assign(m_valid.size(), 0);
+        double bound = 0.0;
+        for (std::uint32_t o = 0; o < m_valid.size(); ++o) {
+            if (!m_active[o]) continue;
+            m_objectBox[o] = appendBox(m_valid[o].box, bound);
+            if (!isMesh(o)) continue;
+            const TriangleMesh& mesh = meshOf(o);
+            const auto baseVertex = static_cast<std::uint32_t>(m_geometry.positions.size() / 3);
+            m_baseTriangle[o] = static_cast<std::uint32_t>(m_geometry.indices.size() / 3);
+            for (const Vec3& v : mesh.vertices) {
+                const Vec3 r = v.allFinite() ? Vec3(v - m_origin) : Vec3::Zero();  // unused vertices may be NaN
+                for (int a = 0; a < 3; ++a) m_geometry.positions.push_back(static_cast<float>(r[a]));
+            }
+            for (const auto& t : mesh.triangles)
+                for (std::uint32_t index : t) m_geometry.indices.push_back(baseVertex + index);
+        }
+        m_groupBox.resize(m_groups.size());
+        for (std::size_t g = 0; g < m_groups.size(); ++g) m_groupBox[g] = appendBox(m_groups[g].box, bound);
+        m_geometry.coordinateBound = bound;
+        m_pass.upload(m_geometry, stats);
+    }
+
+    std::uint32_t appendBox(const Aabb& worldBox, double& bound) {
+        const Aabb r = relative(worldBox);
+        for (int a = 0; a < 3; ++a) m_geometry.boxes.push_back(floatDown(r.min[a]));
+        for (int a = 0; a < 3; ++a) m_geometry.boxes.push_back(floatUp(r.max[a]));
+        bound = std::max({bound, r.min.cwiseAbs().maxCoeff(), r.max.cwiseAbs().maxCoeff()});
+        return static_cast<std::uint32_t>(m_geometry.boxes.size() / 6 - 1);
+    }
+
+    /// Compact owner ids for the objects present in a level.
+    std::uint32_t ownerOf(std::uint32_t object) {
+        auto& id = m_ownerId[object];
+        if (id == kNoOwner) id = m_ownerCount++;
+        return id;
+    }
+    void resetOwners() {
+        m_ownerId.assign(m_valid.size(), kNoOwner);
+        m_ownerCount = 0;
+    }
+
+    void addBoxItem(std::uint32_t object, std::uint32_t box, const Aabb& worldBox) {
+        m_items.owner.push_back(ownerOf(object));
+        m_items.prims.push_back(box | CULLIDE_PRIM_BOX_BIT);
+        m_items.primBegin.push_back(static_cast<std::uint32_t>(m_items.prims.size()));
+        m_items.bounds.push_back(relative(worldBox));
+    }
+    void addTriangleItem(std::uint32_t object, std::uint32_t first, std::uint32_t count, const Aabb& worldBox) {
+        m_items.owner.push_back(ownerOf(object));
+        for (std::uint32_t t = first; t < first + count; ++t) m_items.prims.push_back(m_baseTriangle[object] + t);
+        m_items.primBegin.push_back(static_cast<std::uint32_t>(m_items.prims.size()));
+        m_items.bounds.push_back(relative(worldBox));
+    }
+
+    void pruneLevel(const char* name, Stats& stats) {
+        stats.levels.push_back(LevelStats{});
+        LevelStats& level = stats.levels.back();
+        level.name = name;
+        m_pass.prune(m_items, m_survivors, level, stats);
+    }
+
+    struct Tri {
+        std::uint32_t object;
+        std::uint32_t triangle;
+        Aabb box;
+    };
+
+    /// Triangles of the given groups; with `prepass`, only those whose box overlaps a partner object's box.
+    void collectTriangles(const std::vector<Group>& groups, bool prepass) {
+        m_tris.clear();
+        for (const Group& g : groups) {
+            const TriangleMesh& mesh = meshOf(g.object);
+            const bool test = prepass && m_partners[g.object].size() <= 16;
+            for (std::uint32_t t = g.first; t < g.first + g.count; ++t) {
+                const Aabb box = triangleBounds(mesh, t).inflated(0.5 * m_settings.margin);
+                if (test && !overlapsPartner(g.object, box)) continue;
+                m_tris.push_back({g.object, t, box});
+            }
+        }
+    }
+
+    void runTriangleLevel(const std::vector<std::uint32_t>& proxies, Stats& stats) {
+        resetOwners();
+        m_items.clear();
+        for (const Tri& t : m_tris) addTriangleItem(t.object, t.triangle, 1, t.box);
+        for (std::uint32_t o : proxies) addBoxItem(o, m_objectBox[o], m_valid[o].box);
+        pruneLevel("triangles", stats);
+        finishFromTriangles(m_survivors, proxies);
+    }
+
+    void finishFromTriangles(const std::vector<std::uint8_t>& alive, const std::vector<std::uint32_t>& proxies) {
+        for (std::size_t i = 0; i < m_tris.size(); ++i)
+            if (alive.empty() || alive[i]) m_survivingTriangles[m_tris[i].object].push_back(m_tris[i].triangle);
+        for (std::size_t p = 0; p < proxies.size(); ++p)
+            m_proxyAlive[proxies[p]] = alive.empty() || alive[m_tris.size() + p] ? 1 : 0;
+        for (auto& list : m_survivingTriangles) std::sort(list.begin(), list.end());
+    }
+
+    std::vector<std::uint32_t> activeProxies() const {
+        std::vector<std::uint32_t> proxies;
+        for (std::uint32_t o = 0; o < m_valid.size(); ++o)
+            if (m_active[o] && !isMesh(o)) proxies.push_back(o);
+        return proxies;
+    }
+
+    static std::size_t triangleCount(const std::vector<Group>& groups) {
+        std::size_t n = 0;
+        for (const Group& g : groups) n += g.count;
+        return n;
+    }
+
+    /// CPU pre-pass (done in buildGroups), group boxes on the GPU, triangles of the surviving groups on the GPU;
+    /// a level whose input is small enough goes straight to the exact stage.
+    void runAutoPipeline(Stats& stats) {
+        std::vector<std::uint32_t> proxies = activeProxies();
+        std::vector<Group> groups = m_groups;
+        if (triangleCount(groups) > m_settings.exactThreshold) {
+            resetOwners();
+            m_items.clear();
+            for (std::size_t g = 0; g < groups.size(); ++g)
+                addBoxItem(groups[g].object, m_groupBox[g], groups[g].box);
+            for (std::uint32_t o : proxies) addBoxItem(o, m_objectBox[o], m_valid[o].box);
+            pruneLevel("groups", stats);
+            std::vector<Group> kept;
+            for (std::size_t g = 0; g < groups.size(); ++g)
+                if (m_survivors[g]) kept.push_back(groups[g]);
+            std::vector<std::uint32_t> keptProxies;
+            for (std::size_t p = 0; p < proxies.size(); ++p)
+                if (m_survivors[groups.size() + p]) keptProxies.push_back(proxies[p]);
+            groups.swap(kept);
+            proxies.swap(keptProxies);
+        }
+        collectTriangles(groups, true);
+        if (m_tris.size() > m_settings.exactThreshold)
+            runTriangleLevel(proxies, stats);
+        else
+            finishFromTriangles({}, proxies);
+    }
+
+    /// The paper's pipeline: objects as boxes, objects as triangles, groups as triangles, triangles.
+    void runPaperPipeline(Stats& stats) {
+        std::vector<std::uint32_t> objects;
+        for (std::uint32_t o = 0; o < m_valid.size(); ++o)
+            if (m_active[o]) objects.push_back(o);
+        std::vector<std::uint32_t> proxies = activeProxies();
+
+        auto keepSurvivors = [&](std::vector<std::uint32_t>& list) {
+            std::vector<std::uint32_t> kept;
+            for (std::size_t i = 0; i < list.size(); ++i)
+                if (m_survivors[i]) kept.push_back(list[i]);
+            list.swap(kept);
+        };
+        resetOwners();
+        m_items.clear();
+        for (std::uint32_t o : objects) addBoxItem(o, m_objectBox[o], m_valid[o].box);
+        pruneLevel("objects-box", stats);
+        keepSurvivors(objects);
+
+        resetOwners();
+        m_items.clear();
+        for (std::uint32_t o : objects) {
+            if (isMesh(o))
+                addTriangleItem(o, 0, static_cast<std::uint32_t>(meshOf(o).triangles.size()), m_valid[o].box);
+            else
+                addBoxItem(o, m_objectBox[o], m_valid[o].box);
+        }
+        pruneLevel("objects", stats);
+        keepSurvivors(objects);
+        std::vector<std::uint8_t> objectAlive(m_valid.size(), 0);
+        for (std::uint32_t o : objects) objectAlive[o] = 1;
+        // Pairs are now the box-overlapping pairs among the survivors (the paper's all-pair box test).
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+        for (const auto& p : m_pairs)
+            if (objectAlive[p.first] && objectAlive[p.second]) pairs.push_back(p);
+        m_pairs.swap(pairs);
+
+        std::vector<Group> groups;
+        for (const Group& g : m_groups)
+            if (objectAlive[g.object]) groups.push_back(g);
+        std::vector<std::uint32_t> levelProxies;
+        for (std::uint32_t o : proxies)
+            if (objectAlive[o]) levelProxies.push_back(o);
+        resetOwners();
+        m_items.clear();
+        for (const Group& g : groups) addTriangleItem(g.object, g.first, g.count, g.box);
+        for (std::uint32_t o : levelProxies) addBoxItem(o, m_objectBox[o], m_valid[o].box);
+        pruneLevel("groups", stats);
+        std::vector<Group> kept;
+        for (std::size_t g = 0; g < groups.size(); ++g)
+            if (m_survivors[g]) kept.push_back(groups[g]);
+        std::vector<std::uint32_t> keptProxies;
+        for (std::size_t p = 0; p < levelProxies.size(); ++p)
+            if (m_survivors[groups.size() + p]) keptProxies.push_back(levelProxies[p]);
+        collectTriangles(kept, false);
+        runTriangleLevel(keptProxies, stats);
+    }
+
+    void assemblePairs(Result& result) {
+        std::vector<ExactJob> jobs;
+        std::vector<std::size_t> jobPair;
+        std::vector<std::uint8_t> inPcs(m_valid.size(), 0);
+        auto alive = [&](std::uint32_t o) {
+            return isMesh(o) ? !m_survivingTriangles[o].empty() : m_proxyAlive[o] != 0;
+        };
+        for (const auto& [a, b] : m_pairs) {
+            if (!alive(a) || !alive(b)) continue;
+            ObjectPair pair;
+            pair.a = a;
+            pair.b = b;
+            if (isMesh(a) && isMesh(b)) {
+                pair.hasTriangles = true;
+                jobs.push_back({a, b, &m_survivingTriangles[a], &m_survivingTriangles[b]});
+                jobPair.push_back(result.pairs.size());
+            } else if (isMesh(a) || isMesh(b)) {
+                const std::uint32_t mesh = isMesh(a) ? a : b;
+                const Aabb& proxy = m_valid[isMesh(a) ? b : a].box;
+                bool any = false;
+                for (std::uint32_t t : m_survivingTriangles[mesh])
+                    if ((any = triangleBounds(meshOf(mesh), t).inflated(0.5 * m_settings.margin).overlaps(proxy)))
+                        break;
+                if (!any) continue;
+            }
+            result.pairs.push_back(std::move(pair));
+        }
+        m_exact.run(*m_objects, jobs, m_settings.margin, m_jobResults, result.stats);
+        for (std::size_t j = 0; j < jobs.size(); ++j) {
+            ObjectPair& pair = result.pairs[jobPair[j]];
+            pair.triangles = std::move(m_jobResults[j].triangles);
+            if (m_jobResults[j].candidates == 0) pair.a = pair.b = kDropped;  // no two boxes overlap
+        }
+        result.pairs.erase(std::remove_if(result.pairs.begin(), result.pairs.end(),
+                                          [](const ObjectPair& p) { return p.a == kDropped; }),
+                           result.pairs.end());
+        for (const ObjectPair& p : result.pairs) inPcs[p.a] = inPcs[p.b] = 1;
+        for (std::uint32_t o = 0; o < inPcs.size(); ++o)
+            if (inPcs[o]) result.pcs.push_back(o);
+    }
+
+    static constexpr std::uint32_t kNoOwner = 0xFFFFFFFFu;
+    static constexpr std::uint32_t kDropped = 0xFFFFFFFFu;
+
+    Settings m_settings;
+    gl::EglContext m_context;
+    gl::VisibilityPass m_pass;
+    ExactStage m_exact;
+
+    // Per-frame state (members to reuse allocations).
+    const std::vector<Object>* m_objects = nullptr;
+    std::vector<ValidatedObject> m_valid;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> m_pairs;
+    std::vector<std::vector<std::uint32_t>> m_partners;
+    std::vector<std::uint8_t> m_active;
+    std::vector<Group> m_groups;
+    std::vector<std::uint32_t> m_groupBox;
+    std::vector<std::uint32_t> m_objectBox;
+    std::vector<std::uint32_t> m_baseTriangle;
+    Vec3 m_origin = Vec3::Zero();
+    gl::GpuGeometry m_geometry;
+    gl::LevelItems m_items;
+    std::vector<std::uint8_t> m_survivors;
+    std::vector<std::uint32_t> m_ownerId;
+    std::uint32_t m_ownerCount = 0;
+    std::vector<Tri> m_tris;
+    std::vector<std::vector<std::uint32_t>> m_survivingTriangles;
+    std::vector<std::uint8_t> m_proxyAlive;
+    std::vector<ExactJobResult> m_jobResults;
+};
+
+}  // namespace
+
+std::unique_ptr<Culler> createGpuCuller(const Settings& settings) {
+    const std::string error = settings.validate();
+    if (!error.empty()) throw std::invalid_argument("cullide::Settings: " + error);
+    return std::make_unique<GpuCuller>(settings);
+}
+
+}  // namespace cullide

@@ -1,0 +1,83 @@
+// The brute-force oracle: every triangle pair of every box-overlapping object pair, exact test.
+#include "FrameObjects.h"
+#include "TaskPool.h"
+#include "Timer.h"
+#include "cullide/Culler.h"
+#include "cullide/TriangleTest.h"
+
+#include <stdexcept>
+
+namespace cullide {
+namespace {
+
+class ReferenceCuller final : public Culler {
+public:
+    explicit ReferenceCuller(const Settings& settings) : m_settings(settings), m_pool(settings.threads) {}
+
+    const Settings& settings() const override { return m_settings; }
+
+    void run(const std::vector<Object>& objects, Result& result) override {
+        Timer total;
+        result.clear();
+        Stats& stats = result.stats;
+        stats.renderer = "cpu-reference";
+        const double margin = m_settings.margin;
+        const auto valid = validateObjects(objects, margin, result.rejected);
+        stats.objects = objects.size();
+        stats.rejectedObjects = result.rejected.size();
+        const auto pairs = overlappingPairs(valid);
+        std::vector<ObjectPair> out(pairs.size());
+        m_pool.parallelFor(pairs.size(), 1, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t p = begin; p < end; ++p) {
+                const auto [a, b] = pairs[p];
+                ObjectPair& pair = out[p];
+                pair.a = a;
+                pair.b = b;
+                pair.hasTriangles = valid[a].isMesh && valid[b].isMesh;
+                if (!pair.hasTriangles) continue;
+                const TriangleMesh& ma = *objects[a].mesh;
+                const TriangleMesh& mb = *objects[b].mesh;
+                std::vector<Aabb> boxesB(mb.triangles.size());
+                for (std::uint32_t tb = 0; tb < mb.triangles.size(); ++tb)
+                    boxesB[tb] = triangleBounds(mb, tb).inflated(0.5 * margin);
+                for (std::uint32_t ta = 0; ta < ma.triangles.size(); ++ta) {
+                    const Aabb boxA = triangleBounds(ma, ta).inflated(0.5 * margin);
+                    const auto& A = ma.triangles[ta];
+                    for (std::uint32_t tb = 0; tb < mb.triangles.size(); ++tb) {
+                        if (!boxA.overlaps(boxesB[tb])) continue;
+                        const auto& B = mb.triangles[tb];
+                        if (trianglesWithin(ma.vertices[A[0]], ma.vertices[A[1]], ma.vertices[A[2]],
+                                            mb.vertices[B[0]], mb.vertices[B[1]], mb.vertices[B[2]], margin))
+                            pair.triangles.push_back({ta, tb});
+                    }
+                }
+            }
+        });
+        std::vector<std::uint8_t> inPcs(objects.size(), 0);
+        for (ObjectPair& pair : out) {
+            if (pair.hasTriangles && pair.triangles.empty()) continue;
+            stats.intersectingTrianglePairs += pair.triangles.size();
+            inPcs[pair.a] = inPcs[pair.b] = 1;
+            result.pairs.push_back(std::move(pair));
+        }
+        for (std::uint32_t o = 0; o < inPcs.size(); ++o)
+            if (inPcs[o]) result.pcs.push_back(o);
+        stats.pcsObjects = result.pcs.size();
+        stats.candidateObjectPairs = result.pairs.size();
+        stats.totalMs = total.ms();
+    }
+
+private:
+    Settings m_settings;
+    TaskPool m_pool;
+};
+
+}  // namespace
+
+std::unique_ptr<Culler> createReferenceCuller(const Settings& settings) {
+    const std::string error = settings.validate();
+    if (!error.empty()) throw std::invalid_argument("cullide::Settings: " + error);
+    return std::make_unique<ReferenceCuller>(settings);
+}
+
+}  // namespace cullide

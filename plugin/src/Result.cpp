@@ -1,0 +1,12 @@
+#include "cullide/Result.h"
+
+namespace cullide {
+
+void Result::clear() {
+    pcs.clear();
+    pairs.clear();
+    rejected.clear();
+    stats = Stats{};
+}
+
+}  // namespace cullide

@@ -1,0 +1,18 @@
+#include "cullide/Settings.h"
+
+#include <cmath>
+
+namespace cullide {
+
+std::string Settings::validate() const {
+    if (resolution < 16 || resolution > 4096) return "resolution must be in 16..4096";
+    if (groupSize < 1 || groupSize > 4096) return "groupSize must be in 1..4096";
+    if (maxIterations < 1 || maxIterations > 64) return "maxIterations must be in 1..64";
+    if (!std::isfinite(margin) || margin < 0.0) return "margin must be finite and >= 0";
+    if (threads > 256) return "threads must be <= 256";
+    if (mode != Mode::Reliable && mode != Mode::Sampled) return "mode is not a Mode value";
+    if (pipeline != Pipeline::Auto && pipeline != Pipeline::Paper) return "pipeline is not a Pipeline value";
+    return {};
+}
+
+}  // namespace cullide

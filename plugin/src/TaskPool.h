@@ -1,0 +1,45 @@
+// A small persistent worker pool: parallelFor over an index range with dynamic chunking. Deterministic results
+// are the caller's job (write to per-index slots).
+#pragma once
+
+#include <condition_variable>
+#include <cstddef>
+#include <functional>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+namespace cullide {
+
+class TaskPool {
+public:
+    /// `threads` = total workers including the calling thread; 0 = hardware concurrency.
+    explicit TaskPool(unsigned threads);
+    ~TaskPool();
+    TaskPool(const TaskPool&) = delete;
+    TaskPool& operator=(const TaskPool&) = delete;
+
+    /// Calls fn(begin, end) on disjoint chunks covering [0, count); returns when all are done. Exceptions thrown
+    /// by fn are rethrown on the calling thread (the first one).
+    void parallelFor(std::size_t count, std::size_t chunk, const std::function<void(std::size_t, std::size_t)>& fn);
+    unsigned size() const { return static_cast<unsigned>(m_workers.size()) + 1; }
+
+private:
+    void workerLoop();
+    void drain(std::unique_lock<std::mutex>& lock);
+
+    std::vector<std::thread> m_workers;
+    std::mutex m_mutex;
+    std::condition_variable m_wake;
+    std::condition_variable m_done;
+    const std::function<void(std::size_t, std::size_t)>* m_fn = nullptr;
+    std::size_t m_count = 0;
+    std::size_t m_chunk = 1;
+    std::size_t m_next = 0;
+    std::size_t m_busy = 0;
+    std::size_t m_generation = 0;
+    bool m_stop = false;
+    std::exception_ptr m_error;
+};
+
+}  // namespace cullide

@@ -1,0 +1,162 @@
+#include "gl/EglContext.h"
+
+#include "cullide/Culler.h"
+
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <stdexcept>
+#include <vector>
+
+namespace cullide::gl {
+namespace {
+
+constexpr const char* kPackages = "install libegl1 libegl-mesa0 libgl1-mesa-dri (Mesa llvmpipe) or an NVIDIA driver";
+
+bool hasExtension(const char* list, const char* name) {
+    if (list == nullptr) return false;
+    const std::size_t n = std::strlen(name);
+    for (const char* p = list; (p = std::strstr(p, name)) != nullptr; p += n) {
+        if ((p == list || p[-1] == ' ') && (p[n] == ' ' || p[n] == '\0')) return true;
+    }
+    return false;
+}
+
+#ifndef NDEBUG
+void GLAPIENTRY debugCallback(GLenum, GLenum type, GLuint, GLenum severity, GLsizei, const GLchar* message,
+                              const void*) {
+    if (type == GL_DEBUG_TYPE_ERROR || severity == GL_DEBUG_SEVERITY_HIGH)
+        std::fprintf(stderr, "cullide: GL debug: %s\n", message);
+}
+#endif
+
+}  // namespace
+
+void checkGlError(const char* what) {
+    const GLenum error = glGetError();
+    if (error != GL_NO_ERROR) {
+        char buffer[160];
+        std::snprintf(buffer, sizeof buffer, "OpenGL error 0x%04x after %s", error, what);
+        throw std::runtime_error(buffer);
+    }
+}
+
+EglContext::EglContext(const std::string& preferenceArg) {
+    std::string preference = preferenceArg;
+    if (preference.empty()) {
+        if (const char* env = std::getenv("CULLIDE_EGL_DEVICE")) preference = env;
+    }
+    if (!epoxy_has_egl())
+        throw GlUnavailableError(std::string("no EGL library found (libEGL.so.1): ") + kPackages);
+
+    const char* clientExtensions = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
+    std::string reasons;
+    const bool wantSurfaceless = preference == "surfaceless";
+    bool matchedDevice = false;
+
+    if (!wantSurfaceless && hasExtension(clientExtensions, "EGL_EXT_platform_device") &&
+        hasExtension(clientExtensions, "EGL_EXT_device_enumeration")) {
+        EGLint count = 0;
+        eglQueryDevicesEXT(0, nullptr, &count);
+        std::vector<EGLDeviceEXT> devices(static_cast<std::size_t>(count > 0 ? count : 0));
+        if (count > 0) eglQueryDevicesEXT(count, devices.data(), &count);
+        // Order: hardware devices first, then software ones, unless the preference says otherwise.
+        std::vector<std::pair<EGLDeviceEXT, std::string>> candidates;
+        for (int pass = 0; pass < 2; ++pass) {
+            for (std::size_t i = 0; i < devices.size(); ++i) {
+                const char* extensions = eglQueryDeviceStringEXT(devices[i], EGL_EXTENSIONS);
+                const bool software = hasExtension(extensions, "EGL_MESA_device_software");
+                if ((pass == 0) == software) continue;
+                const std::string index = std::to_string(i);
+                if (!preference.empty() && preference != "hardware" && preference != "software" &&
+                    preference != index)
+                    continue;
+                if (preference == "hardware" && software) continue;
+                if (preference == "software" && !software) continue;
+                const char* drm = hasExtension(extensions, "EGL_EXT_device_drm")
+                                      ? eglQueryDeviceStringEXT(devices[i], EGL_DRM_DEVICE_FILE_EXT)
+                                      : nullptr;
+                candidates.emplace_back(devices[i], "EGL device " + index + (software ? " (software)" : " (hardware)") +
+                                                        (drm ? std::string(" ") + drm : std::string()));
+            }
+        }
+        for (const auto& [device, description] : candidates) {
+            matchedDevice = true;
+            EGLDisplay display = eglGetPlatformDisplayEXT(EGL_PLATFORM_DEVICE_EXT, device, nullptr);
+            if (display != EGL_NO_DISPLAY && tryDisplay(display, description, reasons)) return;
+        }
+    } else if (!wantSurfaceless) {
+        reasons += "EGL_EXT_platform_device is not offered by the EGL client; ";
+    }
+    const bool allowSurfaceless = preference.empty() || wantSurfaceless || preference == "software";
+    if (allowSurfaceless && hasExtension(clientExtensions, "EGL_MESA_platform_surfaceless")) {
+        EGLDisplay display = eglGetPlatformDisplayEXT(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+        if (display != EGL_NO_DISPLAY && tryDisplay(display, "Mesa surfaceless platform", reasons)) return;
+    }
+    if (!preference.empty() && !matchedDevice && !wantSurfaceless)
+        reasons += "no EGL device matches CULLIDE_EGL_DEVICE/device setting '" + preference + "'; ";
+    throw GlUnavailableError("no usable headless OpenGL 4.5 core context: " + reasons + kPackages);
+}
+
+bool EglContext::tryDisplay(EGLDisplay display, const std::string& description, std::string& whyNot) {
+    EGLint major = 0;
+    EGLint minor = 0;
+    if (!eglInitialize(display, &major, &minor)) {
+        whyNot += description + ": eglInitialize failed; ";
+        return false;
+    }
+    const char* extensions = eglQueryString(display, EGL_EXTENSIONS);
+    if (!hasExtension(extensions, "EGL_KHR_surfaceless_context") ||
+        !hasExtension(extensions, "EGL_KHR_no_config_context") || !eglBindAPI(EGL_OPENGL_API)) {
+        whyNot += description + ": lacks surfaceless/no-config contexts or desktop OpenGL; ";
+        eglTerminate(display);
+        return false;
+    }
+    const EGLint attributes[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
+                                 EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+#ifndef NDEBUG
+                                 EGL_CONTEXT_OPENGL_DEBUG, EGL_TRUE,
+#endif
+                                 EGL_NONE};
+    EGLContext context = eglCreateContext(display, EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, attributes);
+    if (context == EGL_NO_CONTEXT) {
+        whyNot += description + ": no OpenGL 4.5 core context; ";
+        eglTerminate(display);
+        return false;
+    }
+    if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context)) {
+        whyNot += description + ": eglMakeCurrent failed; ";
+        eglDestroyContext(display, context);
+        eglTerminate(display);
+        return false;
+    }
+    m_display = display;
+    m_context = context;
+    m_device = description;
+    const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+    const auto* version = reinterpret_cast<const char*>(glGetString(GL_VERSION));
+    m_renderer = std::string(renderer ? renderer : "?") + " | " + (version ? version : "?");
+    m_timerQueries = epoxy_gl_version() >= 33 || epoxy_has_gl_extension("GL_ARB_timer_query");
+#ifndef NDEBUG
+    if (epoxy_has_gl_extension("GL_KHR_debug")) {
+        glEnable(GL_DEBUG_OUTPUT);
+        glDebugMessageCallback(debugCallback, nullptr);
+    }
+#endif
+    return true;
+}
+
+void EglContext::makeCurrent() {
+    if (eglGetCurrentContext() != m_context &&
+        !eglMakeCurrent(m_display, EGL_NO_SURFACE, EGL_NO_SURFACE, m_context))
+        throw GlUnavailableError("eglMakeCurrent failed for the culler's context");
+}
+
+EglContext::~EglContext() {
+    if (m_display == EGL_NO_DISPLAY) return;
+    eglMakeCurrent(m_display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+    eglDestroyContext(m_display, m_context);
+    eglTerminate(m_display);
+}
+
+}  // namespace cullide::gl

@@ -1,0 +1,301 @@
+#include "gl/VisibilityPass.h"
+
+#include "bindings.h"
+#include "gl/EglContext.h"
+#include "gl/GlApi.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
+
+namespace cullide::gl {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+GLuint compileShader(GLenum type, const char* name) {
+    const char* header = "#version 450 core\n";
+    const char* bindings = shaderSource("bindings.h");
+    const char* body = shaderSource(name);
+    if (bindings == nullptr || body == nullptr) throw std::logic_error(std::string("missing shader ") + name);
+    const char* sources[] = {header, bindings, "\n#line 1\n", body};
+    GLuint shader = glCreateShader(type);
+    glShaderSource(shader, 4, sources, nullptr);
+    glCompileShader(shader);
+    GLint ok = 0;
+    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+        char log[4096] = {};
+        glGetShaderInfoLog(shader, sizeof log, nullptr, log);
+        glDeleteShader(shader);
+        throw std::runtime_error(std::string("cullide: compiling ") + name + " failed: " + log);
+    }
+    return shader;
+}
+
+/// Grows a buffer to hold at least `bytes`.
+void reserveBuffer(GLuint buffer, std::size_t& capacity, std::size_t bytes) {
+    if (bytes > capacity || capacity == 0) {
+        capacity = std::max<std::size_t>({bytes, capacity + capacity / 2, 256});
+        glNamedBufferData(buffer, static_cast<GLsizeiptr>(capacity), nullptr, GL_DYNAMIC_DRAW);
+    }
+}
+
+/// Grows a buffer to at least `bytes` and uploads `data`.
+void uploadBuffer(GLuint buffer, std::size_t& capacity, const void* data, std::size_t bytes) {
+    reserveBuffer(buffer, capacity, bytes);
+    if (bytes > 0) glNamedBufferSubData(buffer, 0, static_cast<GLsizeiptr>(bytes), data);
+}
+
+std::uint32_t bitsFor(std::uint32_t maxValue) {
+    std::uint32_t bits = 1;
+    while (bits < 31 && (maxValue >> bits) != 0) ++bits;
+    return bits;
+}
+
+enum Buffer { kPositions, kIndices, kBoxes, kPrims, kOwners, kFlags, kBufferCount };
+
+}  // namespace
+
+struct VisibilityPass::Impl {
+    EglContext& context;
+    Settings settings;
+    GLuint program = 0;
+    GLuint vao = 0;
+    GLuint framebuffer = 0;
+    GLuint images[4] = {};
+    GLuint buffers[kBufferCount] = {};
+    std::size_t capacity[kBufferCount] = {};
+    GLuint timer = 0;
+    double coordinateBound = 0.0;
+    std::vector<std::uint32_t> primScratch;
+    std::vector<std::uint32_t> flagScratch;
+
+    Impl(EglContext& c, const Settings& s) : context(c), settings(s) {
+        context.makeCurrent();
+        GLuint vs = compileShader(GL_VERTEX_SHADER, "cull.vert");
+        GLuint fs = 0;
+        try {
+            fs = compileShader(GL_FRAGMENT_SHADER, "cull.frag");
+        } catch (...) {
+            glDeleteShader(vs);
+            throw;
+        }
+        program = glCreateProgram();
+        glAttachShader(program, vs);
+        glAttachShader(program, fs);
+        glLinkProgram(program);
+        glDeleteShader(vs);
+        glDeleteShader(fs);
+        GLint ok = 0;
+        glGetProgramiv(program, GL_LINK_STATUS, &ok);
+        if (!ok) {
+            char log[4096] = {};
+            glGetProgramInfoLog(program, sizeof log, nullptr, log);
+            throw std::runtime_error(std::string("cullide: linking the visibility program failed: ") + log);
+        }
+        glCreateVertexArrays(1, &vao);
+        glCreateBuffers(kBufferCount, buffers);
+        const GLsizei width = 3 * settings.resolution;
+        const GLsizei height = settings.resolution;
+        glCreateTextures(GL_TEXTURE_2D, 4, images);
+        for (GLuint image : images) glTextureStorage2D(image, 1, GL_R32UI, width, height);
+        glCreateFramebuffers(1, &framebuffer);
+        glNamedFramebufferParameteri(framebuffer, GL_FRAMEBUFFER_DEFAULT_WIDTH, width);
+        glNamedFramebufferParameteri(framebuffer, GL_FRAMEBUFFER_DEFAULT_HEIGHT, height);
+        if (context.hasTimerQueries()) glGenQueries(1, &timer);
+        checkGlError("creating the visibility pass");
+    }
+
+    ~Impl() {
+        context.makeCurrent();
+        if (timer) glDeleteQueries(1, &timer);
+        glDeleteFramebuffers(1, &framebuffer);
+        glDeleteTextures(4, images);
+        glDeleteBuffers(kBufferCount, buffers);
+        glDeleteVertexArrays(1, &vao);
+        glDeleteProgram(program);
+    }
+
+    void draw(int pass, std::size_t primCount, LevelStats& level, Stats& stats) {
+        glUniform1i(CULLIDE_LOC_PASS, pass);
+        glDrawArraysInstanced(GL_TRIANGLES, 0, static_cast<GLsizei>(3 * primCount), 3);
+        glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+        level.draws += 1;
+        level.primitivesDrawn += 3 * primCount;
+        stats.draws += 1;
+    }
+
+    /// One iteration over `alive` items: returns the flags of all items.
+    void runIteration(const LevelItems& items, const std::vector<std::uint8_t>& alive, LevelStats& level,
+                      Stats& stats) {
+        // Primitives of the alive items, and the view box fitted to them.
+        primScratch.clear();
+        Aabb view;
+        std::uint32_t maxOwner = 0;
+        for (std::size_t i = 0; i < items.size(); ++i) {
+            if (!alive[i]) continue;
+            for (std::uint32_t p = items.primBegin[i]; p < items.primBegin[i + 1]; ++p) {
+                primScratch.push_back(items.prims[p]);
+                primScratch.push_back(static_cast<std::uint32_t>(i));
+            }
+            view.grow(items.bounds[i]);
+            maxOwner = std::max(maxOwner, items.owner[i]);
+        }
+        const std::size_t primCount = primScratch.size() / 2;
+        uploadBuffer(buffers[kPrims], capacity[kPrims], primScratch.data(), primScratch.size() * 4);
+        stats.bytesUploaded += primScratch.size() * 4;
+
+        // View box: the survivors' bounds grown by the margin and a little, so that every dilated fragment and
+        // every conservative depth range stays inside the image and inside [0, 1].
+        const double margin = 0.5 * settings.margin;  // each item is dilated by half: together the full margin
+        const Vec3 extent0 = view.extent();
+        const double scale = std::max(extent0.maxCoeff(), 1e-30);
+        const double grow = margin + 1e-4 * scale;
+        view = view.inflated(grow);
+        Vec3 extent = view.extent();
+        const double minExtent = std::max(1e-6 * extent.maxCoeff(), 1e-30);
+        for (int a = 0; a < 3; ++a) {
+            if (extent[a] < minExtent) {
+                view.min[a] -= 0.5 * minExtent;
+                view.max[a] += 0.5 * minExtent;
+            }
+        }
+        extent = view.extent();
+        const double res = settings.resolution;
+        const bool conservative = settings.mode == Mode::Reliable;
+        const double bound = std::max(coordinateBound, view.min.cwiseAbs().cwiseMax(view.max.cwiseAbs()).maxCoeff());
+        float lo[3], pixelScale[3], depthScale[3], halfSize[3], depthPad[3];
+        for (int a = 0; a < 3; ++a) {
+            // Float error of positions (relative to the origin) and of the projection, as a fraction of the
+            // extent: a few ulps of `bound`, generously over-estimated (docs/reliability.md).
+            const double relative = std::ldexp(1.0, -18) * (1.0 + bound / extent[a]);
+            lo[a] = static_cast<float>(view.min[a]);
+            pixelScale[a] = static_cast<float>(res / extent[a]);
+            depthScale[a] = static_cast<float>(1.0 / extent[a]);
+            halfSize[a] = static_cast<float>(0.5 + margin * res / extent[a] + 1e-3 + relative * res);
+            depthPad[a] = static_cast<float>(margin / extent[a] + relative + std::ldexp(1.0, -20));
+        }
+        const std::uint32_t idBits = bitsFor(maxOwner);
+        if (idBits > 16) throw std::runtime_error("cullide: more than 65536 objects in one level");
+
+        glUseProgram(program);
+        glUniform1i(CULLIDE_LOC_RESOLUTION, settings.resolution);
+        glUniform3fv(CULLIDE_LOC_VIEW_LO, 1, lo);
+        glUniform3fv(CULLIDE_LOC_PIXEL_SCALE, 1, pixelScale);
+        glUniform3fv(CULLIDE_LOC_DEPTH_SCALE, 1, depthScale);
+        glUniform3fv(CULLIDE_LOC_HALF_SIZE, 1, halfSize);
+        glUniform3fv(CULLIDE_LOC_DEPTH_PAD, 1, depthPad);
+        glUniform1ui(CULLIDE_LOC_ID_BITS, idBits);
+        glUniform1i(CULLIDE_LOC_CONSERVATIVE, conservative ? 1 : 0);
+
+        const GLuint empty[2] = {0xFFFFFFFFu, 0u};
+        glClearTexImage(images[CULLIDE_IMAGE_NEAR1], 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[0]);
+        glClearTexImage(images[CULLIDE_IMAGE_NEAR2], 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[0]);
+        glClearTexImage(images[CULLIDE_IMAGE_FAR1], 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
+        glClearTexImage(images[CULLIDE_IMAGE_FAR2], 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
+        glClearNamedBufferSubData(buffers[kFlags], GL_R32UI, 0, static_cast<GLsizeiptr>(items.size() * 4),
+                                  GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
+        for (GLuint unit = 0; unit < 4; ++unit)
+            glBindImageTexture(unit, images[unit], 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32UI);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_POSITIONS, buffers[kPositions]);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_INDICES, buffers[kIndices]);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_BOXES, buffers[kBoxes]);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_PRIMS, buffers[kPrims]);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_ITEM_OWNER, buffers[kOwners]);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_FLAGS, buffers[kFlags]);
+        glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+        glViewport(0, 0, 3 * settings.resolution, settings.resolution);
+        glDisable(GL_DEPTH_TEST);
+        glDisable(GL_CULL_FACE);
+        glBindVertexArray(vao);
+
+        if (timer) glBeginQuery(GL_TIME_ELAPSED, timer);
+        draw(CULLIDE_PASS_NEAREST, primCount, level, stats);
+        draw(CULLIDE_PASS_SECOND, primCount, level, stats);
+        draw(CULLIDE_PASS_FLAG, primCount, level, stats);
+        if (timer) glEndQuery(GL_TIME_ELAPSED);
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        flagScratch.resize(items.size());
+        glGetNamedBufferSubData(buffers[kFlags], 0, static_cast<GLsizeiptr>(items.size() * 4), flagScratch.data());
+        stats.bytesReadBack += items.size() * 4;
+        if (timer) {
+            GLuint64 ns = 0;
+            glGetQueryObjectui64v(timer, GL_QUERY_RESULT, &ns);
+            level.gpuMs += static_cast<double>(ns) * 1e-6;
+            stats.gpuMs += static_cast<double>(ns) * 1e-6;
+        }
+        checkGlError("a visibility iteration");
+    }
+};
+
+VisibilityPass::VisibilityPass(EglContext& context, const Settings& settings)
+    : m_impl(std::make_unique<Impl>(context, settings)) {}
+
+VisibilityPass::~VisibilityPass() = default;
+
+void VisibilityPass::upload(const GpuGeometry& geometry, Stats& stats) {
+    Impl& s = *m_impl;
+    s.context.makeCurrent();
+    uploadBuffer(s.buffers[kPositions], s.capacity[kPositions], geometry.positions.data(),
+                 geometry.positions.size() * 4);
+    uploadBuffer(s.buffers[kIndices], s.capacity[kIndices], geometry.indices.data(), geometry.indices.size() * 4);
+    uploadBuffer(s.buffers[kBoxes], s.capacity[kBoxes], geometry.boxes.data(), geometry.boxes.size() * 4);
+    stats.bytesUploaded += (geometry.positions.size() + geometry.indices.size() + geometry.boxes.size()) * 4;
+    s.coordinateBound = geometry.coordinateBound;
+}
+
+void VisibilityPass::prune(const LevelItems& items, std::vector<std::uint8_t>& survivors, LevelStats& level,
+                           Stats& stats) {
+    Impl& s = *m_impl;
+    const auto t0 = Clock::now();
+    survivors.assign(items.size(), 1);
+    if (items.size() == 0) return;
+    s.context.makeCurrent();
+    uploadBuffer(s.buffers[kOwners], s.capacity[kOwners], items.owner.data(), items.owner.size() * 4);
+    stats.bytesUploaded += items.owner.size() * 4;
+    reserveBuffer(s.buffers[kFlags], s.capacity[kFlags], items.size() * 4);
+    std::vector<std::uint8_t> next(items.size());
+    std::vector<std::uint32_t> ownerCount;
+    for (int iteration = 0; iteration < s.settings.maxIterations; ++iteration) {
+        std::size_t alive = 0;
+        std::uint32_t owners = 0;
+        ownerCount.assign(items.size() ? *std::max_element(items.owner.begin(), items.owner.end()) + 1 : 0, 0);
+        for (std::size_t i = 0; i < items.size(); ++i) {
+            if (!survivors[i]) continue;
+            ++alive;
+            if (ownerCount[items.owner[i]]++ == 0) ++owners;
+        }
+        level.itemsPerIteration.push_back(alive);
+        if (owners < 2) {  // nothing left to collide with
+            std::fill(survivors.begin(), survivors.end(), 0);
+            level.itemsPerIteration.push_back(0);
+            break;
+        }
+        s.runIteration(items, survivors, level, stats);
+        if (std::getenv("CULLIDE_DEBUG_FLAGS"))
+            for (std::size_t i = 0; i < items.size(); ++i) std::fprintf(stderr, "item %zu flags %x\n", i, s.flagScratch[i]);
+        bool changed = false;
+        for (std::size_t i = 0; i < items.size(); ++i) {
+            next[i] = survivors[i] && s.flagScratch[i] == CULLIDE_FLAGS_ALL;
+            changed |= next[i] != survivors[i];
+        }
+        survivors.swap(next);
+        if (!changed) break;
+        if (iteration + 1 == s.settings.maxIterations) {
+            std::size_t left = 0;
+            for (auto v : survivors) left += v;
+            level.itemsPerIteration.push_back(left);
+        }
+    }
+    level.cpuMs += msSince(t0);
+}
+
+}  // namespace cullide::gl

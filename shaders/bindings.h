@@ -1,0 +1,41 @@
+/* Binding points, uniform locations and flag layout shared verbatim by the C++ code and every shader.
+ * Valid as both C++ and GLSL: only #define and comments. */
+#ifndef CULLIDE_SHADER_BINDINGS_H
+#define CULLIDE_SHADER_BINDINGS_H
+
+/* Shader storage buffers (std430). */
+#define CULLIDE_SSBO_POSITIONS 0   /* float[3 * vertexCount]: xyz relative to the upload origin */
+#define CULLIDE_SSBO_INDICES 1     /* uint[3 * triangleCount]: global vertex indices */
+#define CULLIDE_SSBO_BOXES 2       /* float[6 * boxCount]: min xyz, max xyz relative to the upload origin */
+#define CULLIDE_SSBO_PRIMS 3       /* uvec2[primCount]: (primitive reference | kind bit, item) */
+#define CULLIDE_SSBO_ITEM_OWNER 4  /* uint[itemCount]: owner (compact object id within the level) */
+#define CULLIDE_SSBO_FLAGS 5       /* uint[itemCount]: per-view "not fully visible" bits, atomicOr */
+
+/* Per-pixel images (r32ui), three views side by side: width 3 * resolution, height resolution. */
+#define CULLIDE_IMAGE_NEAR1 0  /* min over items of (quantized nearest depth << idBits | owner) */
+#define CULLIDE_IMAGE_FAR1 1   /* max over items of (quantized farthest depth + 1 << idBits | owner) */
+#define CULLIDE_IMAGE_NEAR2 2  /* like NEAR1 over owners other than NEAR1's owner */
+#define CULLIDE_IMAGE_FAR2 3   /* like FAR1 over owners other than FAR1's owner */
+
+/* Uniform locations. */
+#define CULLIDE_LOC_PASS 0          /* int: CULLIDE_PASS_* */
+#define CULLIDE_LOC_RESOLUTION 1    /* int */
+#define CULLIDE_LOC_VIEW_LO 2       /* vec3: view box minimum (upload-origin relative) */
+#define CULLIDE_LOC_PIXEL_SCALE 3   /* vec3: pixels per unit along each world axis */
+#define CULLIDE_LOC_DEPTH_SCALE 4   /* vec3: normalized depth per unit along each world axis */
+#define CULLIDE_LOC_HALF_SIZE 5     /* vec3: per world axis, half pixel + margin + slack, in pixels (0 = sampled) */
+#define CULLIDE_LOC_DEPTH_PAD 6     /* vec3: per view axis, margin + slack added to depth ranges (normalized depth) */
+#define CULLIDE_LOC_ID_BITS 7       /* uint: low bits of the packed depth that hold the owner id */
+#define CULLIDE_LOC_CONSERVATIVE 8  /* int: 1 = reliable mode, 0 = sampled */
+
+#define CULLIDE_PASS_NEAREST 0  /* write NEAR1 / FAR1 */
+#define CULLIDE_PASS_SECOND 1   /* write NEAR2 / FAR2 for owners other than the nearest/farthest one */
+#define CULLIDE_PASS_FLAG 2     /* set FLAGS bits */
+
+#define CULLIDE_PRIM_BOX_BIT 0x80000000u /* set in a primitive reference that names a box */
+
+/* Flag bits: bit (2 * axis) = not fully visible from the -axis side (near test), bit (2 * axis + 1) = from the
+ * +axis side (far test). An item survives a view set when all six bits are set. */
+#define CULLIDE_FLAGS_ALL 63u
+
+#endif

@@ -1,0 +1,31 @@
+// Helpers to compare culler results against the brute-force reference.
+#pragma once
+
+#include "cullide/Culler.h"
+
+#include <array>
+#include <cstdint>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace cullide::test {
+
+using FlatPair = std::array<std::uint32_t, 4>;  // object a, triangle of a, object b, triangle of b
+
+std::set<FlatPair> trianglePairs(const Result& result);
+
+struct Comparison {
+    std::size_t expected = 0;
+    std::size_t missed = 0;      ///< in the reference, not in the result
+    std::size_t spurious = 0;    ///< in the result, not in the reference
+    std::string firstMissed;
+};
+Comparison compare(const Result& reference, const Result& result);
+
+/// Seeded soup scene: `objects` clusters of random triangles (some degenerate) in the unit cube.
+std::vector<TriangleMesh> randomSoups(std::uint64_t seed, int objects, int trianglesPerObject, double clusterSize);
+
+std::vector<Object> asObjects(const std::vector<TriangleMesh>& meshes);
+
+}  // namespace cullide::test

@@ -1,0 +1,116 @@
+// Settings validation, object validation and the reference culler (no GL needed).
+#include "Compare.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace cullide::test {
+namespace {
+
+TEST(Settings, DefaultsAreValid) { EXPECT_EQ(Settings{}.validate(), ""); }
+
+TEST(Settings, RejectsOutOfRangeFields) {
+    auto bad = [](auto mutate) {
+        Settings s;
+        mutate(s);
+        return s.validate();
+    };
+    EXPECT_NE(bad([](Settings& s) { s.resolution = 8; }), "");
+    EXPECT_NE(bad([](Settings& s) { s.resolution = 5000; }), "");
+    EXPECT_NE(bad([](Settings& s) { s.groupSize = 0; }), "");
+    EXPECT_NE(bad([](Settings& s) { s.maxIterations = 0; }), "");
+    EXPECT_NE(bad([](Settings& s) { s.margin = -1; }), "");
+    EXPECT_NE(bad([](Settings& s) { s.margin = std::numeric_limits<double>::quiet_NaN(); }), "");
+    EXPECT_NE(bad([](Settings& s) { s.margin = std::numeric_limits<double>::infinity(); }), "");
+    Settings s;
+    s.resolution = 1;
+    EXPECT_THROW(createReferenceCuller(s), std::invalid_argument);
+    EXPECT_THROW(createGpuCuller(s), std::invalid_argument);
+}
+
+TriangleMesh singleTriangle(const Vec3& a, const Vec3& b, const Vec3& c) {
+    TriangleMesh m;
+    m.vertices = {a, b, c};
+    m.triangles = {{0, 1, 2}};
+    return m;
+}
+
+TEST(ReferenceCuller, FindsCrossingAndTouchingPairsOnly) {
+    std::vector<TriangleMesh> meshes = {
+        singleTriangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0}),
+        singleTriangle({0.2, 0.2, -0.5}, {0.2, 0.2, 0.5}, {0.9, 0.9, 0}),  // crosses 0
+        singleTriangle({1, 0, 0}, {2, 0, 0}, {2, 1, 0}),                  // touches 0 at a vertex
+        singleTriangle({5, 5, 5}, {6, 5, 5}, {5, 6, 5}),                  // far away
+    };
+    auto culler = createReferenceCuller(Settings{});
+    Result r;
+    culler->run(asObjects(meshes), r);
+    ASSERT_EQ(r.pairs.size(), 2u);
+    EXPECT_EQ(r.pairs[0].a, 0u);
+    EXPECT_EQ(r.pairs[0].b, 1u);
+    EXPECT_EQ(r.pairs[1].a, 0u);
+    EXPECT_EQ(r.pairs[1].b, 2u);
+    EXPECT_EQ(r.pcs, (std::vector<std::uint32_t>{0, 1, 2}));
+}
+
+TEST(ReferenceCuller, MarginReportsNearPairs) {
+    std::vector<TriangleMesh> meshes = {singleTriangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0}),
+                                        singleTriangle({0, 0, 0.05}, {1, 0, 0.05}, {0, 1, 0.05})};
+    Settings s;
+    auto plain = createReferenceCuller(s);
+    s.margin = 0.06;
+    auto withMargin = createReferenceCuller(s);
+    Result r0, r1;
+    plain->run(asObjects(meshes), r0);
+    withMargin->run(asObjects(meshes), r1);
+    EXPECT_TRUE(r0.pairs.empty());
+    ASSERT_EQ(r1.pairs.size(), 1u);
+    EXPECT_EQ(r1.pairs[0].triangles.size(), 1u);
+}
+
+TEST(ReferenceCuller, InvalidObjectsAreRejectedWithoutHarmingOthers) {
+    std::vector<TriangleMesh> meshes = {
+        singleTriangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0}),
+        singleTriangle({0.2, 0.2, -0.5}, {0.2, 0.2, 0.5}, {0.9, 0.9, 0}),
+        singleTriangle({0.2, 0.2, -0.5}, {std::nan(""), 0.2, 0.5}, {0.9, 0.9, 0}),
+        singleTriangle({0.2, 0.2, -0.5}, {0.2, 0.2, 0.5}, {0.9, 0.9, 0}),
+        TriangleMesh{},  // empty mesh: valid, collides with nothing
+    };
+    meshes[3].triangles[0][2] = 7;  // out of range
+    auto objects = asObjects(meshes);
+    Object box;
+    box.box.min = Vec3(0, 0, 0);
+    box.box.max = Vec3(std::numeric_limits<double>::infinity(), 1, 1);
+    objects.push_back(box);
+    auto culler = createReferenceCuller(Settings{});
+    Result r;
+    culler->run(objects, r);
+    ASSERT_EQ(r.rejected.size(), 3u);
+    EXPECT_EQ(r.rejected[0].object, 2u);
+    EXPECT_NE(r.rejected[0].message.find("non-finite"), std::string::npos);
+    EXPECT_EQ(r.rejected[1].object, 3u);
+    EXPECT_NE(r.rejected[1].message.find("out of range"), std::string::npos);
+    EXPECT_EQ(r.rejected[2].object, 5u);
+    ASSERT_EQ(r.pairs.size(), 1u);
+    EXPECT_EQ(r.pairs[0].a, 0u);
+    EXPECT_EQ(r.pairs[0].b, 1u);
+}
+
+TEST(ReferenceCuller, BoxProxiesPairWithoutTriangles) {
+    std::vector<TriangleMesh> meshes = {singleTriangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0})};
+    auto objects = asObjects(meshes);
+    Object box;
+    box.box.min = Vec3(0.1, 0.1, -0.1);
+    box.box.max = Vec3(0.3, 0.3, 0.1);
+    objects.push_back(box);
+    auto culler = createReferenceCuller(Settings{});
+    Result r;
+    culler->run(objects, r);
+    ASSERT_EQ(r.pairs.size(), 1u);
+    EXPECT_FALSE(r.pairs[0].hasTriangles);
+}
+
+}  // namespace
+}  // namespace cullide::test
