@@ -7,9 +7,11 @@
 #define CULLIDE_SSBO_POSITIONS 0   /* float[3 * vertexCount]: xyz relative to the upload origin */
 #define CULLIDE_SSBO_INDICES 1     /* uint[3 * triangleCount]: global vertex indices */
 #define CULLIDE_SSBO_BOXES 2       /* float[6 * boxCount]: min xyz, max xyz relative to the upload origin */
-#define CULLIDE_SSBO_PRIMS 3       /* uvec2[primCount]: (primitive reference | kind bit, item) */
+#define CULLIDE_SSBO_PRIMS 3       /* uvec4[primCount]: (primitive reference | kind bit, item, band, bands) */
 #define CULLIDE_SSBO_ITEM_OWNER 4  /* uint[itemCount]: owner (compact object id within the level) */
 #define CULLIDE_SSBO_FLAGS 5       /* uint[itemCount]: per-view "not fully visible" bits, atomicOr */
+#define CULLIDE_SSBO_RECORDS 6     /* PrimRecord[3 * primCount]: per (view axis, primitive) setup, raster back-end */
+#define CULLIDE_SSBO_COUNTERS 7    /* uint[1]: compute invocations that would exceed CULLIDE_MAX_LOOP_ITERATIONS */
 
 /* Per-pixel images (r32ui), three views side by side: width 3 * resolution, height resolution. */
 #define CULLIDE_IMAGE_NEAR1 0  /* min over items of (quantized nearest depth << idBits | owner) */
@@ -27,6 +29,15 @@
 #define CULLIDE_LOC_DEPTH_PAD 6     /* vec3: per view axis, margin + slack added to depth ranges (normalized depth) */
 #define CULLIDE_LOC_ID_BITS 7       /* uint: low bits of the packed depth that hold the owner id */
 #define CULLIDE_LOC_CONSERVATIVE 8  /* int: 1 = reliable mode, 0 = sampled */
+#define CULLIDE_LOC_PRIM_COUNT 9    /* uint: primitives in the draw/dispatch (compute back-end) */
+
+#define CULLIDE_COMPUTE_GROUP_SIZE 64 /* local_size_x of cull.comp */
+/* The C++ side splits a primitive's footprint into bands of at most this many pixels per compute invocation... */
+#define CULLIDE_PIXELS_PER_INVOCATION 4096
+/* ...so no invocation comes near llvmpipe's limit of 65535 loop iterations per invocation (shared by all loops;
+ * past it loops silently stop). An invocation that would still exceed this bound does nothing and counts itself
+ * in CULLIDE_SSBO_COUNTERS; the C++ side then discards that iteration's pruning (conservative). */
+#define CULLIDE_MAX_LOOP_ITERATIONS 60000
 
 #define CULLIDE_PASS_NEAREST 0  /* write NEAR1 / FAR1 */
 #define CULLIDE_PASS_SECOND 1   /* write NEAR2 / FAR2 for owners other than the nearest/farthest one */

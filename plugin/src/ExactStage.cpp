@@ -4,6 +4,9 @@
 #include "cullide/TriangleTest.h"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <utility>
 
 namespace cullide {
 namespace {
@@ -13,32 +16,111 @@ struct BoxRef {
     std::uint32_t triangle;
 };
 
-void sortedBoxes(const TriangleMesh& mesh, const std::vector<std::uint32_t>& triangles, double inflate, int axis,
-                 std::vector<BoxRef>& out) {
+/// Boxes (inflated) of the given triangles that overlap `region`.
+void boxesIn(const TriangleMesh& mesh, const std::vector<std::uint32_t>& triangles, double inflate,
+             const Aabb& region, std::vector<BoxRef>& out) {
     out.clear();
-    out.reserve(triangles.size());
-    for (std::uint32_t t : triangles) out.push_back({triangleBounds(mesh, t).inflated(inflate), t});
-    std::sort(out.begin(), out.end(), [axis](const BoxRef& x, const BoxRef& y) {
-        return x.box.min[axis] != y.box.min[axis] ? x.box.min[axis] < y.box.min[axis] : x.triangle < y.triangle;
-    });
-}
-
-/// Every pair (one box from each list) whose boxes overlap, exactly once.
-void sweep(const std::vector<BoxRef>& a, const std::vector<BoxRef>& b, int axis, std::vector<TrianglePair>& out) {
-    std::size_t i = 0;
-    std::size_t j = 0;
-    while (i < a.size() && j < b.size()) {
-        if (a[i].box.min[axis] <= b[j].box.min[axis]) {
-            for (std::size_t k = j; k < b.size() && b[k].box.min[axis] <= a[i].box.max[axis]; ++k)
-                if (a[i].box.overlaps(b[k].box)) out.push_back({a[i].triangle, b[k].triangle});
-            ++i;
-        } else {
-            for (std::size_t k = i; k < a.size() && a[k].box.min[axis] <= b[j].box.max[axis]; ++k)
-                if (a[k].box.overlaps(b[j].box)) out.push_back({a[k].triangle, b[j].triangle});
-            ++j;
-        }
+    for (std::uint32_t t : triangles) {
+        const Aabb box = triangleBounds(mesh, t).inflated(inflate);
+        if (box.overlaps(region)) out.push_back({box, t});
     }
 }
+
+/// Every pair (one box from each list) whose boxes overlap, exactly once: a uniform grid over the region where
+/// both sets overlap. Each pair is reported from the grid cell holding the minimum corner of the two boxes'
+/// intersection, so no pair is reported twice. Boxes spanning many cells are tested directly.
+class GridCandidates {
+public:
+    void run(const std::vector<BoxRef>& a, const std::vector<BoxRef>& b, const Aabb& region,
+             std::vector<TrianglePair>& out) {
+        if (a.empty() || b.empty()) return;
+        if (a.size() * b.size() <= 4096) {
+            for (const BoxRef& x : a)
+                for (const BoxRef& y : b)
+                    if (x.box.overlaps(y.box)) out.push_back({x.triangle, y.triangle});
+            return;
+        }
+        double mean = 0.0;
+        for (const BoxRef& x : a) mean += x.box.extent().maxCoeff();
+        for (const BoxRef& y : b) mean += y.box.extent().maxCoeff();
+        mean /= static_cast<double>(a.size() + b.size());
+        const Vec3 extent = region.extent();
+        m_cell = std::max({1.5 * mean, extent.maxCoeff() / 128.0, 1e-300});
+        m_origin = region.min;
+        for (int k = 0; k < 3; ++k)
+            m_dims[k] = static_cast<std::int64_t>(std::min(128.0, std::max(1.0, std::ceil(extent[k] / m_cell))));
+        // Bucket b by cell; large boxes aside.
+        m_entries.clear();
+        m_largeB.clear();
+        for (std::uint32_t j = 0; j < b.size(); ++j) {
+            const auto [lo, hi] = cellRange(b[j].box);
+            if (cellCount(lo, hi) > kMaxCells) {
+                m_largeB.push_back(j);
+                continue;
+            }
+            for (std::int64_t x = lo[0]; x <= hi[0]; ++x)
+                for (std::int64_t y = lo[1]; y <= hi[1]; ++y)
+                    for (std::int64_t z = lo[2]; z <= hi[2]; ++z) m_entries.push_back({key(x, y, z), j});
+        }
+        std::sort(m_entries.begin(), m_entries.end());
+        for (const BoxRef& x : a) {
+            for (std::uint32_t j : m_largeB)
+                if (x.box.overlaps(b[j].box)) out.push_back({x.triangle, b[j].triangle});
+            const auto [lo, hi] = cellRange(x.box);
+            if (cellCount(lo, hi) > kMaxCells) {  // large a: against every bucketed b, once each
+                for (std::uint32_t j = 0; j < b.size(); ++j)
+                    if (!isLarge(b[j].box) && x.box.overlaps(b[j].box)) out.push_back({x.triangle, b[j].triangle});
+                continue;
+            }
+            for (std::int64_t cx = lo[0]; cx <= hi[0]; ++cx)
+                for (std::int64_t cy = lo[1]; cy <= hi[1]; ++cy)
+                    for (std::int64_t cz = lo[2]; cz <= hi[2]; ++cz) {
+                        const std::uint64_t k = key(cx, cy, cz);
+                        auto it = std::lower_bound(m_entries.begin(), m_entries.end(), std::make_pair(k, 0u));
+                        for (; it != m_entries.end() && it->first == k; ++it) {
+                            const BoxRef& y = b[it->second];
+                            if (!x.box.overlaps(y.box)) continue;
+                            const Vec3 corner = x.box.min.cwiseMax(y.box.min);
+                            if (cellOf(corner[0], 0) == cx && cellOf(corner[1], 1) == cy && cellOf(corner[2], 2) == cz)
+                                out.push_back({x.triangle, y.triangle});
+                        }
+                    }
+        }
+    }
+
+private:
+    static constexpr std::int64_t kMaxCells = 64;
+    using Cell = std::array<std::int64_t, 3>;
+
+    std::int64_t cellOf(double v, int axis) const {
+        const double c = std::floor((v - m_origin[axis]) / m_cell);
+        return std::clamp<std::int64_t>(static_cast<std::int64_t>(std::clamp(c, -1.0, 1e9)), 0, m_dims[axis] - 1);
+    }
+    std::pair<Cell, Cell> cellRange(const Aabb& box) const {
+        Cell lo{}, hi{};
+        for (int k = 0; k < 3; ++k) {
+            lo[k] = cellOf(box.min[k], k);
+            hi[k] = cellOf(box.max[k], k);
+        }
+        return {lo, hi};
+    }
+    static std::int64_t cellCount(const Cell& lo, const Cell& hi) {
+        return (hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
+    }
+    bool isLarge(const Aabb& box) const {
+        const auto [lo, hi] = cellRange(box);
+        return cellCount(lo, hi) > kMaxCells;
+    }
+    std::uint64_t key(std::int64_t x, std::int64_t y, std::int64_t z) const {
+        return static_cast<std::uint64_t>((x * m_dims[1] + y) * m_dims[2] + z);
+    }
+
+    double m_cell = 1.0;
+    Vec3 m_origin = Vec3::Zero();
+    std::array<std::int64_t, 3> m_dims{1, 1, 1};
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> m_entries;
+    std::vector<std::uint32_t> m_largeB;
+};
 
 }  // namespace
 
@@ -46,22 +128,28 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
                      std::vector<ExactJobResult>& results, Stats& stats) {
     results.assign(jobs.size(), ExactJobResult{});
     m_candidates.resize(jobs.size());
-    // Phase 1: candidates per job (sweep and prune along the widest axis of the pair).
+    // Phase 1: candidates per job (a grid over the region where the two objects' surviving triangles overlap).
     m_pool.parallelFor(jobs.size(), 1, [&](std::size_t begin, std::size_t end) {
         std::vector<BoxRef> boxesA;
         std::vector<BoxRef> boxesB;
+        GridCandidates grid;
+        const double inflate = 0.5 * margin;
         for (std::size_t j = begin; j < end; ++j) {
             const ExactJob& job = jobs[j];
             const TriangleMesh& ma = *objects[job.a].mesh;
             const TriangleMesh& mb = *objects[job.b].mesh;
-            Aabb bounds;
-            for (std::uint32_t t : *job.trianglesA) bounds.grow(triangleBounds(ma, t));
-            int axis = 0;
-            bounds.extent().maxCoeff(&axis);
-            sortedBoxes(ma, *job.trianglesA, 0.5 * margin, axis, boxesA);
-            sortedBoxes(mb, *job.trianglesB, 0.5 * margin, axis, boxesB);
+            Aabb boundsA, boundsB;
+            for (std::uint32_t t : *job.trianglesA) boundsA.grow(triangleBounds(ma, t));
+            for (std::uint32_t t : *job.trianglesB) boundsB.grow(triangleBounds(mb, t));
+            boundsA = boundsA.inflated(inflate);
+            boundsB = boundsB.inflated(inflate);
             m_candidates[j].clear();
-            sweep(boxesA, boxesB, axis, m_candidates[j]);
+            if (boundsA.overlaps(boundsB)) {
+                const Aabb region{boundsA.min.cwiseMax(boundsB.min), boundsA.max.cwiseMin(boundsB.max)};
+                boxesIn(ma, *job.trianglesA, inflate, region, boxesA);
+                boxesIn(mb, *job.trianglesB, inflate, region, boxesB);
+                grid.run(boxesA, boxesB, region, m_candidates[j]);
+            }
             results[j].candidates = m_candidates[j].size();
         }
     });

@@ -61,6 +61,12 @@ std::vector<ValidatedObject> validateObjects(const std::vector<Object>& objects,
     return out;
 }
 
+bool meshTouchesBox(const TriangleMesh& mesh, const Aabb& box, double margin) {
+    for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
+        if (triangleBounds(mesh, t).inflated(0.5 * margin).overlaps(box)) return true;
+    return false;
+}
+
 std::vector<std::pair<std::uint32_t, std::uint32_t>> overlappingPairs(const std::vector<ValidatedObject>& objects) {
     std::vector<std::uint32_t> order;
     Aabb all;

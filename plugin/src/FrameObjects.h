@@ -25,6 +25,10 @@ std::vector<ValidatedObject> validateObjects(const std::vector<Object>& objects,
 /// All pairs (a < b) of valid objects whose boxes overlap, sorted: sweep and prune along the widest axis.
 std::vector<std::pair<std::uint32_t, std::uint32_t>> overlappingPairs(const std::vector<ValidatedObject>& objects);
 
+/// True when some triangle's box, inflated by margin / 2, overlaps `box` (already inflated by margin / 2): the
+/// deterministic test for pairs with a box-only proxy (their narrow phase is the caller's).
+bool meshTouchesBox(const TriangleMesh& mesh, const Aabb& box, double margin);
+
 /// Box of triangle t of `mesh`.
 inline Aabb triangleBounds(const TriangleMesh& mesh, std::uint32_t t) {
     Aabb b;

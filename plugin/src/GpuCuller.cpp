@@ -71,7 +71,6 @@ public:
             stats.prepassObjectsOut += m_active[i];
         }
         m_survivingTriangles.assign(objects.size(), {});
-        m_proxyAlive.assign(objects.size(), 0);
         buildGroups(!paper, stats);
         stats.prepassMs = prepass.ms();
 
@@ -226,14 +225,13 @@ private:
         for (const Tri& t : m_tris) addTriangleItem(t.object, t.triangle, 1, t.box);
         for (std::uint32_t o : proxies) addBoxItem(o, m_objectBox[o], m_valid[o].box);
         pruneLevel("triangles", stats);
-        finishFromTriangles(m_survivors, proxies);
+        finishFromTriangles(m_survivors);
     }
 
-    void finishFromTriangles(const std::vector<std::uint8_t>& alive, const std::vector<std::uint32_t>& proxies) {
+    /// Surviving triangles per object (`alive` empty: all of m_tris). Proxies only ever act as occluders.
+    void finishFromTriangles(const std::vector<std::uint8_t>& alive) {
         for (std::size_t i = 0; i < m_tris.size(); ++i)
             if (alive.empty() || alive[i]) m_survivingTriangles[m_tris[i].object].push_back(m_tris[i].triangle);
-        for (std::size_t p = 0; p < proxies.size(); ++p)
-            m_proxyAlive[proxies[p]] = alive.empty() || alive[m_tris.size() + p] ? 1 : 0;
         for (auto& list : m_survivingTriangles) std::sort(list.begin(), list.end());
     }
 
@@ -251,11 +249,14 @@ private:
     }
 
     /// CPU pre-pass (done in buildGroups), group boxes on the GPU, triangles of the surviving groups on the GPU;
-    /// a level whose input is small enough goes straight to the exact stage.
+    /// a level whose input is small enough goes straight to the exact stage, and GPU levels are skipped where they
+    /// do not pay (Settings::gpuLevels).
     void runAutoPipeline(Stats& stats) {
         std::vector<std::uint32_t> proxies = activeProxies();
         std::vector<Group> groups = m_groups;
-        if (triangleCount(groups) > m_settings.exactThreshold) {
+        const bool gpu = m_settings.gpuLevels == GpuLevels::Always ||
+                         (m_settings.gpuLevels == GpuLevels::Auto && !m_context.isSoftware());
+        if (gpu && triangleCount(groups) > m_settings.exactThreshold) {
             resetOwners();
             m_items.clear();
             for (std::size_t g = 0; g < groups.size(); ++g)
@@ -272,10 +273,10 @@ private:
             proxies.swap(keptProxies);
         }
         collectTriangles(groups, true);
-        if (m_tris.size() > m_settings.exactThreshold)
+        if (gpu && m_tris.size() > m_settings.exactThreshold)
             runTriangleLevel(proxies, stats);
         else
-            finishFromTriangles({}, proxies);
+            finishFromTriangles({});
     }
 
     /// The paper's pipeline: objects as boxes, objects as triangles, groups as triangles, triangles.
@@ -309,11 +310,6 @@ private:
         keepSurvivors(objects);
         std::vector<std::uint8_t> objectAlive(m_valid.size(), 0);
         for (std::uint32_t o : objects) objectAlive[o] = 1;
-        // Pairs are now the box-overlapping pairs among the survivors (the paper's all-pair box test).
-        std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
-        for (const auto& p : m_pairs)
-            if (objectAlive[p.first] && objectAlive[p.second]) pairs.push_back(p);
-        m_pairs.swap(pairs);
 
         std::vector<Group> groups;
         for (const Group& g : m_groups)
@@ -336,49 +332,46 @@ private:
         runTriangleLevel(keptProxies, stats);
     }
 
+    /// Pairs are a function of the input alone: mesh pairs with at least one triangle pair within the margin
+    /// (exact), pairs with a box proxy by a CPU box test. The GPU levels only decide how much exact work is left.
     void assemblePairs(Result& result) {
         std::vector<ExactJob> jobs;
         std::vector<std::size_t> jobPair;
-        std::vector<std::uint8_t> inPcs(m_valid.size(), 0);
-        auto alive = [&](std::uint32_t o) {
-            return isMesh(o) ? !m_survivingTriangles[o].empty() : m_proxyAlive[o] != 0;
-        };
         for (const auto& [a, b] : m_pairs) {
-            if (!alive(a) || !alive(b)) continue;
             ObjectPair pair;
             pair.a = a;
             pair.b = b;
             if (isMesh(a) && isMesh(b)) {
+                if (m_survivingTriangles[a].empty() || m_survivingTriangles[b].empty()) continue;
                 pair.hasTriangles = true;
                 jobs.push_back({a, b, &m_survivingTriangles[a], &m_survivingTriangles[b]});
                 jobPair.push_back(result.pairs.size());
             } else if (isMesh(a) || isMesh(b)) {
-                const std::uint32_t mesh = isMesh(a) ? a : b;
-                const Aabb& proxy = m_valid[isMesh(a) ? b : a].box;
-                bool any = false;
-                for (std::uint32_t t : m_survivingTriangles[mesh])
-                    if ((any = triangleBounds(meshOf(mesh), t).inflated(0.5 * m_settings.margin).overlaps(proxy)))
-                        break;
-                if (!any) continue;
+                if (!meshTouchesBox(meshOf(isMesh(a) ? a : b), m_valid[isMesh(a) ? b : a].box, m_settings.margin))
+                    continue;
             }
             result.pairs.push_back(std::move(pair));
         }
         m_exact.run(*m_objects, jobs, m_settings.margin, m_jobResults, result.stats);
+        std::vector<std::uint8_t> keep(result.pairs.size(), 1);
         for (std::size_t j = 0; j < jobs.size(); ++j) {
-            ObjectPair& pair = result.pairs[jobPair[j]];
-            pair.triangles = std::move(m_jobResults[j].triangles);
-            if (m_jobResults[j].candidates == 0) pair.a = pair.b = kDropped;  // no two boxes overlap
+            result.pairs[jobPair[j]].triangles = std::move(m_jobResults[j].triangles);
+            keep[jobPair[j]] = !result.pairs[jobPair[j]].triangles.empty();
         }
-        result.pairs.erase(std::remove_if(result.pairs.begin(), result.pairs.end(),
-                                          [](const ObjectPair& p) { return p.a == kDropped; }),
-                           result.pairs.end());
+        std::size_t out = 0;
+        for (std::size_t i = 0; i < result.pairs.size(); ++i) {
+            if (!keep[i]) continue;
+            if (out != i) result.pairs[out] = std::move(result.pairs[i]);
+            ++out;
+        }
+        result.pairs.resize(out);
+        std::vector<std::uint8_t> inPcs(m_valid.size(), 0);
         for (const ObjectPair& p : result.pairs) inPcs[p.a] = inPcs[p.b] = 1;
         for (std::uint32_t o = 0; o < inPcs.size(); ++o)
             if (inPcs[o]) result.pcs.push_back(o);
     }
 
     static constexpr std::uint32_t kNoOwner = 0xFFFFFFFFu;
-    static constexpr std::uint32_t kDropped = 0xFFFFFFFFu;
 
     Settings m_settings;
     gl::EglContext m_context;
@@ -403,7 +396,6 @@ private:
     std::uint32_t m_ownerCount = 0;
     std::vector<Tri> m_tris;
     std::vector<std::vector<std::uint32_t>> m_survivingTriangles;
-    std::vector<std::uint8_t> m_proxyAlive;
     std::vector<ExactJobResult> m_jobResults;
 };
 

@@ -27,6 +27,7 @@ public:
         stats.rejectedObjects = result.rejected.size();
         const auto pairs = overlappingPairs(valid);
         std::vector<ObjectPair> out(pairs.size());
+        std::vector<std::uint8_t> keep(pairs.size(), 0);
         m_pool.parallelFor(pairs.size(), 1, [&](std::size_t begin, std::size_t end) {
             for (std::size_t p = begin; p < end; ++p) {
                 const auto [a, b] = pairs[p];
@@ -34,7 +35,13 @@ public:
                 pair.a = a;
                 pair.b = b;
                 pair.hasTriangles = valid[a].isMesh && valid[b].isMesh;
-                if (!pair.hasTriangles) continue;
+                if (!pair.hasTriangles) {
+                    keep[p] = !valid[a].isMesh && !valid[b].isMesh
+                                  ? 1
+                                  : meshTouchesBox(*objects[valid[a].isMesh ? a : b].mesh,
+                                                   valid[valid[a].isMesh ? b : a].box, margin);
+                    continue;
+                }
                 const TriangleMesh& ma = *objects[a].mesh;
                 const TriangleMesh& mb = *objects[b].mesh;
                 std::vector<Aabb> boxesB(mb.triangles.size());
@@ -51,11 +58,13 @@ public:
                             pair.triangles.push_back({ta, tb});
                     }
                 }
+                keep[p] = !pair.triangles.empty();
             }
         });
         std::vector<std::uint8_t> inPcs(objects.size(), 0);
-        for (ObjectPair& pair : out) {
-            if (pair.hasTriangles && pair.triangles.empty()) continue;
+        for (std::size_t p = 0; p < out.size(); ++p) {
+            ObjectPair& pair = out[p];
+            if (!keep[p]) continue;
             stats.intersectingTrianglePairs += pair.triangles.size();
             inPcs[pair.a] = inPcs[pair.b] = 1;
             result.pairs.push_back(std::move(pair));

@@ -12,6 +12,9 @@ std::string Settings::validate() const {
     if (threads > 256) return "threads must be <= 256";
     if (mode != Mode::Reliable && mode != Mode::Sampled) return "mode is not a Mode value";
     if (pipeline != Pipeline::Auto && pipeline != Pipeline::Paper) return "pipeline is not a Pipeline value";
+    if (backend != Backend::Compute && backend != Backend::Raster) return "backend is not a Backend value";
+    if (gpuLevels != GpuLevels::Auto && gpuLevels != GpuLevels::Always && gpuLevels != GpuLevels::Never)
+        return "gpuLevels is not a GpuLevels value";
     return {};
 }
 

@@ -23,6 +23,13 @@ Comparison compare(const Result& reference, const Result& result) {
                             std::to_string(p[2]) + " tri " + std::to_string(p[3]);
     }
     for (const auto& p : got) c.spurious += expected.count(p) ? 0 : 1;
+    // Object pairs and the PCS are a function of the input too (reliable mode): they must match exactly.
+    auto objectPairs = [](const Result& r) {
+        std::vector<std::array<std::uint32_t, 3>> out;
+        for (const ObjectPair& p : r.pairs) out.push_back({p.a, p.b, p.hasTriangles ? 1u : 0u});
+        return out;
+    };
+    c.objectPairsEqual = objectPairs(reference) == objectPairs(result) && reference.pcs == result.pcs;
     return c;
 }
 

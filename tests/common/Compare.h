@@ -20,6 +20,7 @@ struct Comparison {
     std::size_t missed = 0;      ///< in the reference, not in the result
     std::size_t spurious = 0;    ///< in the result, not in the reference
     std::string firstMissed;
+    bool objectPairsEqual = false;  ///< same object pairs (a, b, hasTriangles) and the same PCS
 };
 Comparison compare(const Result& reference, const Result& result);
 

@@ -5,6 +5,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <limits>
 
 namespace cullide::test {
 namespace {
@@ -13,7 +15,8 @@ Settings reliable(int resolution, Pipeline pipeline = Pipeline::Auto) {
     Settings s;
     s.resolution = resolution;
     s.pipeline = pipeline;
-    s.exactThreshold = 0;  // always run every GPU level in tests
+    s.exactThreshold = 0;              // run every GPU level in tests,
+    s.gpuLevels = GpuLevels::Always;   // also on llvmpipe
     return s;
 }
 
@@ -53,6 +56,7 @@ TEST_P(ReliableSweep, MissesNothingOnRandomSoups) {
         const Comparison cmp = compare(expected, got);
         EXPECT_EQ(cmp.missed, 0u) << "seed " << seed << " res " << c.resolution << ": " << cmp.firstMissed;
         EXPECT_EQ(cmp.spurious, 0u) << "seed " << seed;
+        EXPECT_TRUE(cmp.objectPairsEqual) << "seed " << seed;
         expectedTotal += cmp.expected;
     }
     EXPECT_GT(expectedTotal, 20u) << "scenes too sparse to test anything";
@@ -62,6 +66,199 @@ INSTANTIATE_TEST_SUITE_P(Resolutions, ReliableSweep,
                          ::testing::Values(SweepCase{Pipeline::Auto, 16}, SweepCase{Pipeline::Auto, 64},
                                            SweepCase{Pipeline::Auto, 256}, SweepCase{Pipeline::Auto, 1024},
                                            SweepCase{Pipeline::Paper, 16}, SweepCase{Pipeline::Paper, 256}));
+
+}  // namespace
+}  // namespace cullide::test
+
+namespace cullide::test {
+namespace {
+
+Result runBoth(Culler& culler, const std::vector<Object>& objects, double margin, Comparison& cmp) {
+    Settings s;
+    s.margin = margin;
+    auto reference = createReferenceCuller(s);
+    Result expected, got;
+    reference->run(objects, expected);
+    culler.run(objects, got);
+    cmp = compare(expected, got);
+    return got;
+}
+
+TEST(GpuCuller, PrunesMostOfASparseScene) {
+    CULLIDE_GPU_CULLER_OR_SKIP(culler, reliable(256));
+    const auto meshes = randomSoups(11, 40, 100, 0.08);
+    Comparison cmp;
+    const Result r = runBoth(*culler, asObjects(meshes), 0.0, cmp);
+    EXPECT_EQ(cmp.missed, 0u) << cmp.firstMissed;
+    ASSERT_FALSE(r.stats.levels.empty());
+    const LevelStats& last = r.stats.levels.back();
+    ASSERT_GE(last.itemsPerIteration.size(), 2u);
+    // The visibility levels must actually remove work: far fewer candidate pairs than all-pairs of the survivors.
+    EXPECT_LT(last.itemsPerIteration.back(), last.itemsPerIteration.front());
+    EXPECT_LT(r.stats.candidateTrianglePairs, 40u * 100u);
+    EXPECT_GT(r.stats.bytesReadBack, 0u);
+    EXPECT_GT(r.stats.draws, 0u);
+}
+
+TEST(GpuCuller, MarginReportsEveryPairWithinDistance) {
+    for (double margin : {0.002, 0.02}) {
+        Settings s = reliable(64);
+        s.margin = margin;
+        CULLIDE_GPU_CULLER_OR_SKIP(culler, s);
+        const auto meshes = randomSoups(5, 16, 60, 0.15);
+        Comparison cmp;
+        runBoth(*culler, asObjects(meshes), margin, cmp);
+        EXPECT_EQ(cmp.missed, 0u) << "margin " << margin << ": " << cmp.firstMissed;
+        EXPECT_EQ(cmp.spurious, 0u);
+        EXPECT_GT(cmp.expected, 0u);
+    }
+}
+
+TEST(GpuCuller, DeformingAppearingAndDisappearingObjects) {
+    CULLIDE_GPU_CULLER_OR_SKIP(culler, reliable(128));
+    auto meshes = randomSoups(21, 14, 50, 0.2);
+    for (int frame = 0; frame < 8; ++frame) {
+        // Deform every vertex, drop an object, add a new one, change triangle counts.
+        for (std::size_t m = 0; m < meshes.size(); ++m)
+            for (Vec3& v : meshes[m].vertices)
+                v += 0.01 * Vec3(std::sin(frame + v.y() * 9), std::cos(frame + v.z() * 7), std::sin(v.x() * 5 - frame));
+        if (frame % 2 == 1 && meshes.size() > 4) meshes.erase(meshes.begin() + frame % meshes.size());
+        auto extra = randomSoups(100 + static_cast<std::uint64_t>(frame), 1, 20 + 10 * frame, 0.2);
+        meshes.push_back(extra[0]);
+        if (frame % 3 == 0) meshes[0].triangles.resize(meshes[0].triangles.size() / 2);
+        Comparison cmp;
+        runBoth(*culler, asObjects(meshes), 0.0, cmp);
+        EXPECT_EQ(cmp.missed, 0u) << "frame " << frame << ": " << cmp.firstMissed;
+        EXPECT_EQ(cmp.spurious, 0u);
+        EXPECT_TRUE(cmp.objectPairsEqual) << "frame " << frame;
+    }
+}
+
+TEST(GpuCuller, InvalidObjectsAndProxiesNeverHarmValidOnes) {
+    CULLIDE_GPU_CULLER_OR_SKIP(culler, reliable(64));
+    auto meshes = randomSoups(3, 10, 60, 0.2);
+    TriangleMesh nan = meshes[0];
+    nan.vertices[1].x() = std::nan("");
+    TriangleMesh badIndex = meshes[1];
+    badIndex.triangles[0][1] = 99999;
+    meshes.push_back(nan);
+    meshes.push_back(badIndex);
+    meshes.push_back(TriangleMesh{});
+    auto objects = asObjects(meshes);
+    Object proxy;
+    proxy.box.min = Vec3(0.4, 0.4, 0.4);
+    proxy.box.max = Vec3(0.6, 0.6, 0.6);
+    objects.push_back(proxy);
+    Object infiniteProxy;
+    infiniteProxy.box.min = Vec3(0, 0, 0);
+    infiniteProxy.box.max = Vec3(1, 1, std::numeric_limits<double>::infinity());
+    objects.push_back(infiniteProxy);
+    Comparison cmp;
+    const Result r = runBoth(*culler, objects, 0.0, cmp);
+    EXPECT_EQ(cmp.missed, 0u) << cmp.firstMissed;
+    EXPECT_EQ(cmp.spurious, 0u);
+    EXPECT_TRUE(cmp.objectPairsEqual);
+    ASSERT_EQ(r.rejected.size(), 3u);
+    EXPECT_EQ(r.rejected[0].object, 10u);
+    EXPECT_EQ(r.rejected[1].object, 11u);
+    EXPECT_EQ(r.rejected[2].object, 14u);
+    for (const ObjectPair& p : r.pairs) {
+        EXPECT_NE(p.a, 10u);
+        EXPECT_NE(p.b, 11u);
+        if (p.b == 13u) {
+            EXPECT_FALSE(p.hasTriangles);
+        }
+    }
+}
+
+TEST(GpuCuller, LargeOffsetsAndTinyObjects) {
+    CULLIDE_GPU_CULLER_OR_SKIP(culler, reliable(32));
+    for (double offset : {1e5, 1e7}) {
+        auto meshes = randomSoups(8, 12, 40, 0.2);
+        // Shrink half of the objects below a pixel and move everything far from the origin.
+        for (std::size_t m = 0; m < meshes.size(); ++m)
+            for (Vec3& v : meshes[m].vertices) {
+                if (m % 2 == 0) v = Vec3(0.5, 0.5, 0.5) + (v - Vec3(0.5, 0.5, 0.5)) * 1e-3;
+                v += Vec3(offset, -offset, offset);
+            }
+        Comparison cmp;
+        runBoth(*culler, asObjects(meshes), 0.0, cmp);
+        EXPECT_EQ(cmp.missed, 0u) << "offset " << offset << ": " << cmp.firstMissed;
+        EXPECT_EQ(cmp.spurious, 0u);
+    }
+}
+
+TEST(GpuCuller, SampledModeMissesAreCounted) {
+    std::size_t missed = 0;
+    std::size_t expected = 0;
+    for (int resolution : {16, 64, 256}) {
+        Settings s = reliable(resolution);
+        s.mode = Mode::Sampled;
+        CULLIDE_GPU_CULLER_OR_SKIP(culler, s);
+        for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+            Comparison cmp;
+            runBoth(*culler, asObjects(randomSoups(seed, 16, 80, 0.2)), 0.0, cmp);
+            EXPECT_EQ(cmp.spurious, 0u);  // the exact stage never reports a false pair
+            missed += cmp.missed;
+            expected += cmp.expected;
+        }
+        std::printf("sampled mode at %dx%d: missed %zu of %zu triangle pairs so far\n", resolution, resolution, missed,
+                    expected);
+    }
+    EXPECT_GT(expected, 0u);
+}
+
+TEST(GpuCuller, AutoPolicyGivesTheSameResultWithOrWithoutGpuLevels) {
+    Settings s;
+    s.resolution = 64;
+    CULLIDE_GPU_CULLER_OR_SKIP(autoCuller, s);
+    CULLIDE_GPU_CULLER_OR_SKIP(gpuCuller, reliable(64));
+    s.gpuLevels = GpuLevels::Never;
+    CULLIDE_GPU_CULLER_OR_SKIP(cpuCuller, s);
+    const auto meshes = randomSoups(77, 20, 80, 0.2);
+    const auto objects = asObjects(meshes);
+    Result a, g, c;
+    autoCuller->run(objects, a);
+    gpuCuller->run(objects, g);
+    cpuCuller->run(objects, c);
+    EXPECT_TRUE(compare(g, a).objectPairsEqual);
+    EXPECT_TRUE(compare(g, c).objectPairsEqual);
+    EXPECT_EQ(trianglePairs(g), trianglePairs(a));
+    EXPECT_EQ(trianglePairs(g), trianglePairs(c));
+    EXPECT_FALSE(g.stats.levels.empty());
+    EXPECT_TRUE(c.stats.levels.empty());
+    // Auto skips the GPU levels exactly on software renderers.
+    const bool software = a.stats.renderer.find("llvmpipe") != std::string::npos;
+    EXPECT_EQ(a.stats.levels.empty(), software) << a.stats.renderer;
+}
+
+TEST(GpuCuller, RasterBackendAgreesWithCompute) {
+    Settings s = reliable(64);
+    s.backend = Backend::Raster;
+    CULLIDE_GPU_CULLER_OR_SKIP(raster, s);
+    CULLIDE_GPU_CULLER_OR_SKIP(compute, reliable(64));
+    const auto meshes = randomSoups(9, 12, 60, 0.2);
+    Result r, c;
+    raster->run(asObjects(meshes), r);
+    compute->run(asObjects(meshes), c);
+    EXPECT_EQ(trianglePairs(r), trianglePairs(c));
+    ASSERT_EQ(r.stats.levels.size(), c.stats.levels.size());
+    // Same shader code for the test itself: the same survivors at every level and iteration.
+    for (std::size_t l = 0; l < r.stats.levels.size(); ++l)
+        EXPECT_EQ(r.stats.levels[l].itemsPerIteration, c.stats.levels[l].itemsPerIteration) << l;
+}
+
+TEST(GpuCuller, UnknownDeviceIsAClearError) {
+    Settings s;
+    s.device = "99";
+    try {
+        createGpuCuller(s);
+        FAIL() << "expected GlUnavailableError";
+    } catch (const GlUnavailableError& e) {
+        EXPECT_NE(std::string(e.what()).find("99"), std::string::npos) << e.what();
+        EXPECT_NE(std::string(e.what()).find("libegl"), std::string::npos) << e.what();
+    }
+}
 
 }  // namespace
 }  // namespace cullide::test

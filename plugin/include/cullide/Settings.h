@@ -22,9 +22,30 @@ enum class Pipeline {
     Paper,
 };
 
+enum class Backend {
+    /// A compute shader scans each primitive's conservative footprint (default: multi-threaded on llvmpipe, and it
+    /// avoids the fixed-function path on data-centre GPUs).
+    Compute,
+    /// The same test through the rasterizer (a vertex + fragment shader, three views side by side in one target).
+    Raster,
+};
+
+enum class GpuLevels {
+    /// Run the GPU visibility levels where they pay: on hardware devices. On software renderers (llvmpipe) a level
+    /// costs more than the exact work it saves on every scene measured (docs/performance.md), so the CPU pre-passes
+    /// and the exact stage do the work there. Results are identical either way.
+    Auto,
+    /// Always run the GPU levels (tests, benchmarks, the paper-faithful pipeline).
+    Always,
+    /// Never run them: CPU box pre-passes and the exact stage only.
+    Never,
+};
+
 struct Settings {
     Mode mode = Mode::Reliable;
     Pipeline pipeline = Pipeline::Auto;
+    Backend backend = Backend::Compute;
+    GpuLevels gpuLevels = GpuLevels::Auto;
     /// Image-space resolution per view (square), 16..4096.
     int resolution = 256;
     /// Sub-object group size k (triangles per group), 1..4096.

@@ -3,6 +3,8 @@
 #include "cullide/Culler.h"
 
 #include <cstdio>
+#include <map>
+#include <mutex>
 #include <cstdlib>
 #include <cstring>
 #include <stdexcept>
@@ -29,6 +31,29 @@ void GLAPIENTRY debugCallback(GLenum, GLenum type, GLuint, GLenum severity, GLsi
         std::fprintf(stderr, "cullide: GL debug: %s\n", message);
 }
 #endif
+
+/// EGL displays are per device and process-wide; eglTerminate would invalidate every context on one. Count the
+/// users of each display and terminate it when the last one goes.
+std::mutex& displayMutex() {
+    static std::mutex m;
+    return m;
+}
+std::map<EGLDisplay, int>& displayUsers() {
+    static std::map<EGLDisplay, int> users;
+    return users;
+}
+void retainDisplay(EGLDisplay d) {
+    std::lock_guard<std::mutex> lock(displayMutex());
+    ++displayUsers()[d];
+}
+void releaseDisplay(EGLDisplay d) {
+    std::lock_guard<std::mutex> lock(displayMutex());
+    auto it = displayUsers().find(d);
+    if (it == displayUsers().end() || --it->second == 0) {
+        if (it != displayUsers().end()) displayUsers().erase(it);
+        eglTerminate(d);
+    }
+}
 
 }  // namespace
 
@@ -105,11 +130,12 @@ bool EglContext::tryDisplay(EGLDisplay display, const std::string& description, 
         whyNot += description + ": eglInitialize failed; ";
         return false;
     }
+    retainDisplay(display);
     const char* extensions = eglQueryString(display, EGL_EXTENSIONS);
     if (!hasExtension(extensions, "EGL_KHR_surfaceless_context") ||
         !hasExtension(extensions, "EGL_KHR_no_config_context") || !eglBindAPI(EGL_OPENGL_API)) {
         whyNot += description + ": lacks surfaceless/no-config contexts or desktop OpenGL; ";
-        eglTerminate(display);
+        releaseDisplay(display);
         return false;
     }
     const EGLint attributes[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
@@ -121,13 +147,13 @@ bool EglContext::tryDisplay(EGLDisplay display, const std::string& description, 
     EGLContext context = eglCreateContext(display, EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, attributes);
     if (context == EGL_NO_CONTEXT) {
         whyNot += description + ": no OpenGL 4.5 core context; ";
-        eglTerminate(display);
+        releaseDisplay(display);
         return false;
     }
     if (!eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, context)) {
         whyNot += description + ": eglMakeCurrent failed; ";
         eglDestroyContext(display, context);
-        eglTerminate(display);
+        releaseDisplay(display);
         return false;
     }
     m_display = display;
@@ -136,6 +162,9 @@ bool EglContext::tryDisplay(EGLDisplay display, const std::string& description, 
     const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
     const auto* version = reinterpret_cast<const char*>(glGetString(GL_VERSION));
     m_renderer = std::string(renderer ? renderer : "?") + " | " + (version ? version : "?");
+    const std::string lower = renderer ? renderer : "";
+    m_software = lower.find("llvmpipe") != std::string::npos || lower.find("softpipe") != std::string::npos ||
+                 lower.find("SwiftShader") != std::string::npos;
     m_timerQueries = epoxy_gl_version() >= 33 || epoxy_has_gl_extension("GL_ARB_timer_query");
 #ifndef NDEBUG
     if (epoxy_has_gl_extension("GL_KHR_debug")) {
@@ -146,17 +175,20 @@ bool EglContext::tryDisplay(EGLDisplay display, const std::string& description, 
     return true;
 }
 
+bool EglContext::tryMakeCurrent() noexcept {
+    return eglGetCurrentContext() == m_context ||
+           eglMakeCurrent(m_display, EGL_NO_SURFACE, EGL_NO_SURFACE, m_context) == EGL_TRUE;
+}
+
 void EglContext::makeCurrent() {
-    if (eglGetCurrentContext() != m_context &&
-        !eglMakeCurrent(m_display, EGL_NO_SURFACE, EGL_NO_SURFACE, m_context))
-        throw GlUnavailableError("eglMakeCurrent failed for the culler's context");
+    if (!tryMakeCurrent()) throw GlUnavailableError("eglMakeCurrent failed for the culler's context");
 }
 
 EglContext::~EglContext() {
     if (m_display == EGL_NO_DISPLAY) return;
-    eglMakeCurrent(m_display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+    if (eglGetCurrentContext() == m_context) eglMakeCurrent(m_display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     eglDestroyContext(m_display, m_context);
-    eglTerminate(m_display);
+    releaseDisplay(m_display);
 }
 
 }  // namespace cullide::gl

@@ -22,9 +22,13 @@ public:
 
     /// Makes the context current on the calling thread (cheap when it already is).
     void makeCurrent();
+    /// The same without throwing (destructors): false when the context cannot be made current.
+    bool tryMakeCurrent() noexcept;
     const std::string& device() const { return m_device; }
     const std::string& renderer() const { return m_renderer; }
     bool hasTimerQueries() const { return m_timerQueries; }
+    /// A CPU rasterizer (llvmpipe, softpipe): GPU levels cost more than they save there.
+    bool isSoftware() const { return m_software; }
 
 private:
     bool tryDisplay(EGLDisplay display, const std::string& description, std::string& whyNot);
@@ -34,6 +38,7 @@ private:
     std::string m_device;
     std::string m_renderer;
     bool m_timerQueries = false;
+    bool m_software = false;
 };
 
 }  // namespace cullide::gl

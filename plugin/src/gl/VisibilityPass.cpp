@@ -7,9 +7,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <stdexcept>
+#include <initializer_list>
 #include <string>
 
 namespace cullide::gl {
@@ -20,14 +19,17 @@ double msSince(Clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-GLuint compileShader(GLenum type, const char* name) {
-    const char* header = "#version 450 core\n";
-    const char* bindings = shaderSource("bindings.h");
-    const char* body = shaderSource(name);
-    if (bindings == nullptr || body == nullptr) throw std::logic_error(std::string("missing shader ") + name);
-    const char* sources[] = {header, bindings, "\n#line 1\n", body};
+/// Compiles "#version" + bindings.h + the given embedded sources, in order.
+GLuint compileShader(GLenum type, std::initializer_list<const char*> names) {
+    std::vector<const char*> sources = {"#version 450 core\n", shaderSource("bindings.h")};
+    for (const char* name : names) {
+        const char* text = shaderSource(name);
+        if (text == nullptr) throw std::logic_error(std::string("missing embedded shader ") + name);
+        sources.push_back("\n");
+        sources.push_back(text);
+    }
     GLuint shader = glCreateShader(type);
-    glShaderSource(shader, 4, sources, nullptr);
+    glShaderSource(shader, static_cast<GLsizei>(sources.size()), sources.data(), nullptr);
     glCompileShader(shader);
     GLint ok = 0;
     glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
@@ -35,9 +37,25 @@ GLuint compileShader(GLenum type, const char* name) {
         char log[4096] = {};
         glGetShaderInfoLog(shader, sizeof log, nullptr, log);
         glDeleteShader(shader);
-        throw std::runtime_error(std::string("cullide: compiling ") + name + " failed: " + log);
+        throw std::runtime_error(std::string("cullide: compiling ") + *(names.end() - 1) + " failed: " + log);
     }
     return shader;
+}
+
+GLuint linkProgram(std::initializer_list<GLuint> shaders) {
+    GLuint program = glCreateProgram();
+    for (GLuint shader : shaders) glAttachShader(program, shader);
+    glLinkProgram(program);
+    for (GLuint shader : shaders) glDeleteShader(shader);
+    GLint ok = 0;
+    glGetProgramiv(program, GL_LINK_STATUS, &ok);
+    if (!ok) {
+        char log[4096] = {};
+        glGetProgramInfoLog(program, sizeof log, nullptr, log);
+        glDeleteProgram(program);
+        throw std::runtime_error(std::string("cullide: linking a visibility program failed: ") + log);
+    }
+    return program;
 }
 
 /// Grows a buffer to hold at least `bytes`.
@@ -60,7 +78,8 @@ std::uint32_t bitsFor(std::uint32_t maxValue) {
     return bits;
 }
 
-enum Buffer { kPositions, kIndices, kBoxes, kPrims, kOwners, kFlags, kBufferCount };
+enum Buffer { kPositions, kIndices, kBoxes, kPrims, kOwners, kFlags, kRecords, kCounters, kBufferCount };
+constexpr std::size_t kRecordBytes = 7 * 16;  // PrimRecord in common.glsl
 
 }  // namespace
 
@@ -68,6 +87,7 @@ struct VisibilityPass::Impl {
     EglContext& context;
     Settings settings;
     GLuint program = 0;
+    GLuint setupProgram = 0;  // raster back-end only
     GLuint vao = 0;
     GLuint framebuffer = 0;
     GLuint images[4] = {};
@@ -76,30 +96,40 @@ struct VisibilityPass::Impl {
     GLuint timer = 0;
     double coordinateBound = 0.0;
     std::vector<std::uint32_t> primScratch;
+    const GpuGeometry* geometry = nullptr;
+    GLuint overflows = 0;  ///< compute invocations of the last iteration that refused to run (see bindings.h)
+
+    /// Extent of a primitive (a box, or a triangle of the uploaded geometry).
+    Vec3 primExtent(std::uint32_t ref) const {
+        Aabb b;
+        if (ref & CULLIDE_PRIM_BOX_BIT) {
+            const float* f = &geometry->boxes[6 * (ref & ~CULLIDE_PRIM_BOX_BIT)];
+            return Vec3(f[3] - f[0], f[4] - f[1], f[5] - f[2]);
+        }
+        for (int k = 0; k < 3; ++k) {
+            const float* v = &geometry->positions[3 * geometry->indices[3 * ref + static_cast<std::uint32_t>(k)]];
+            b.grow(Vec3(v[0], v[1], v[2]));
+        }
+        return b.extent();
+    }
     std::vector<std::uint32_t> flagScratch;
 
     Impl(EglContext& c, const Settings& s) : context(c), settings(s) {
         context.makeCurrent();
-        GLuint vs = compileShader(GL_VERTEX_SHADER, "cull.vert");
-        GLuint fs = 0;
-        try {
-            fs = compileShader(GL_FRAGMENT_SHADER, "cull.frag");
-        } catch (...) {
-            glDeleteShader(vs);
-            throw;
-        }
-        program = glCreateProgram();
-        glAttachShader(program, vs);
-        glAttachShader(program, fs);
-        glLinkProgram(program);
-        glDeleteShader(vs);
-        glDeleteShader(fs);
-        GLint ok = 0;
-        glGetProgramiv(program, GL_LINK_STATUS, &ok);
-        if (!ok) {
-            char log[4096] = {};
-            glGetProgramInfoLog(program, sizeof log, nullptr, log);
-            throw std::runtime_error(std::string("cullide: linking the visibility program failed: ") + log);
+        if (settings.backend == Backend::Compute) {
+            program = linkProgram({compileShader(GL_COMPUTE_SHADER, {"common.glsl", "visit.glsl", "cull.comp"})});
+        } else {
+            setupProgram = linkProgram(
+                {compileShader(GL_COMPUTE_SHADER, {"common.glsl", "records.glsl", "cull_setup.comp"})});
+            GLuint vs = compileShader(GL_VERTEX_SHADER, {"common.glsl", "records.glsl", "cull.vert"});
+            GLuint fs = 0;
+            try {
+                fs = compileShader(GL_FRAGMENT_SHADER, {"common.glsl", "visit.glsl", "records.glsl", "cull.frag"});
+            } catch (...) {
+                glDeleteShader(vs);
+                throw;
+            }
+            program = linkProgram({vs, fs});
         }
         glCreateVertexArrays(1, &vao);
         glCreateBuffers(kBufferCount, buffers);
@@ -115,44 +145,54 @@ struct VisibilityPass::Impl {
     }
 
     ~Impl() {
-        context.makeCurrent();
+        if (!context.tryMakeCurrent()) return;  // the context is gone: so are its objects
         if (timer) glDeleteQueries(1, &timer);
         glDeleteFramebuffers(1, &framebuffer);
         glDeleteTextures(4, images);
         glDeleteBuffers(kBufferCount, buffers);
         glDeleteVertexArrays(1, &vao);
         glDeleteProgram(program);
+        if (setupProgram) glDeleteProgram(setupProgram);
     }
 
     void draw(int pass, std::size_t primCount, LevelStats& level, Stats& stats) {
         glUniform1i(CULLIDE_LOC_PASS, pass);
-        glDrawArraysInstanced(GL_TRIANGLES, 0, static_cast<GLsizei>(3 * primCount), 3);
+        if (settings.backend == Backend::Compute) {
+            const auto groups = static_cast<GLuint>((primCount + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE);
+            glDispatchCompute(groups, 3, 1);
+        } else {
+            glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(3 * 3 * primCount));  // 3 views x primCount records
+        }
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
         level.draws += 1;
         level.primitivesDrawn += 3 * primCount;
         stats.draws += 1;
     }
 
+    void setUniforms(std::size_t primCount, std::uint32_t idBits, const float* lo, const float* pixelScale,
+                     const float* depthScale, const float* halfSize, const float* depthPad) const {
+        glUniform1i(CULLIDE_LOC_RESOLUTION, settings.resolution);
+        glUniform3fv(CULLIDE_LOC_VIEW_LO, 1, lo);
+        glUniform3fv(CULLIDE_LOC_PIXEL_SCALE, 1, pixelScale);
+        glUniform3fv(CULLIDE_LOC_DEPTH_SCALE, 1, depthScale);
+        glUniform3fv(CULLIDE_LOC_HALF_SIZE, 1, halfSize);
+        glUniform3fv(CULLIDE_LOC_DEPTH_PAD, 1, depthPad);
+        glUniform1ui(CULLIDE_LOC_ID_BITS, idBits);
+        glUniform1i(CULLIDE_LOC_CONSERVATIVE, settings.mode == Mode::Reliable ? 1 : 0);
+        glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(primCount));
+    }
+
     /// One iteration over `alive` items: returns the flags of all items.
     void runIteration(const LevelItems& items, const std::vector<std::uint8_t>& alive, LevelStats& level,
                       Stats& stats) {
-        // Primitives of the alive items, and the view box fitted to them.
-        primScratch.clear();
+        // The view box fitted to the alive items.
         Aabb view;
         std::uint32_t maxOwner = 0;
         for (std::size_t i = 0; i < items.size(); ++i) {
             if (!alive[i]) continue;
-            for (std::uint32_t p = items.primBegin[i]; p < items.primBegin[i + 1]; ++p) {
-                primScratch.push_back(items.prims[p]);
-                primScratch.push_back(static_cast<std::uint32_t>(i));
-            }
             view.grow(items.bounds[i]);
             maxOwner = std::max(maxOwner, items.owner[i]);
         }
-        const std::size_t primCount = primScratch.size() / 2;
-        uploadBuffer(buffers[kPrims], capacity[kPrims], primScratch.data(), primScratch.size() * 4);
-        stats.bytesUploaded += primScratch.size() * 4;
-
         // View box: the survivors' bounds grown by the margin and a little, so that every dilated fragment and
         // every conservative depth range stays inside the image and inside [0, 1].
         const double margin = 0.5 * settings.margin;  // each item is dilated by half: together the full margin
@@ -170,7 +210,6 @@ struct VisibilityPass::Impl {
         }
         extent = view.extent();
         const double res = settings.resolution;
-        const bool conservative = settings.mode == Mode::Reliable;
         const double bound = std::max(coordinateBound, view.min.cwiseAbs().cwiseMax(view.max.cwiseAbs()).maxCoeff());
         float lo[3], pixelScale[3], depthScale[3], halfSize[3], depthPad[3];
         for (int a = 0; a < 3; ++a) {
@@ -183,18 +222,43 @@ struct VisibilityPass::Impl {
             halfSize[a] = static_cast<float>(0.5 + margin * res / extent[a] + 1e-3 + relative * res);
             depthPad[a] = static_cast<float>(margin / extent[a] + relative + std::ldexp(1.0, -20));
         }
+        // Primitives of the alive items; on the compute back-end each is split into bands of at most
+        // CULLIDE_PIXELS_PER_INVOCATION pixels of its largest footprint over the three views.
+        primScratch.clear();
+        const bool split = settings.backend == Backend::Compute;
+        for (std::size_t i = 0; i < items.size(); ++i) {
+            if (!alive[i]) continue;
+            for (std::uint32_t p = items.primBegin[i]; p < items.primBegin[i + 1]; ++p) {
+                std::uint32_t bands = 1;
+                if (split) {
+                    const Vec3 size = primExtent(items.prims[p]);
+                    double pixels = 0.0;
+                    for (int a = 0; a < 3; ++a) {
+                        const int u = (a + 1) % 3, v = (a + 2) % 3;
+                        pixels = std::max(pixels, (size[u] * pixelScale[u] + 2.0 * halfSize[u] + 3.0) *
+                                                      (size[v] * pixelScale[v] + 2.0 * halfSize[v] + 3.0));
+                    }
+                    bands = static_cast<std::uint32_t>(
+                        std::min(1e6, std::ceil(pixels / CULLIDE_PIXELS_PER_INVOCATION)));
+                    bands = std::max(bands, 1u);
+                }
+                for (std::uint32_t band = 0; band < bands; ++band) {
+                    primScratch.push_back(items.prims[p]);
+                    primScratch.push_back(static_cast<std::uint32_t>(i));
+                    primScratch.push_back(band);
+                    primScratch.push_back(bands);
+                }
+            }
+        }
+        const std::size_t primCount = primScratch.size() / 4;
+        uploadBuffer(buffers[kPrims], capacity[kPrims], primScratch.data(), primScratch.size() * 4);
+        stats.bytesUploaded += primScratch.size() * 4;
+
         const std::uint32_t idBits = bitsFor(maxOwner);
         if (idBits > 16) throw std::runtime_error("cullide: more than 65536 objects in one level");
 
         glUseProgram(program);
-        glUniform1i(CULLIDE_LOC_RESOLUTION, settings.resolution);
-        glUniform3fv(CULLIDE_LOC_VIEW_LO, 1, lo);
-        glUniform3fv(CULLIDE_LOC_PIXEL_SCALE, 1, pixelScale);
-        glUniform3fv(CULLIDE_LOC_DEPTH_SCALE, 1, depthScale);
-        glUniform3fv(CULLIDE_LOC_HALF_SIZE, 1, halfSize);
-        glUniform3fv(CULLIDE_LOC_DEPTH_PAD, 1, depthPad);
-        glUniform1ui(CULLIDE_LOC_ID_BITS, idBits);
-        glUniform1i(CULLIDE_LOC_CONSERVATIVE, conservative ? 1 : 0);
+        setUniforms(primCount, idBits, lo, pixelScale, depthScale, halfSize, depthPad);
 
         const GLuint empty[2] = {0xFFFFFFFFu, 0u};
         glClearTexImage(images[CULLIDE_IMAGE_NEAR1], 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[0]);
@@ -211,6 +275,9 @@ struct VisibilityPass::Impl {
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_PRIMS, buffers[kPrims]);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_ITEM_OWNER, buffers[kOwners]);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_FLAGS, buffers[kFlags]);
+        reserveBuffer(buffers[kCounters], capacity[kCounters], 4);
+        glClearNamedBufferSubData(buffers[kCounters], GL_R32UI, 0, 4, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_COUNTERS, buffers[kCounters]);
         glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
         glViewport(0, 0, 3 * settings.resolution, settings.resolution);
         glDisable(GL_DEPTH_TEST);
@@ -218,6 +285,18 @@ struct VisibilityPass::Impl {
         glBindVertexArray(vao);
 
         if (timer) glBeginQuery(GL_TIME_ELAPSED, timer);
+        if (settings.backend == Backend::Raster) {
+            reserveBuffer(buffers[kRecords], capacity[kRecords], 3 * primCount * kRecordBytes);
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_RECORDS, buffers[kRecords]);
+            glUseProgram(setupProgram);
+            setUniforms(primCount, idBits, lo, pixelScale, depthScale, halfSize, depthPad);
+            const auto groups = static_cast<GLuint>((primCount + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE);
+            glDispatchCompute(groups, 3, 1);
+            glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+            glUseProgram(program);
+            level.draws += 1;
+            stats.draws += 1;
+        }
         draw(CULLIDE_PASS_NEAREST, primCount, level, stats);
         draw(CULLIDE_PASS_SECOND, primCount, level, stats);
         draw(CULLIDE_PASS_FLAG, primCount, level, stats);
@@ -225,7 +304,8 @@ struct VisibilityPass::Impl {
         glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
         flagScratch.resize(items.size());
         glGetNamedBufferSubData(buffers[kFlags], 0, static_cast<GLsizeiptr>(items.size() * 4), flagScratch.data());
-        stats.bytesReadBack += items.size() * 4;
+        glGetNamedBufferSubData(buffers[kCounters], 0, 4, &overflows);
+        stats.bytesReadBack += items.size() * 4 + 4;
         if (timer) {
             GLuint64 ns = 0;
             glGetQueryObjectui64v(timer, GL_QUERY_RESULT, &ns);
@@ -250,6 +330,7 @@ void VisibilityPass::upload(const GpuGeometry& geometry, Stats& stats) {
     uploadBuffer(s.buffers[kBoxes], s.capacity[kBoxes], geometry.boxes.data(), geometry.boxes.size() * 4);
     stats.bytesUploaded += (geometry.positions.size() + geometry.indices.size() + geometry.boxes.size()) * 4;
     s.coordinateBound = geometry.coordinateBound;
+    s.geometry = &geometry;
 }
 
 void VisibilityPass::prune(const LevelItems& items, std::vector<std::uint8_t>& survivors, LevelStats& level,
@@ -280,8 +361,7 @@ void VisibilityPass::prune(const LevelItems& items, std::vector<std::uint8_t>& s
             break;
         }
         s.runIteration(items, survivors, level, stats);
-        if (std::getenv("CULLIDE_DEBUG_FLAGS"))
-            for (std::size_t i = 0; i < items.size(); ++i) std::fprintf(stderr, "item %zu flags %x\n", i, s.flagScratch[i]);
+        if (s.overflows != 0) break;  // some footprint was not scanned: keep every item (conservative)
         bool changed = false;
         for (std::size_t i = 0; i < items.size(); ++i) {
             next[i] = survivors[i] && s.flagScratch[i] == CULLIDE_FLAGS_ALL;

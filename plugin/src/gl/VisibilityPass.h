@@ -45,6 +45,7 @@ public:
     VisibilityPass(const VisibilityPass&) = delete;
     VisibilityPass& operator=(const VisibilityPass&) = delete;
 
+    /// Uploads the frame's geometry; `geometry` must stay alive (unchanged) until the next upload.
     void upload(const GpuGeometry& geometry, Stats& stats);
 
     /// Prunes the items: survivors[i] is true when item i may intersect an item of another owner. Runs at most

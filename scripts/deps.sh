@@ -1,0 +1,20 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages the project needs (only those missing). Runs apt-get as root, or via sudo.
+set -euo pipefail
+packages=(cmake g++ make pkg-config git
+  libbullet-dev libbullet-extras-dev libeigen3-dev libepoxy-dev libegl-dev libegl1 libegl-mesa0 libgl1-mesa-dri
+  libgtest-dev libgmock-dev nlohmann-json3-dev libcgal-dev)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+echo "deps: installing ${missing[*]}"
+sudo=""
+[ "$(id -u)" -eq 0 ] || sudo="sudo"
+export DEBIAN_FRONTEND=noninteractive
+$sudo apt-get update -qq
+$sudo apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,25 @@
+#!/usr/bin/env bash
+# Installs what is missing, configures, builds and runs the whole test suite (unit, GL on llvmpipe or a GPU, the
+# CGAL oracle, the CLI end to end).
+#   scripts/test.sh              release build (warnings as errors) in build/
+#   scripts/test.sh --sanitize   ASan + UBSan build in build-asan/ (the CGAL oracle is left out: it is slow there)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+sanitize=0
+[ "${1:-}" = "--sanitize" ] && sanitize=1
+scripts/deps.sh
+jobs=$(nproc)
+if [ $sanitize -eq 1 ]; then
+  dir=build-asan
+  cmake -S . -B $dir -DCMAKE_BUILD_TYPE=Debug -DCULLIDE_WERROR=ON -DCULLIDE_SANITIZE=ON -DCULLIDE_BUILD_CGAL_ORACLE=OFF
+  export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1"
+  export LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp:print_suppressions=0"
+  export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+else
+  dir=build
+  cmake -S . -B $dir -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCULLIDE_WERROR=ON
+fi
+cmake --build $dir -j"$jobs"
+# Mesa's shader cache lives under the build dir so runs never depend on a warm home directory.
+export MESA_SHADER_CACHE_DIR="$PWD/$dir/mesa-shader-cache"
+ctest --test-dir $dir --output-on-failure -j"$jobs" --timeout 600

@@ -1,0 +1,142 @@
+// Shared by every CULLIDE visibility shader: resources, the per-primitive setup, the conservative pixel test and
+// the per-pixel depth bookkeeping. Both back-ends (raster: cull.vert/cull.frag; compute: cull.comp) run exactly
+// this code, so they give the same answer.
+
+layout(std430, binding = CULLIDE_SSBO_POSITIONS) readonly buffer Positions { float positions[]; };
+layout(std430, binding = CULLIDE_SSBO_INDICES) readonly buffer Indices { uint indices[]; };
+layout(std430, binding = CULLIDE_SSBO_BOXES) readonly buffer Boxes { float boxes[]; };
+layout(std430, binding = CULLIDE_SSBO_PRIMS) readonly buffer Prims { uvec4 prims[]; };
+layout(std430, binding = CULLIDE_SSBO_ITEM_OWNER) readonly buffer Owners { uint owners[]; };
+
+layout(location = CULLIDE_LOC_PASS) uniform int u_pass;
+layout(location = CULLIDE_LOC_RESOLUTION) uniform int u_resolution;
+layout(location = CULLIDE_LOC_VIEW_LO) uniform vec3 u_viewLo;
+layout(location = CULLIDE_LOC_PIXEL_SCALE) uniform vec3 u_pixelScale;
+layout(location = CULLIDE_LOC_DEPTH_SCALE) uniform vec3 u_depthScale;
+layout(location = CULLIDE_LOC_HALF_SIZE) uniform vec3 u_halfSize;
+layout(location = CULLIDE_LOC_DEPTH_PAD) uniform vec3 u_depthPad;
+layout(location = CULLIDE_LOC_ID_BITS) uniform uint u_idBits;
+layout(location = CULLIDE_LOC_CONSERVATIVE) uniform int u_conservative;
+layout(location = CULLIDE_LOC_PRIM_COUNT) uniform uint u_primCount;
+
+// std430 layout of a primitive record written by cull_setup.comp: 24 floats (vec4-aligned members only).
+struct PrimRecord {
+    vec4 rect;
+    vec4 edge0;   // xyz used
+    vec4 edge1;
+    vec4 edge2;
+    vec4 plane;
+    vec4 originZrange;  // (x0, y0, zmin, zmax)
+    uvec4 ids;          // (item, owner, axis, 0)
+};
+
+struct Prim {
+    vec4 rect;     // 2D bounding rectangle (pixels, undilated)
+    vec3 edge0;    // edge functions (nx, ny, c): inside <= 0; (0, 0, -1) disables an edge
+    vec3 edge1;
+    vec3 edge2;
+    vec4 plane;    // depth plane z = z0 + a*(x - x0) + b*(y - y0): (a, b, z0, valid)
+    vec2 origin;   // (x0, y0)
+    vec2 zrange;   // the primitive's own depth range
+    uint item;
+    uint owner;
+    int axis;
+};
+
+vec3 vertexAt(uint i) { return vec3(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]); }
+
+// World point -> (pixel x, pixel y, normalized depth) for the view along `axis`.
+vec3 project(vec3 p, int axis) {
+    int ua = (axis + 1) % 3;
+    int va = (axis + 2) % 3;
+    return vec3((p[ua] - u_viewLo[ua]) * u_pixelScale[ua], (p[va] - u_viewLo[va]) * u_pixelScale[va],
+                (p[axis] - u_viewLo[axis]) * u_depthScale[axis]);
+}
+
+vec3 edgeFunction(vec2 from, vec2 to, float s) {
+    vec2 e = to - from;
+    vec2 n = s * vec2(e.y, -e.x);
+    return vec3(n, -dot(n, from));
+}
+
+Prim makePrim(uint index, int axis) {
+    Prim p;
+    uvec4 entry = prims[index];
+    p.item = entry.y;
+    p.owner = owners[entry.y];
+    p.axis = axis;
+    p.edge0 = vec3(0.0, 0.0, -1.0);
+    p.edge1 = vec3(0.0, 0.0, -1.0);
+    p.edge2 = vec3(0.0, 0.0, -1.0);
+    p.plane = vec4(0.0);
+    p.origin = vec2(0.0);
+    if ((entry.x & CULLIDE_PRIM_BOX_BIT) != 0u) {
+        uint b = (entry.x & ~CULLIDE_PRIM_BOX_BIT) * 6u;
+        vec3 lo = project(vec3(boxes[b], boxes[b + 1u], boxes[b + 2u]), axis);
+        vec3 hi = project(vec3(boxes[b + 3u], boxes[b + 4u], boxes[b + 5u]), axis);
+        p.rect = vec4(lo.xy, hi.xy);
+        p.zrange = vec2(lo.z, hi.z);
+        return p;
+    }
+    uint t = entry.x * 3u;
+    vec3 p0 = project(vertexAt(indices[t]), axis);
+    vec3 p1 = project(vertexAt(indices[t + 1u]), axis);
+    vec3 p2 = project(vertexAt(indices[t + 2u]), axis);
+    p.rect = vec4(min(min(p0.xy, p1.xy), p2.xy), max(max(p0.xy, p1.xy), p2.xy));
+    p.zrange = vec2(min(min(p0.z, p1.z), p2.z), max(max(p0.z, p1.z), p2.z));
+    vec2 d1 = p1.xy - p0.xy;
+    vec2 d2 = p2.xy - p0.xy;
+    float area2 = d1.x * d2.y - d1.y * d2.x;
+    float maxEdge2 = max(max(dot(d1, d1), dot(d2, d2)), dot(p2.xy - p1.xy, p2.xy - p1.xy));
+    // Well-conditioned in 2D: exact edge tests and a depth plane. Otherwise (edge-on, needle-like or tiny in
+    // projection) the rectangle and the triangle's own depth range are used: coarser, still conservative.
+    if (abs(area2) > 1.0e-3 && abs(area2) >= maxEdge2 * (1.0 / 256.0)) {
+        float s = area2 > 0.0 ? 1.0 : -1.0;
+        p.edge0 = edgeFunction(p0.xy, p1.xy, s);
+        p.edge1 = edgeFunction(p1.xy, p2.xy, s);
+        p.edge2 = edgeFunction(p2.xy, p0.xy, s);
+        float invArea = 1.0 / area2;
+        float pa = ((p1.z - p0.z) * d2.y - (p2.z - p0.z) * d1.y) * invArea;
+        float pb = ((p2.z - p0.z) * d1.x - (p1.z - p0.z) * d2.x) * invArea;
+        p.plane = vec4(pa, pb, p0.z, 1.0);
+        p.origin = p0.xy;
+    }
+    return p;
+}
+
+// Half size of the tested square in pixels along the view's two image axes (0 in sampled mode: the centre only).
+vec2 halfSizeFor(int axis) {
+    return u_conservative != 0 ? vec2(u_halfSize[(axis + 1) % 3], u_halfSize[(axis + 2) % 3]) : vec2(0.0);
+}
+
+bool edgeRejects(vec3 e, vec2 c, vec2 h) { return e.x * c.x + e.y * c.y + e.z - (h.x * abs(e.x) + h.y * abs(e.y)) > 0.0; }
+
+// Pixel square [c - h, c + h] against the rectangle and the three edge half-planes (separating axes); on success
+// the primitive's depth range over the square (padded in reliable mode).
+bool coverage(Prim p, vec2 c, vec2 h, out float zlo, out float zhi) {
+    zlo = 0.0;
+    zhi = 0.0;
+    if (c.x + h.x < p.rect.x || c.x - h.x > p.rect.z || c.y + h.y < p.rect.y || c.y - h.y > p.rect.w) return false;
+    if (edgeRejects(p.edge0, c, h) || edgeRejects(p.edge1, c, h) || edgeRejects(p.edge2, c, h)) return false;
+    zlo = p.zrange.x;
+    zhi = p.zrange.y;
+    if (p.plane.w != 0.0) {
+        float zc = p.plane.z + p.plane.x * (c.x - p.origin.x) + p.plane.y * (c.y - p.origin.y);
+        float r = h.x * abs(p.plane.x) + h.y * abs(p.plane.y);
+        float lo = max(zc - r, zlo);
+        float hi = min(zc + r, zhi);
+        if (lo <= hi) {
+            zlo = lo;
+            zhi = hi;
+        } else if (u_conservative == 0) {
+            zlo = clamp(zc, p.zrange.x, p.zrange.y);
+            zhi = zlo;
+        }
+    }
+    if (u_conservative != 0) {
+        float pad = u_depthPad[p.axis] + (p.zrange.y - p.zrange.x) * (1.0 / 4096.0);
+        zlo -= pad;
+        zhi += pad;
+    }
+    return true;
+}

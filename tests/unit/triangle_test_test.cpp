@@ -1,0 +1,585 @@
+// Unit tests of the exact triangle-triangle stage: hand-made adversarial cases with known answers (each checked in all
+// vertex orders of both triangles and with the triangles swapped), distances, trianglesWithin, and seeded randomized
+// consistency between the exact intersection test and the distance.
+#include "cullide/TriangleTest.h"
+
+#include "../../plugin/src/exact/ExactPredicates.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+namespace {
+
+using cullide::triangleDistance;
+using cullide::trianglesIntersect;
+using cullide::trianglesWithin;
+using cullide::Vec3;
+
+using Tri = std::array<Vec3, 3>;
+
+double up(double x) { return std::nextafter(x, std::numeric_limits<double>::infinity()); }
+double down(double x) { return std::nextafter(x, -std::numeric_limits<double>::infinity()); }
+
+std::string str(const Tri& t) {
+    std::string s;
+    char buf[128];
+    for (const Vec3& v : t) {
+        std::snprintf(buf, sizeof buf, "{%a, %a, %a} ", v.x(), v.y(), v.z());
+        s += buf;
+    }
+    return s;
+}
+
+constexpr int kPerms[6][3] = {{0, 1, 2}, {1, 2, 0}, {2, 0, 1}, {0, 2, 1}, {2, 1, 0}, {1, 0, 2}};
+
+/// Checks trianglesIntersect == expected in all 6 x 6 vertex orders and both triangle orders (72 calls), and that the
+/// distance agrees (0 iff intersecting, the same in every order).
+void expectIntersect(const Tri& a, const Tri& b, bool expected, const std::string& what) {
+    SCOPED_TRACE(what + ": A = " + str(a) + " B = " + str(b));
+    const double d0 = triangleDistance(a[0], a[1], a[2], b[0], b[1], b[2]);
+    if (expected) {
+        EXPECT_EQ(d0, 0.0);
+    } else {
+        EXPECT_GT(d0, 0.0);
+    }
+    int wrong = 0;
+    for (const auto& pa : kPerms) {
+        for (const auto& pb : kPerms) {
+            const Vec3 &a0 = a[pa[0]], &a1 = a[pa[1]], &a2 = a[pa[2]];
+            const Vec3 &b0 = b[pb[0]], &b1 = b[pb[1]], &b2 = b[pb[2]];
+            wrong += trianglesIntersect(a0, a1, a2, b0, b1, b2) != expected;
+            wrong += trianglesIntersect(b0, b1, b2, a0, a1, a2) != expected;
+            // margin <= 0 is the exact test too.
+            wrong += trianglesWithin(a0, a1, a2, b0, b1, b2, 0.0) != expected;
+            wrong += trianglesWithin(b0, b1, b2, a0, a1, a2, -1.0) != expected;
+            const double d = triangleDistance(b0, b1, b2, a0, a1, a2);
+            EXPECT_NEAR(d, d0, 1e-12 * std::max(1.0, d0));
+        }
+    }
+    EXPECT_EQ(wrong, 0) << "expected " << (expected ? "intersecting" : "disjoint");
+}
+
+/// An exact similarity transform (power-of-two scale, then offset) of integer/dyadic cases.
+struct Transform {
+    double scale;
+    Vec3 offset;
+    const char* name;
+};
+
+const Transform kTransforms[] = {
+    {1.0, Vec3::Zero(), "identity"},
+    {1.0, Vec3(1e5, -3e5, 7e5), "offset 1e5"},
+    {1.0, Vec3(1e6, 1e6, -2e6), "offset 1e6"},
+    {1.0, Vec3(1e7, -1e7, 1e7), "offset 1e7"},
+    {0x1p-30, Vec3::Zero(), "tiny 1e-9"},
+    {0x1p-30, Vec3(1e5, 2e5, -1e5), "tiny 1e-9 at offset 1e5"},
+    {0x1p-28, Vec3(-1e7, 1e7, 3e6), "tiny 4e-9 at offset 1e7"},
+    {0x1p+40, Vec3::Zero(), "huge 1e12"},
+};
+
+Tri apply(const Transform& t, const Tri& tri, bool* exact) {
+    Tri out;
+    for (int i = 0; i < 3; ++i) {
+        out[i] = tri[i] * t.scale + t.offset;
+        if (((out[i] - t.offset) / t.scale) != tri[i]) *exact = false;
+    }
+    return out;
+}
+
+/// Runs a case given in small dyadic coordinates under every exact transform.
+void expectIntersectAllTransforms(const Tri& a, const Tri& b, bool expected, const std::string& what) {
+    for (const Transform& t : kTransforms) {
+        bool exact = true;
+        const Tri ta = apply(t, a, &exact), tb = apply(t, b, &exact);
+        ASSERT_TRUE(exact) << what << " is not exactly representable under " << t.name;
+        expectIntersect(ta, tb, expected, what + " [" + t.name + "]");
+    }
+}
+
+Vec3 V(double x, double y, double z) { return {x, y, z}; }
+
+const Tri kA = {V(0, 0, 0), V(4, 0, 0), V(0, 4, 0)};  // reference right triangle in z = 0, hypotenuse x + y = 4
+
+// ---------------------------------------------------------------------------------------------------------------
+// Predicates
+
+TEST(ExactPredicates, SignConventionsAndZeros) {
+    using cullide::exact::orient2d;
+    using cullide::exact::orient3d;
+    EXPECT_EQ(orient3d(V(0, 0, 0), V(1, 0, 0), V(0, 1, 0), V(0, 0, 1)), 1);
+    EXPECT_EQ(orient3d(V(0, 0, 0), V(1, 0, 0), V(0, 1, 0), V(0, 0, -1)), -1);
+    EXPECT_EQ(orient3d(V(0, 0, 0), V(1, 0, 0), V(0, 1, 0), V(7, -3, 0)), 0);
+    EXPECT_EQ(orient2d(0, 0, 1, 0, 0, 1), 1);
+    EXPECT_EQ(orient2d(0, 0, 1, 0, 2, 0), 0);
+    EXPECT_EQ(orient2d(0, 0, 1, 0, 0, -1), -1);
+    // One ulp off the plane z = 1 at a large offset.
+    const Vec3 o(1e7, 1e7, 1.0);
+    EXPECT_EQ(orient3d(o, V(1e7 + 3, 1e7, 1.0), V(1e7, 1e7 + 5, 1.0), V(1e7 + 1, 1e7 + 1, up(1.0))), 1);
+    EXPECT_EQ(orient3d(o, V(1e7 + 3, 1e7, 1.0), V(1e7, 1e7 + 5, 1.0), V(1e7 + 1, 1e7 + 1, down(1.0))), -1);
+    EXPECT_EQ(orient3d(o, V(1e7 + 3, 1e7, 1.0), V(1e7, 1e7 + 5, 1.0), V(1e7 + 1, 1e7 + 1, 1.0)), 0);
+    // Filter-defeating: a tilted plane through integer points, probed one ulp away along x.
+    const Vec3 a(1, 2, 3), b(1001, 2, 4), c(1, 3003, 5);  // plane through a, b, c
+    // Point on the plane: a + 0.5 (b - a) + 0.25 (c - a) (exact in binary).
+    const Vec3 q = a + 0.5 * (b - a) + 0.25 * (c - a);
+    EXPECT_EQ(orient3d(a, b, c, q), 0);
+    const int sUp = orient3d(a, b, c, V(up(q.x()), q.y(), q.z()));
+    const int sDown = orient3d(a, b, c, V(down(q.x()), q.y(), q.z()));
+    EXPECT_NE(sUp, 0);
+    EXPECT_EQ(sDown, -sUp);
+    EXPECT_EQ(cullide::exact::orient3dExact(a.data(), b.data(), c.data(), q.data()), 0);
+}
+
+TEST(ExactPredicates, SubnormalAndHugeCoordinates) {
+    using cullide::exact::orient2d;
+    using cullide::exact::orient3d;
+    const double t = std::numeric_limits<double>::denorm_min();
+    const Vec3 o(0, 0, 0), x(1, 0, 0), y(0, 1, 0);
+    EXPECT_EQ(orient3d(o, x, y, V(0.5, 0.5, t)), 1);
+    EXPECT_EQ(orient3d(o, x, y, V(0.5, 0.5, -t)), -1);
+    EXPECT_EQ(orient3d(o, x, y, V(0.5, 0.5, 0.0)), 0);
+    // Mixed magnitudes: plane through (t, 0, 0), (1, t, 0), (0, 1, t) probed at points whose exact sign needs
+    // products far below the subnormal range.
+    const Vec3 p0(t, 0, 0), p1(1, t, 0), p2(0, 1, t);
+    // det[(1 - t, t, 0), (-t, 1, t), (0.25 - t, 0.25, 0)] = -(1 - t) t / 4 + t^2 (0.25 - t) < 0 (by hand).
+    const Vec3 q(0.25, 0.25, 0);
+    EXPECT_EQ(orient3d(p0, p1, p2, q), -1);
+    EXPECT_EQ(cullide::exact::orient3dExactBigInt(p0.data(), p1.data(), p2.data(), q.data()), -1);
+    const double big = 0x1p+1000;
+    EXPECT_EQ(orient3d(o, V(big, 0, 0), V(0, big, 0), V(1, 1, 0x1p-1000)), 1);
+    EXPECT_EQ(orient3d(o, V(big, 0, 0), V(0, big, 0), V(1, 1, -t)), -1);
+    EXPECT_EQ(orient3d(V(big, big, big), V(-big, big, big), V(big, -big, big), V(1e300, -1e300, big)), 0);
+    EXPECT_EQ(orient3d(V(big, big, big), V(-big, big, big), V(big, -big, big), V(1e300, -1e300, up(big))), 1);
+    const double h = 1e300;
+    EXPECT_EQ(orient2d(0, 0, h, h, h, up(h)), 1);
+    EXPECT_EQ(orient2d(0, 0, h, h, h, h), 0);
+    EXPECT_EQ(orient2d(t, 0, 0, t, 2 * t, -t), 0);
+    EXPECT_EQ(orient2d(t, 0, 0, t, 2 * t, 0), -1);  // (b - a) x (c - a) = (-t, t) x (t, 0) = -t^2
+}
+
+TEST(ExactPredicates, ExactMatchesFilterOnRandomInputs) {
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (int n = 0; n < 20000; ++n) {
+        Vec3 p[4];
+        for (Vec3& v : p) v = V(u(rng), u(rng), u(rng));
+        if (n % 2) {
+            // Nearly coplanar, the rounded point in a random role: the plain floating-point sign is often wrong here.
+            p[3] = p[0] + u(rng) * (p[1] - p[0]) + u(rng) * (p[2] - p[0]);
+            std::rotate(p, p + (n / 2) % 4, p + 4);
+        }
+        const int f = cullide::exact::orient3d(p[0], p[1], p[2], p[3]);
+        ASSERT_EQ(f, cullide::exact::orient3dExact(p[0].data(), p[1].data(), p[2].data(), p[3].data()));
+        if (n % 16 == 1) {  // the two exact evaluations agree
+            ASSERT_EQ(f, cullide::exact::orient3dExactBigInt(p[0].data(), p[1].data(), p[2].data(), p[3].data()));
+        }
+        // Antisymmetry under swapping two points, invariance under cyclic shifts of (a, b, c, d) with sign (-1).
+        ASSERT_EQ(cullide::exact::orient3d(p[1], p[0], p[2], p[3]), -f);
+        ASSERT_EQ(cullide::exact::orient3d(p[1], p[2], p[3], p[0]), -f);
+        const int g = cullide::exact::orient2d(p[0].x(), p[0].y(), p[1].x(), p[1].y(), p[3].x(), p[3].y());
+        ASSERT_EQ(g, cullide::exact::orient2dExact(p[0].x(), p[0].y(), p[1].x(), p[1].y(), p[3].x(), p[3].y()));
+        ASSERT_EQ(cullide::exact::orient2d(p[1].x(), p[1].y(), p[3].x(), p[3].y(), p[0].x(), p[0].y()), g);
+        const Vec3 e = p[0] + u(rng) * (p[1] - p[0]);  // nearly collinear in 2D
+        ASSERT_EQ(cullide::exact::orient2d(p[1].x(), p[1].y(), e.x(), e.y(), p[0].x(), p[0].y()),
+                  cullide::exact::orient2dExact(p[1].x(), p[1].y(), e.x(), e.y(), p[0].x(), p[0].y()));
+    }
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Coplanar
+
+TEST(TrianglesIntersect, CoplanarOverlapAndContainment) {
+    expectIntersectAllTransforms(kA, {V(1, 1, 0), V(5, 1, 0), V(1, 5, 0)}, true, "coplanar overlap");
+    expectIntersectAllTransforms(kA, {V(1, 1, 0), V(2, 1, 0), V(1, 2, 0)}, true, "coplanar contained");
+    expectIntersectAllTransforms(kA, {V(-1, -1, 0), V(9, -1, 0), V(-1, 9, 0)}, true, "coplanar containing");
+    expectIntersectAllTransforms(kA, kA, true, "identical");
+    // Star of David: every vertex outside the other, edges cross.
+    expectIntersectAllTransforms({V(0, 0, 0), V(6, 0, 0), V(3, 6, 0)}, {V(0, 4, 0), V(6, 4, 0), V(3, -2, 0)}, true,
+                                 "coplanar star");
+}
+
+TEST(TrianglesIntersect, CoplanarTouching) {
+    expectIntersectAllTransforms(kA, {V(4, 0, 0), V(6, 1, 0), V(6, -1, 0)}, true, "coplanar vertex-vertex");
+    expectIntersectAllTransforms(kA, {V(2, 2, 0), V(4, 4, 0), V(5, 2, 0)}, true, "coplanar vertex on edge");
+    expectIntersectAllTransforms(kA, {V(1, 0, 0), V(3, 0, 0), V(2, -2, 0)}, true, "coplanar edge overlap");
+    expectIntersectAllTransforms(kA, {V(4, 0, 0), V(8, 0, 0), V(6, -2, 0)}, true, "coplanar collinear edges touching");
+    expectIntersectAllTransforms(kA, {V(5, 0, 0), V(8, 0, 0), V(3, -2, 0)}, false, "coplanar collinear edges gap");
+    expectIntersectAllTransforms(kA, {V(0, 0, 0), V(-4, 0, 0), V(0, -4, 0)}, true, "coplanar shared vertex, opposite");
+    expectIntersectAllTransforms(kA, {V(0, 0, 0), V(4, 0, 0), V(0, -4, 0)}, true, "coplanar shared edge (hinge)");
+    expectIntersectAllTransforms(kA, {V(3, 3, 0), V(5, 5, 0), V(6, 2, 0)}, false, "coplanar near hypotenuse");
+}
+
+TEST(TrianglesIntersect, CoplanarDisjointByOneUlp) {
+    // B's vertex one ulp beyond the hypotenuse x + y = 4 (and exactly on it as the control).
+    for (const Vec3& o : {V(0, 0, 0), V(1e5, 1e5, 0), V(1e6, -1e6, 3), V(1e7, 1e7, -1e7)}) {
+        const Tri a = {o + V(0, 0, 0), o + V(4, 0, 0), o + V(0, 4, 0)};
+        const double x = o.x() + 2, y = o.y() + 2;
+        const Tri touching = {V(x, y, o.z()), o + V(4, 4, 0), o + V(5, 2, 0)};
+        const Tri apart = {V(x, up(y), o.z()), o + V(4, 4, 0), o + V(5, 2, 0)};
+        const Tri apartX = {V(up(x), y, o.z()), o + V(4, 4, 0), o + V(5, 2, 0)};
+        expectIntersect(a, touching, true, "coplanar touching");
+        expectIntersect(a, apart, false, "coplanar disjoint by 1 ulp in y");
+        expectIntersect(a, apartX, false, "coplanar disjoint by 1 ulp in x");
+        // Collinear edges one ulp apart along the line.
+        const Tri b = {V(up(o.x() + 4), o.y(), o.z()), o + V(8, 0, 0), o + V(3, -2, 0)};
+        expectIntersect(a, b, false, "coplanar collinear edges 1 ulp gap");
+    }
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// General position and contact
+
+TEST(TrianglesIntersect, PiercingAndSeparated) {
+    expectIntersectAllTransforms(kA, {V(1, 1, -1), V(1, 1, 1), V(3, 3, 1)}, true, "edge pierces face");
+    expectIntersectAllTransforms(kA, {V(1, 1, 1), V(2, 1, 1), V(1, 2, 1)}, false, "parallel above");
+    expectIntersectAllTransforms(kA, {V(5, 5, -1), V(5, 5, 1), V(6, 6, 0)}, false, "crosses plane outside");
+    // Edges piercing A's plane on the line of one of A's edges: outside, at a vertex, on the edge.
+    // (In both "outside" cases the boxes overlap and B's plane cuts A, so neither early reject applies.)
+    expectIntersectAllTransforms(kA, {V(6, 0, -1), V(6, 0, 1), V(3, 0.5, 5)}, false, "pierces on an edge's extension");
+    expectIntersectAllTransforms(kA, {V(-5, 8, -1), V(1, 4, 1), V(-5, 11, 0)}, false, "pierces on hypotenuse line");
+    expectIntersectAllTransforms(kA, {V(4, 0, -1), V(4, 0, 1), V(7, 3, 0)}, true, "pierces at a vertex");
+    expectIntersectAllTransforms(kA, {V(2, 0, -1), V(2, 0, 1), V(7, -3, 0)}, true, "pierces on an edge");
+    expectIntersectAllTransforms(kA, {V(3, 3, -1), V(3, 3, 1), V(8, -2, 0)}, false, "B's plane misses A");
+    // Each triangle straddles the other's plane, but their intervals on the planes' common line are disjoint.
+    expectIntersectAllTransforms(kA, {V(5, 1, -1), V(5, 1, 1), V(3, 1, 5)}, false, "line intervals disjoint");
+    expectIntersectAllTransforms(kA, {V(3, 1, -1), V(3, 1, 1), V(9, 1, 0)}, true, "line intervals touch at a point");
+    expectIntersectAllTransforms(kA, {V(2, 2, -1), V(2, 2, 1), V(8, -4, 0)}, true, "B's plane holds the hypotenuse");
+}
+
+TEST(TrianglesIntersect, EdgeEdge) {
+    // B in the plane x = 1; its edge x = 1, y = 0 passes through A's edge y = 0 at (1, 0, 0).
+    const Tri b = {V(1, 0, -1), V(1, 0, 1), V(1, -5, 0)};
+    expectIntersectAllTransforms(kA, b, true, "edge-edge touching");
+    const Tri bAway = {V(1, -0.5, -1), V(1, -0.5, 1), V(1, -5, 0)};
+    expectIntersectAllTransforms(kA, bAway, false, "edge-edge skew");
+    // Near misses whose boxes overlap (so that the exact stage decides): B in the plane x = 1, its edge crossing z = 0
+    // at y = y0 (exactly, at the edge's midpoint), A's cross-section there is y in [0, 3].
+    for (const double y0 : {0.0, -0x1p-52, -0.5}) {
+        const Tri crossing = {V(1, -1 + y0, -1), V(1, 1 + y0, 1), V(1, -3, 1)};
+        expectIntersect(kA, crossing, y0 == 0.0, "edge crossing z = 0 at y = " + std::to_string(y0));
+    }
+    // Crossing edges that are not axis-aligned.
+    expectIntersectAllTransforms(kA, {V(1, 3, -2), V(3, 1, 2), V(9, 9, 0)}, true, "edge through hypotenuse midpoint");
+    // One ulp off: move B by one ulp of 1 in -y (the exact contact disappears).
+    const Tri bUlp = {V(1, -0x1p-52, -1), V(1, -0x1p-52, 1), V(1, -5, 0)};
+    expectIntersect(kA, bUlp, false, "edge-edge apart by 2^-52");
+}
+
+TEST(TrianglesIntersect, VertexOnFace) {
+    expectIntersectAllTransforms(kA, {V(1, 1, 0), V(1, 1, 5), V(2, 3, 4)}, true, "vertex on face");
+    expectIntersectAllTransforms(kA, {V(2, 2, 0), V(2, 2, 5), V(3, 4, 4)}, true, "vertex on edge");
+    expectIntersectAllTransforms(kA, {V(4, 0, 0), V(5, 1, 5), V(3, 4, 4)}, true, "vertex on vertex");
+    expectIntersect(kA, {V(1, 1, 0x1p-60), V(1, 1, 5), V(2, 3, 4)}, false, "vertex 2^-60 above face");
+    // Same vertex, but B dips below z = 0 outside A (boxes overlap).
+    expectIntersect(kA, {V(1, 1, 0x1p-60), V(6, 1, -0x1p-62), V(1, 1, 5)}, false, "vertex 2^-60 above, B dips outside");
+    expectIntersect(kA, {V(1, 1, 0), V(6, 1, -0x1p-62), V(1, 1, 5)}, true, "vertex on face, B dips outside");
+    expectIntersect(kA, {V(1, 1, -0x1p-60), V(1, 1, 5), V(2, 3, 4)}, true, "vertex 2^-60 below face");
+    expectIntersect(kA, {V(up(2.0), 2, 0), V(1, 1, -5), V(1, 1, 5)}, true, "vertex 1 ulp outside, B crosses A");
+    expectIntersect(kA, {V(up(2.0), 2, 0), V(up(2.0), 2, 5), V(3, 4, 4)}, false, "vertex 1 ulp beyond edge");
+}
+
+TEST(TrianglesIntersect, SharedVertexAndEdge) {
+    expectIntersectAllTransforms({V(0, 0, 0), V(1, 0, 0), V(0, 1, 0)}, {V(0, 0, 0), V(-1, 0, 1), V(0, -1, 1)}, true,
+                                 "shared vertex");
+    expectIntersectAllTransforms({V(0, 0, 0), V(1, 0, 0), V(0, 1, 0)}, {V(0, 0, 0), V(1, 0, 0), V(0, -1, 1)}, true,
+                                 "shared edge");
+    expectIntersectAllTransforms({V(0, 0, 0), V(1, 0, 0), V(0, 1, 0)}, {V(0, 0, 0), V(1, 0, 0), V(1, 1, 0)}, true,
+                                 "shared edge coplanar overlapping");
+    // Mesh neighbours sharing a vertex with random-looking coordinates.
+    const Vec3 s(0.1234567, -7.654321, 3.14159);
+    expectIntersect({s, V(1.1, 0.3, 0.2), V(0.3, 1.7, -0.4)}, {s, V(-1.2, 0.1, 0.9), V(0.2, -1.3, -0.8)}, true,
+                    "shared vertex (float)");
+}
+
+TEST(TrianglesIntersect, Slivers) {
+    // Aspect ratio 1e6: A is a needle along x of height 1e-6 at x = 0.5.
+    const double h = 1e-6;
+    const Tri sliver = {V(0, 0, 0), V(1, 0, 0), V(0.5, h, 0)};
+    expectIntersect(sliver, {V(0.5, h / 2, -1), V(0.5, h / 2, 1), V(0.5, 5, 0)}, true, "plane x=0.5 cuts sliver");
+    expectIntersect(sliver, {V(0.5, h, -1), V(0.5, h, 1), V(0.5, 5, 0)}, true, "touches sliver apex");
+    expectIntersect(sliver, {V(0.5, up(h), -1), V(0.5, up(h), 1), V(0.5, 5, 0)}, false, "1 ulp above sliver apex");
+    expectIntersect(sliver, {V(0.5, up(h), 0), V(0.5, -1, 1), V(0.5, 5, 1)}, false, "vertex 1 ulp above apex");
+    expectIntersect(sliver, {V(0.5, h, 0), V(0.5, -1, 1), V(0.5, 5, 1)}, true, "vertex on apex");
+    // Two crossing needles in different planes.
+    const Tri needle2 = {V(0.5, -1, -h), V(0.5, 1, -h), V(0.5, 0, h)};
+    expectIntersect(sliver, needle2, true, "crossing needles");
+    const Tri needle3 = {V(0.5, -1, h), V(0.5, 1, h), V(0.5, 0, 2 * h)};
+    expectIntersect(sliver, needle3, false, "needles apart");
+    const Tri needle4 = {V(0.5, 2 * h, 0), V(0.5, -1, 1), V(0.5, -1, 1 + 2 * h)};
+    expectIntersect(sliver, needle4, false, "needle tip just beside the sliver");
+    const Tri needle5 = {V(0.5, h / 2, 0), V(0.5, -1, 1), V(0.5, -1, 1 + 2 * h)};
+    expectIntersect(sliver, needle5, true, "needle tip on the sliver");
+    // Coplanar slivers crossing in a thin overlap.
+    expectIntersect(sliver, {V(0.25, -h, 0), V(0.75, 3 * h, 0), V(0.8, 3 * h, 0)}, true, "coplanar slivers crossing");
+    expectIntersect(sliver, {V(0, h, 0), V(0.2, h, 0), V(0.1, 2 * h, 0)}, false, "coplanar slivers apart");
+}
+
+TEST(TrianglesIntersect, NearlyParallelClosePlanes) {
+    // A in z = 1, B one ulp above with identical footprint, then touching at one vertex.
+    const Tri a = {V(0, 0, 1), V(4, 0, 1), V(0, 4, 1)};
+    const double z1 = up(1.0);
+    expectIntersect(a, {V(0, 0, z1), V(4, 0, z1), V(0, 4, z1)}, false, "parallel, 1 ulp apart");
+    expectIntersect(a, {V(1, 1, 1), V(4, 0, z1), V(0, 4, z1)}, true, "nearly parallel, touching at a vertex");
+    expectIntersect(a, {V(1, 1, down(1.0)), V(4, 0, z1), V(0, 4, z1)}, true, "nearly parallel, crossing");
+    // Tilted by 1e-12 across the footprint: crosses z = 1 at x = 1.
+    expectIntersect(a, {V(0, 0, 1 - 1e-12), V(4, 0, 1 + 3e-12), V(0, 4, 1 - 1e-12)}, true, "tilted 1e-12 crossing");
+    expectIntersect(a, {V(0, 0, 1 + 1e-12), V(4, 0, 1 + 3e-12), V(0, 4, 1 + 1e-12)}, false, "tilted 1e-12 above");
+    expectIntersect(a, {V(0, 0, 1 + 1e-12), V(4, 0, 1 + 1e-12), V(0, -4, 1 - 1e-12)}, false, "tilted, crossing outside");
+    // Large offset: planes z = 1e7 and z = 1e7 + ulp.
+    const double Z = 1e7;
+    const Tri big = {V(Z, Z, Z), V(Z + 4, Z, Z), V(Z, Z + 4, Z)};
+    expectIntersect(big, {V(Z + 1, Z + 1, up(Z)), V(Z + 3, Z, up(Z)), V(Z, Z + 3, up(Z))}, false, "1e7, 1 ulp apart");
+    expectIntersect(big, {V(Z + 1, Z + 1, Z), V(Z + 3, Z, up(Z)), V(Z, Z + 3, up(Z))}, true, "1e7, touching");
+    expectIntersect(big, {V(Z + 1, Z + 1, up(Z)), V(Z + 3, Z, up(Z)), V(Z - 3, Z - 3, down(Z))}, false,
+                    "1e7, 1 ulp above, crossing outside");
+    expectIntersect(big, {V(Z + 1, Z + 1, Z), V(Z + 3, Z, up(Z)), V(Z - 3, Z - 3, down(Z))}, true,
+                    "1e7, touching, crossing outside");
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Degenerate triangles
+
+TEST(TrianglesIntersect, PointTriangles) {
+    const Vec3 inside(1, 1, 0), onEdge(2, 2, 0), atVertex(4, 0, 0), outside(3, 3, 0), above(1, 1, 1);
+    expectIntersectAllTransforms(kA, {inside, inside, inside}, true, "point inside");
+    expectIntersectAllTransforms(kA, {onEdge, onEdge, onEdge}, true, "point on edge");
+    expectIntersectAllTransforms(kA, {atVertex, atVertex, atVertex}, true, "point at vertex");
+    expectIntersectAllTransforms(kA, {outside, outside, outside}, false, "point outside, coplanar");
+    expectIntersectAllTransforms(kA, {above, above, above}, false, "point above");
+    const Vec3 tinyAbove(1, 1, 0x1p-300);
+    expectIntersect(kA, {tinyAbove, tinyAbove, tinyAbove}, false, "point 2^-300 above");
+    const double t = std::numeric_limits<double>::denorm_min();
+    expectIntersect(kA, {V(1, 1, t), V(1, 1, t), V(1, 1, t)}, false, "point 2^-1074 above");
+    expectIntersect(kA, {V(1, 1, t), V(1, 1, -t), V(1, 1, t)}, true, "segment through face, subnormal");
+    expectIntersect(kA, {V(2, up(2.0), t), V(2, 2 - 0x1p-51, -t), V(2, 2 - 0x1p-51, -t)}, true,
+                    "subnormal segment through the edge");
+    expectIntersect(kA, {V(up(2.0), 2, t), V(up(2.0), 2, -t), V(2, 2, t)}, false, "subnormal segment beside edge");
+    const Vec3 p(1, 2, 3), q(1, 2, up(3.0));
+    expectIntersectAllTransforms({p, p, p}, {p, p, p}, true, "point = point");
+    expectIntersect({p, p, p}, {q, q, q}, false, "point vs point 1 ulp apart");
+}
+
+TEST(TrianglesIntersect, SegmentTriangles) {
+    // Collinear triangles (third vertex between the others) and repeated vertices.
+    expectIntersectAllTransforms(kA, {V(1, 1, -1), V(1, 1, 0), V(1, 1, 1)}, true, "segment pierces face");
+    expectIntersectAllTransforms(kA, {V(1, 1, 1), V(1, 1, 2), V(1, 1, 3)}, false, "segment above face");
+    expectIntersectAllTransforms(kA, {V(1, 1, 0), V(1, 1, 1), V(1, 1, 2)}, true, "segment end on face");
+    expectIntersectAllTransforms(kA, {V(-1, 1, 0), V(1, 1, 0), V(5, 1, 0)}, true, "coplanar segment crossing");
+    expectIntersectAllTransforms(kA, {V(-1, 5, 0), V(2, 5, 0), V(5, 5, 0)}, false, "coplanar segment outside");
+    expectIntersectAllTransforms(kA, {V(-1, 6, 0), V(2.5, 2.5, 0), V(6, -1, 0)}, false, "coplanar segment beside");
+    expectIntersectAllTransforms(kA, {V(-1, 5, 0), V(2, 2, 0), V(5, -1, 0)}, true, "coplanar segment on hypotenuse");
+    expectIntersectAllTransforms(kA, {V(4, 0, 0), V(6, 0, 0), V(5, 0, 0)}, true, "collinear segment touching vertex");
+    expectIntersectAllTransforms(kA, {V(4, 4, 0), V(2, 2, 0), V(2, 2, 0)}, true, "repeated vertex touching edge");
+    expectIntersectAllTransforms(kA, {V(4, 4, 0), V(3, 3, 0), V(3, 3, 0)}, false, "repeated vertex off edge");
+    expectIntersectAllTransforms(kA, {V(0, 0, -1), V(0, 0, 1), V(0, 0, 1)}, true, "segment through vertex");
+    expectIntersect(kA, {V(up(4.0), 0, 0), V(6, 0, 0), V(5, 0, 0)}, false, "collinear segment 1 ulp from vertex");
+    expectIntersect(kA, {V(up(4.0), 0, 0), V(3, -1, 0), V(3, -1, 0)}, false, "segment 1 ulp from vertex");
+    expectIntersect(kA, {V(4.0, 0, 0), V(3, -1, 0), V(3, -1, 0)}, true, "segment touching vertex");
+}
+
+TEST(TrianglesIntersect, DegenerateVersusDegenerate) {
+    const Tri seg = {V(-1, 0, 0), V(1, 0, 0), V(0, 0, 0)};
+    expectIntersectAllTransforms(seg, {V(0, -1, 0), V(0, 1, 0), V(0, 1, 0)}, true, "segments crossing");
+    expectIntersectAllTransforms(seg, {V(0, -1, 1), V(0, 1, 1), V(0, 0, 1)}, false, "segments skew");
+    expectIntersectAllTransforms(seg, {V(0, -1, -0.5), V(0, 1, 1.5), V(0, 0, 0.5)}, false, "skew, boxes overlap");
+    expectIntersectAllTransforms(seg, {V(0, -1, -1), V(0, 1, 1), V(0, 0, 0)}, true, "crossing, tilted");
+    expectIntersectAllTransforms(seg, {V(3, 3, 0), V(-1, -1, 0), V(-1, -1, 0)}, true, "coplanar crossing at the end");
+    expectIntersectAllTransforms(seg, {V(3, 3, 0), V(-0.5, -0.5, 0), V(1, 1, 0)}, true, "coplanar crossing at 0");
+    expectIntersectAllTransforms(seg, {V(0.5, 2, 0), V(2, -1, 0), V(2, -1, 0)}, false, "coplanar, boxes overlap");
+    expectIntersectAllTransforms(seg, {V(1, 0, 0), V(3, 0, 0), V(2, 0, 0)}, true, "collinear segments touching");
+    expectIntersectAllTransforms(seg, {V(0.5, 0, 0), V(3, 0, 0), V(2, 0, 0)}, true, "collinear segments overlapping");
+    expectIntersectAllTransforms(seg, {V(2, 0, 0), V(3, 0, 0), V(2.5, 0, 0)}, false, "collinear segments gap");
+    expectIntersectAllTransforms(seg, {V(-3, 0, 0), V(3, 0, 0), V(2, 0, 0)}, true, "collinear segment containment");
+    // A point inside the box of a diagonal segment but off it (the cross product has a single non-zero component).
+    const Tri diag = {V(0, 0, 0), V(0, 2, 2), V(0, 1, 1)};
+    expectIntersectAllTransforms(diag, {V(0, 1, 0.5), V(0, 1, 0.5), V(0, 1, 0.5)}, false, "point beside diagonal");
+    expectIntersectAllTransforms(diag, {V(0, 1, 1), V(0, 1, 1), V(0, 1, 1)}, true, "point on diagonal");
+    expectIntersectAllTransforms(diag, {V(0, 1, 0.5), V(0, 3, 2.5), V(0, 3, 2.5)}, false, "parallel diagonals");
+    expectIntersectAllTransforms(diag, {V(1, 1, 0.5), V(0, 1, 0.5), V(0, 1, 0.5)}, false, "segment beside diagonal");
+    expectIntersectAllTransforms(seg, {V(0, 0, 0), V(0, 1, 0), V(0, 2, 0)}, true, "T junction");
+    expectIntersectAllTransforms(seg, {V(0, 1, 0), V(0, 2, 0), V(0, 3, 0)}, false, "T junction gap");
+    expectIntersectAllTransforms(seg, {V(0.5, 0, 0), V(0.5, 0, 0), V(0.5, 0, 0)}, true, "point on segment");
+    expectIntersectAllTransforms(seg, {V(0.5, 0.5, 0), V(0.5, 0.5, 0), V(0.5, 0.5, 0)}, false, "point off segment");
+    expectIntersectAllTransforms(seg, {V(1, 0, 0), V(1, 0, 0), V(1, 0, 0)}, true, "point at segment end");
+    // Coplanar but not collinear segments, in a tilted plane.
+    expectIntersectAllTransforms({V(0, 0, 0), V(2, 2, 2), V(1, 1, 1)}, {V(0, 2, 2), V(2, 0, 0), V(2, 0, 0)}, true,
+                                 "tilted crossing segments");
+    expectIntersectAllTransforms({V(0, 0, 0), V(2, 2, 2), V(1, 1, 1)}, {V(0, 2, 2), V(1, 2, 2), V(1, 2, 2)}, false,
+                                 "tilted coplanar segments apart");
+    // Segments one ulp apart (skew).
+    expectIntersect(seg, {V(0, -1, 0x1p-300), V(0, 1, 0x1p-300), V(0, 0, 0x1p-300)}, false, "segments 2^-300 apart");
+    expectIntersect(seg, {V(0.5, -1, -0x1p-300), V(0.5, 1, 0x1p-300), V(0.5, 0, 0)}, true, "segments crossing, tilted");
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Distance and trianglesWithin
+
+double dist(const Tri& a, const Tri& b) { return triangleDistance(a[0], a[1], a[2], b[0], b[1], b[2]); }
+
+void expectDistance(const Tri& a, const Tri& b, double expected, const std::string& what) {
+    SCOPED_TRACE(what);
+    for (const auto& pa : kPerms) {
+        for (const auto& pb : kPerms) {
+            const Tri x = {a[pa[0]], a[pa[1]], a[pa[2]]}, y = {b[pb[0]], b[pb[1]], b[pb[2]]};
+            EXPECT_NEAR(dist(x, y), expected, 1e-12 * std::max(1.0, expected));
+            EXPECT_NEAR(dist(y, x), expected, 1e-12 * std::max(1.0, expected));
+        }
+    }
+}
+
+TEST(TriangleDistance, KnownDistances) {
+    expectDistance({V(0, 0, 0), V(1, 0, 0), V(0, 1, 0)}, {V(0.2, 0.2, 2), V(1.2, 0.2, 2), V(0.2, 1.2, 2)}, 2.0,
+                   "parallel");
+    expectDistance({V(-1, 0, 0), V(1, 0, 0), V(0, 0, -1)}, {V(0, -1, 3), V(0, 1, 3), V(0, 0, 4)}, 3.0,
+                   "edge-edge skew");
+    expectDistance({V(-1, 0, 0), V(1, 0, 0), V(0, 0, -1)}, {V(-1, -1, 3), V(1, 1, 3), V(0, 0, 5)}, 3.0,
+                   "edge-edge skew at 45 degrees");
+    expectDistance(kA, {V(1, 1, 2), V(1, 1, 5), V(2, 3, 7)}, 2.0, "vertex-face");
+    expectDistance(kA, {V(5, 5, 0), V(6, 5, 0), V(5, 6, 0)}, 3.0 * std::sqrt(2.0), "coplanar vertex-edge");
+    expectDistance(kA, {V(7, 0, 0), V(9, 0, 0), V(8, 1, 0)}, 3.0, "coplanar vertex-vertex");
+    expectDistance(kA, {V(1, 1, -3), V(1, 1, -3), V(1, 1, -3)}, 3.0, "point-face");
+    expectDistance({V(-1, 0, 0), V(1, 0, 0), V(0, 0, 0)}, {V(0, -1, 1), V(0, 1, 1), V(0, 1, 1)}, 1.0,
+                   "segment-segment skew");
+    expectDistance({V(1, 2, 3), V(1, 2, 3), V(1, 2, 3)}, {V(4, 6, 3), V(4, 6, 3), V(4, 6, 3)}, 5.0, "point-point");
+    expectDistance(kA, {V(1, 1, -1), V(1, 1, 1), V(3, 3, 1)}, 0.0, "intersecting");
+    // Sliver at a large offset: B's vertex 1e-3 above the sliver's interior.
+    const Vec3 o(1e6, -1e6, 1e6);
+    expectDistance({o + V(0, 0, 0), o + V(1, 0, 0), o + V(0.5, 0x1p-20, 0)},
+                   {o + V(0.5, 0x1p-22, 0x1p-10), o + V(0.5, 0x1p-22, 1), o + V(0.75, 0.5, 1)}, 0x1p-10,
+                   "sliver at an offset, vertex above its face");
+    // Exact gaps of one ulp.
+    const double z1 = up(1.0);
+    const Tri a = {V(0, 0, 1), V(4, 0, 1), V(0, 4, 1)};
+    EXPECT_EQ(dist(a, {V(1, 1, z1), V(5, 1, z1), V(1, 5, z1)}), z1 - 1.0);
+}
+
+TEST(TrianglesWithin, MarginBehaviour) {
+    const Tri a = {V(0, 0, 0), V(1, 0, 0), V(0, 1, 0)};
+    const Tri b = {V(0.2, 0.2, 2), V(1.2, 0.2, 2), V(0.2, 1.2, 2)};  // distance 2 (parallel)
+    auto within = [](const Tri& x, const Tri& y, double m) {
+        const bool r = trianglesWithin(x[0], x[1], x[2], y[0], y[1], y[2], m);
+        EXPECT_EQ(r, trianglesWithin(y[2], y[0], y[1], x[1], x[0], x[2], m)) << "asymmetric";
+        return r;
+    };
+    EXPECT_FALSE(within(a, b, 0.0));
+    EXPECT_FALSE(within(a, b, -5.0));
+    EXPECT_FALSE(within(a, b, 1.9));
+    EXPECT_TRUE(within(a, b, 2.0));
+    EXPECT_TRUE(within(a, b, 2.1));
+    EXPECT_FALSE(within(a, b, down(2.0)));
+    // Far apart along x only: the box reject.
+    const Tri far = {V(10, 0, 0), V(11, 0, 0), V(10, 1, 0)};
+    EXPECT_FALSE(within(a, far, 8.9));
+    EXPECT_TRUE(within(a, far, 9.0));
+    // Intersecting pairs are within any margin; margin <= 0 is the exact test (touching counts).
+    const Tri pierce = {V(0.2, 0.2, -1), V(0.2, 0.2, 1), V(0.5, 0.3, 1)};
+    EXPECT_TRUE(within(a, pierce, 0.0));
+    EXPECT_TRUE(within(a, pierce, 1e-9));
+    const Tri touch = {V(1, 0, 0), V(2, 0, 0), V(2, 1, 0)};
+    EXPECT_TRUE(within(a, touch, 0.0));
+    EXPECT_TRUE(within(a, touch, -1.0));
+    // Edge-edge gap of 0.25 (skew): tested by the distance, not the planes.
+    const Tri skew = {V(0.25, -0.25, -1), V(0.25, -0.25, 1), V(0.25, -5, 0)};
+    EXPECT_FALSE(within(a, skew, 0.2499));
+    EXPECT_TRUE(within(a, skew, 0.2501));
+    // Degenerate: a point above the face.
+    const Tri pt = {V(0.25, 0.25, 0.5), V(0.25, 0.25, 0.5), V(0.25, 0.25, 0.5)};
+    EXPECT_FALSE(within(a, pt, 0.4999));
+    EXPECT_TRUE(within(a, pt, 0.5001));
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Seeded randomized consistency between trianglesIntersect and triangleDistance
+
+Tri translated(const Tri& t, const Vec3& d) { return {t[0] + d, t[1] + d, t[2] + d}; }
+
+/// Random triangles in the unit cube; every other pair is pushed towards contact.
+Tri randomTri(std::mt19937_64& rng, double scale = 1.0) {
+    std::uniform_real_distribution<double> u(-1, 1);
+    return {V(u(rng), u(rng), u(rng)) * scale, V(u(rng), u(rng), u(rng)) * scale, V(u(rng), u(rng), u(rng)) * scale};
+}
+
+TEST(TriangleConsistency, IntersectIffDistanceZeroUpToContactTolerance) {
+    std::mt19937_64 rng(20240611);
+    std::uniform_real_distribution<double> u(-1, 1);
+    int intersecting = 0, disjoint = 0, nearContact = 0;
+    constexpr double kTol = 1e-12;  // absolute, for unit-size coordinates
+    for (int n = 0; n < 20000; ++n) {
+        const Tri a = randomTri(rng);
+        Tri b = randomTri(rng, n % 4 == 0 ? 0.2 : 1.0);
+        if (n % 2 == 1) b = translated(b, a[n % 3] - b[0] + 1e-3 * V(u(rng), u(rng), u(rng)));  // near contact
+        const bool hit = trianglesIntersect(a[0], a[1], a[2], b[0], b[1], b[2]);
+        const double d = dist(a, b);
+        ASSERT_EQ(hit, d == 0.0) << str(a) << " | " << str(b);
+        (hit ? intersecting : disjoint)++;
+        nearContact += !hit && d < 1e-3;
+
+        // 1-Lipschitz under translation: a pair the exact test calls intersecting is within |s| after a shift s, and a
+        // pair at distance d cannot intersect after a shift shorter than d. Wrong answers in either direction break it.
+        for (const double step : {1e-9, 1e-6, 1e-3, 1e-1}) {
+            const Vec3 dir = V(u(rng), u(rng), u(rng)).normalized();
+            const Tri moved = translated(b, step * dir);
+            const bool hit2 = trianglesIntersect(a[0], a[1], a[2], moved[0], moved[1], moved[2]);
+            const double d2 = dist(a, moved);
+            ASSERT_LE(std::fabs(d2 - d), step + kTol) << "step " << step << ": " << str(a) << " | " << str(b);
+            if (d > step + kTol) {
+                ASSERT_FALSE(hit2) << "step " << step << ": " << str(a) << " | " << str(b);
+            }
+        }
+
+        // trianglesWithin agrees with the distance away from the margin (relative 1e-9).
+        const double m = std::fabs(u(rng)) * 0.5;
+        if (std::fabs(d - m) > 1e-9) {
+            ASSERT_EQ(trianglesWithin(a[0], a[1], a[2], b[0], b[1], b[2], m), d <= m) << "margin " << m << " d " << d;
+        }
+    }
+    std::printf("[consistency] intersecting=%d disjoint=%d near-contact(<1e-3)=%d\n", intersecting, disjoint,
+                nearContact);
+    EXPECT_GT(intersecting, 1000);
+    EXPECT_GT(disjoint, 1000);
+    EXPECT_GT(nearContact, 100);
+}
+
+TEST(TriangleConsistency, DistanceMatchesDenseSampling) {
+    // Upper bound: no sampled pair of points is closer than the distance. Lower bound: the densest sampling is
+    // within its resolution of the distance.
+    std::mt19937_64 rng(99);
+    constexpr int kRes = 24;
+    auto samples = [](const Tri& t) {
+        std::vector<Vec3> s;
+        for (int i = 0; i <= kRes; ++i) {
+            for (int j = 0; i + j <= kRes; ++j) {
+                const double x = double(i) / kRes, y = double(j) / kRes;
+                s.push_back(t[0] + x * (t[1] - t[0]) + y * (t[2] - t[0]));
+            }
+        }
+        return s;
+    };
+    for (int n = 0; n < 150; ++n) {
+        const Tri a = randomTri(rng), b = translated(randomTri(rng), V(0.5, 0, 0));
+        const double d = dist(a, b);
+        const std::vector<Vec3> sa = samples(a), sb = samples(b);
+        double best = std::numeric_limits<double>::infinity();
+        for (const Vec3& p : sa) {
+            for (const Vec3& q : sb) best = std::min(best, (p - q).squaredNorm());
+        }
+        best = std::sqrt(best);
+        auto diam = [](const Tri& t) {
+            return std::max({(t[0] - t[1]).norm(), (t[1] - t[2]).norm(), (t[2] - t[0]).norm()});
+        };
+        const double resolution = (diam(a) + diam(b)) / kRes;
+        EXPECT_LE(d, best + 1e-12) << str(a) << " | " << str(b);
+        EXPECT_GE(d, best - resolution) << str(a) << " | " << str(b);
+    }
+}
+
+}  // namespace
