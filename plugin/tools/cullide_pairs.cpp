@@ -1,6 +1,7 @@
 // cullide-pairs: runs the GPU culler once on a scene file and prints the colliding pairs as JSON.
 //
-//   cullide-pairs SCENE.json [--mode reliable|sampled] [--resolution N] [--margin D] [--out FILE] [--help]
+//   cullide-pairs SCENE.json [--mode reliable|sampled] [--resolution N] [--margin D] [--out FILE]
+//                 [--gpu-levels auto|always|never] [--pipeline auto|paper] [--backend compute|raster] [--help]
 //
 // Exit status: 0 success, 1 unexpected failure, 2 bad input or flags, 3 no usable EGL/OpenGL.
 #include "cullide/Culler.h"
@@ -40,6 +41,9 @@ const char* const kUsage =
     "  --resolution N      image-space resolution per view, 16..4096 (default 256)\n"
     "  --margin D          also report triangle pairs closer than D >= 0 (default 0)\n"
     "  --out FILE          write the JSON to FILE instead of standard output\n"
+    "  --gpu-levels L      auto (default: GPU levels on hardware devices only), always, never\n"
+    "  --pipeline P        auto (default: CPU box pre-pass, group boxes, triangles) or paper\n"
+    "  --backend B         compute (default) or raster\n"
     "  --help              show this help\n"
     "\n"
     "Output: {\"objects\": N, \"object_pairs\": [[i, j], ...], \"triangle_pairs\": [[i, ti, j, tj], ...],\n"
@@ -94,7 +98,8 @@ std::optional<Options> parseArgs(int argc, char** argv) {
                 value = arg.substr(eq + 1);
                 inlineValue = true;
             }
-            if (flag != "--mode" && flag != "--resolution" && flag != "--margin" && flag != "--out") {
+            if (flag != "--mode" && flag != "--resolution" && flag != "--margin" && flag != "--out" &&
+                flag != "--gpu-levels" && flag != "--pipeline" && flag != "--backend") {
                 throw UsageError("unknown option '" + flag + "'");
             }
             if (!inlineValue) {
@@ -113,6 +118,19 @@ std::optional<Options> parseArgs(int argc, char** argv) {
                 o.settings.resolution = parseIntFlag(flag, value);
             } else if (flag == "--margin") {
                 o.settings.margin = parseDoubleFlag(flag, value);
+            } else if (flag == "--gpu-levels") {
+                if (value == "auto") o.settings.gpuLevels = cullide::GpuLevels::Auto;
+                else if (value == "always") o.settings.gpuLevels = cullide::GpuLevels::Always;
+                else if (value == "never") o.settings.gpuLevels = cullide::GpuLevels::Never;
+                else throw UsageError("--gpu-levels expects 'auto', 'always' or 'never', got '" + value + "'");
+            } else if (flag == "--pipeline") {
+                if (value == "auto") o.settings.pipeline = cullide::Pipeline::Auto;
+                else if (value == "paper") o.settings.pipeline = cullide::Pipeline::Paper;
+                else throw UsageError("--pipeline expects 'auto' or 'paper', got '" + value + "'");
+            } else if (flag == "--backend") {
+                if (value == "compute") o.settings.backend = cullide::Backend::Compute;
+                else if (value == "raster") o.settings.backend = cullide::Backend::Raster;
+                else throw UsageError("--backend expects 'compute' or 'raster', got '" + value + "'");
             } else {
                 if (value.empty()) throw UsageError("--out needs a file name");
                 o.out = value;
