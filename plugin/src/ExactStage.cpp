@@ -31,15 +31,13 @@ void boxesIn(const TriangleMesh& mesh, const std::vector<std::uint32_t>& triangl
 /// intersection, so no pair is reported twice. Boxes spanning many cells are tested directly.
 class GridCandidates {
 public:
-    void run(const std::vector<BoxRef>& a, const std::vector<BoxRef>& b, const Aabb& region,
-             std::vector<TrianglePair>& out) {
-        if (a.empty() || b.empty()) return;
-        if (a.size() * b.size() <= 4096) {
-            for (const BoxRef& x : a)
-                for (const BoxRef& y : b)
-                    if (x.box.overlaps(y.box)) out.push_back({x.triangle, y.triangle});
-            return;
-        }
+    /// Buckets `b` (kept by reference until the last query) for queries with boxes from `a`.
+    void build(const std::vector<BoxRef>& a, const std::vector<BoxRef>& b, const Aabb& region) {
+        m_b = &b;
+        m_entries.clear();
+        m_largeB.clear();
+        m_brute = a.size() * b.size() <= 4096;
+        if (m_brute || a.empty() || b.empty()) return;
         double mean = 0.0;
         for (const BoxRef& x : a) mean += x.box.extent().maxCoeff();
         for (const BoxRef& y : b) mean += y.box.extent().maxCoeff();
@@ -50,8 +48,6 @@ public:
         for (int k = 0; k < 3; ++k)
             m_dims[k] = static_cast<std::int64_t>(std::min(128.0, std::max(1.0, std::ceil(extent[k] / m_cell))));
         // Bucket b by cell; large boxes aside.
-        m_entries.clear();
-        m_largeB.clear();
         for (std::uint32_t j = 0; j < b.size(); ++j) {
             const auto [lo, hi] = cellRange(b[j].box);
             if (cellCount(lo, hi) > kMaxCells) {
@@ -63,7 +59,19 @@ public:
                     for (std::int64_t z = lo[2]; z <= hi[2]; ++z) m_entries.push_back({key(x, y, z), j});
         }
         std::sort(m_entries.begin(), m_entries.end());
-        for (const BoxRef& x : a) {
+    }
+
+    /// Candidates of the boxes a[begin, end) against the bucketed b, in a's order.
+    void query(const std::vector<BoxRef>& a, std::size_t begin, std::size_t end, std::vector<TrianglePair>& out) const {
+        const std::vector<BoxRef>& b = *m_b;
+        if (m_brute) {
+            for (std::size_t i = begin; i < end; ++i)
+                for (const BoxRef& y : b)
+                    if (a[i].box.overlaps(y.box)) out.push_back({a[i].triangle, y.triangle});
+            return;
+        }
+        for (std::size_t i = begin; i < end; ++i) {
+            const BoxRef& x = a[i];
             for (std::uint32_t j : m_largeB)
                 if (x.box.overlaps(b[j].box)) out.push_back({x.triangle, b[j].triangle});
             const auto [lo, hi] = cellRange(x.box);
@@ -120,6 +128,14 @@ private:
     std::array<std::int64_t, 3> m_dims{1, 1, 1};
     std::vector<std::pair<std::uint64_t, std::uint32_t>> m_entries;
     std::vector<std::uint32_t> m_largeB;
+    const std::vector<BoxRef>* m_b = nullptr;
+    bool m_brute = true;
+};
+
+struct JobGrid {
+    std::vector<BoxRef> a;
+    std::vector<BoxRef> b;
+    GridCandidates grid;
 };
 
 }  // namespace
@@ -128,31 +144,46 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
                      std::vector<ExactJobResult>& results, Stats& stats) {
     results.assign(jobs.size(), ExactJobResult{});
     m_candidates.resize(jobs.size());
-    // Phase 1: candidates per job (a grid over the region where the two objects' surviving triangles overlap).
+    // Phase 1: per job, the region where the two objects' surviving triangles overlap, their boxes in it, and a
+    // grid over the second object's boxes; then queries of the first object's boxes, in chunks on every worker.
+    std::vector<JobGrid> grids(jobs.size());
+    const double inflate = 0.5 * margin;
     m_pool.parallelFor(jobs.size(), 1, [&](std::size_t begin, std::size_t end) {
-        std::vector<BoxRef> boxesA;
-        std::vector<BoxRef> boxesB;
-        GridCandidates grid;
-        const double inflate = 0.5 * margin;
         for (std::size_t j = begin; j < end; ++j) {
             const ExactJob& job = jobs[j];
             const TriangleMesh& ma = *objects[job.a].mesh;
             const TriangleMesh& mb = *objects[job.b].mesh;
+            JobGrid& g = grids[j];
             Aabb boundsA, boundsB;
             for (std::uint32_t t : *job.trianglesA) boundsA.grow(triangleBounds(ma, t));
             for (std::uint32_t t : *job.trianglesB) boundsB.grow(triangleBounds(mb, t));
             boundsA = boundsA.inflated(inflate);
             boundsB = boundsB.inflated(inflate);
-            m_candidates[j].clear();
-            if (boundsA.overlaps(boundsB)) {
-                const Aabb region{boundsA.min.cwiseMax(boundsB.min), boundsA.max.cwiseMin(boundsB.max)};
-                boxesIn(ma, *job.trianglesA, inflate, region, boxesA);
-                boxesIn(mb, *job.trianglesB, inflate, region, boxesB);
-                grid.run(boxesA, boxesB, region, m_candidates[j]);
-            }
-            results[j].candidates = m_candidates[j].size();
+            if (!boundsA.overlaps(boundsB)) continue;
+            const Aabb region{boundsA.min.cwiseMax(boundsB.min), boundsA.max.cwiseMin(boundsB.max)};
+            boxesIn(ma, *job.trianglesA, inflate, region, g.a);
+            boxesIn(mb, *job.trianglesB, inflate, region, g.b);
+            g.grid.build(g.a, g.b, region);
         }
     });
+    constexpr std::size_t kChunk = 1024;
+    std::vector<std::pair<std::size_t, std::size_t>> tasks;  // (job, first box of a)
+    for (std::size_t j = 0; j < jobs.size(); ++j)
+        for (std::size_t i = 0; i < grids[j].a.size(); i += kChunk) tasks.emplace_back(j, i);
+    std::vector<std::vector<TrianglePair>> taskOut(tasks.size());
+    m_pool.parallelFor(tasks.size(), 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t t = begin; t < end; ++t) {
+            const JobGrid& g = grids[tasks[t].first];
+            const std::size_t first = tasks[t].second;
+            g.grid.query(g.a, first, std::min(g.a.size(), first + kChunk), taskOut[t]);
+        }
+    });
+    for (std::size_t j = 0; j < jobs.size(); ++j) m_candidates[j].clear();
+    for (std::size_t t = 0; t < tasks.size(); ++t) {
+        auto& c = m_candidates[tasks[t].first];
+        c.insert(c.end(), taskOut[t].begin(), taskOut[t].end());
+    }
+    for (std::size_t j = 0; j < jobs.size(); ++j) results[j].candidates = m_candidates[j].size();
     // Phase 2: exact tests over all candidates, flattened so that one large pair still uses every worker.
     std::vector<std::size_t> offsets(jobs.size() + 1, 0);
     for (std::size_t j = 0; j < jobs.size(); ++j) offsets[j + 1] = offsets[j] + m_candidates[j].size();

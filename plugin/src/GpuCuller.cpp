@@ -74,16 +74,13 @@ public:
         buildGroups(!paper, stats);
         stats.prepassMs = prepass.ms();
 
-        Timer upload;
-        uploadGeometry(stats);
-        stats.uploadMs = upload.ms();
-
+        m_uploaded = false;
         Timer levels;
         if (paper)
             runPaperPipeline(stats);
         else
             runAutoPipeline(stats);
-        stats.gpuLevelsMs = levels.ms();
+        stats.gpuLevelsMs = levels.ms() - stats.uploadMs;
 
         Timer exact;
         assemblePairs(result);
@@ -174,9 +171,17 @@ private:
         if (id == kNoOwner) id = m_ownerCount++;
         return id;
     }
-    void resetOwners() {
+    /// Starts building a level's items. The frame's geometry goes to the GPU only when a level actually runs.
+    void beginLevel(Stats& stats) {
+        if (!m_uploaded) {
+            Timer upload;
+            uploadGeometry(stats);
+            stats.uploadMs += upload.ms();
+            m_uploaded = true;
+        }
         m_ownerId.assign(m_valid.size(), kNoOwner);
         m_ownerCount = 0;
+        m_items.clear();
     }
 
     void addBoxItem(std::uint32_t object, std::uint32_t box, const Aabb& worldBox) {
@@ -220,8 +225,7 @@ private:
     }
 
     void runTriangleLevel(const std::vector<std::uint32_t>& proxies, Stats& stats) {
-        resetOwners();
-        m_items.clear();
+        beginLevel(stats);
         for (const Tri& t : m_tris) addTriangleItem(t.object, t.triangle, 1, t.box);
         for (std::uint32_t o : proxies) addBoxItem(o, m_objectBox[o], m_valid[o].box);
         pruneLevel("triangles", stats);
@@ -257,8 +261,7 @@ private:
         const bool gpu = m_settings.gpuLevels == GpuLevels::Always ||
                          (m_settings.gpuLevels == GpuLevels::Auto && !m_context.isSoftware());
         if (gpu && triangleCount(groups) > m_settings.exactThreshold) {
-            resetOwners();
-            m_items.clear();
+            beginLevel(stats);
             for (std::size_t g = 0; g < groups.size(); ++g)
                 addBoxItem(groups[g].object, m_groupBox[g], groups[g].box);
             for (std::uint32_t o : proxies) addBoxItem(o, m_objectBox[o], m_valid[o].box);
@@ -292,14 +295,12 @@ private:
                 if (m_survivors[i]) kept.push_back(list[i]);
             list.swap(kept);
         };
-        resetOwners();
-        m_items.clear();
+        beginLevel(stats);
         for (std::uint32_t o : objects) addBoxItem(o, m_objectBox[o], m_valid[o].box);
         pruneLevel("objects-box", stats);
         keepSurvivors(objects);
 
-        resetOwners();
-        m_items.clear();
+        beginLevel(stats);
         for (std::uint32_t o : objects) {
             if (isMesh(o))
                 addTriangleItem(o, 0, static_cast<std::uint32_t>(meshOf(o).triangles.size()), m_valid[o].box);
@@ -317,8 +318,7 @@ private:
         std::vector<std::uint32_t> levelProxies;
         for (std::uint32_t o : proxies)
             if (objectAlive[o]) levelProxies.push_back(o);
-        resetOwners();
-        m_items.clear();
+        beginLevel(stats);
         for (const Group& g : groups) addTriangleItem(g.object, g.first, g.count, g.box);
         for (std::uint32_t o : levelProxies) addBoxItem(o, m_objectBox[o], m_valid[o].box);
         pruneLevel("groups", stats);
@@ -389,6 +389,7 @@ private:
     std::vector<std::uint32_t> m_objectBox;
     std::vector<std::uint32_t> m_baseTriangle;
     Vec3 m_origin = Vec3::Zero();
+    bool m_uploaded = false;
     gl::GpuGeometry m_geometry;
     gl::LevelItems m_items;
     std::vector<std::uint8_t> m_survivors;
