@@ -269,6 +269,12 @@ TEST(TrianglesIntersect, EdgeEdge) {
     }
     // Crossing edges that are not axis-aligned.
     expectIntersectAllTransforms(kA, {V(1, 3, -2), V(3, 1, 2), V(9, 9, 0)}, true, "edge through hypotenuse midpoint");
+    // Same contact with every vertex strictly off the other triangle's plane (the generic straddling path): the two
+    // segments on the planes' common line touch at one end.
+    expectIntersectAllTransforms(kA, {V(1, 3, -2), V(3, 1, 2), V(9, 9, 1)}, true, "generic edge-edge contact");
+    expectIntersectAllTransforms(kA, {V(1, 3, -2), V(3, 1, 2), V(-5, -5, 1)}, true, "generic edge-edge, overlap");
+    expectIntersect(kA, {V(1, up(3.0), -2), V(3, up(1.0), 2), V(9, 9, 1)}, false, "generic edge-edge, 1 ulp apart");
+    expectIntersect(kA, {V(1, down(3.0), -2), V(3, down(1.0), 2), V(9, 9, 1)}, true, "generic edge-edge, 1 ulp in");
     // One ulp off: move B by one ulp of 1 in -y (the exact contact disappears).
     const Tri bUlp = {V(1, -0x1p-52, -1), V(1, -0x1p-52, 1), V(1, -5, 0)};
     expectIntersect(kA, bUlp, false, "edge-edge apart by 2^-52");
@@ -418,6 +424,22 @@ TEST(TrianglesIntersect, DegenerateVersusDegenerate) {
     // Segments one ulp apart (skew).
     expectIntersect(seg, {V(0, -1, 0x1p-300), V(0, 1, 0x1p-300), V(0, 0, 0x1p-300)}, false, "segments 2^-300 apart");
     expectIntersect(seg, {V(0.5, -1, -0x1p-300), V(0.5, 1, 0x1p-300), V(0.5, 0, 0)}, true, "segments crossing, tilted");
+}
+
+TEST(TrianglesIntersect, NonFiniteInputIsWellDefined) {
+    // Outside the contract (inputs must be finite), but must not crash or read out of bounds; no answer is asserted.
+    const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+    int count = 0;
+    for (const double bad : {nan, inf, -inf}) {
+        for (int i = 0; i < 9; ++i) {
+            Tri b = {V(1, 1, -1), V(1, 1, 1), V(3, 3, 1)};
+            b[i / 3][i % 3] = bad;
+            count += trianglesIntersect(kA[0], kA[1], kA[2], b[0], b[1], b[2]);
+            count += trianglesWithin(b[0], b[1], b[2], kA[0], kA[1], kA[2], 0.5);
+            count += std::isnan(triangleDistance(kA[0], kA[1], kA[2], b[0], b[1], b[2]));
+        }
+    }
+    EXPECT_GE(count, 0);
 }
 
 // ---------------------------------------------------------------------------------------------------------------

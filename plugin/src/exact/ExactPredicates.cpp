@@ -7,14 +7,16 @@
 // standard model fl(x op y) = (x op y)(1 + d), |d| <= eps, gives |det~ - det| <= gamma_8 * T with
 // gamma_8 = 8 eps / (1 - 8 eps) and T the sum of the absolute exact terms. The permanent P~ that the filter computes
 // (same expression with absolute values) has the same 8 roundings per term, so T <= P~ / (1 - eps)^8, and
-// gamma_8 / (1 - eps)^8 < 8 eps (1 + 17 eps). The filter multiplies P~ by 8 eps (1 + 32 eps) (rounded once more,
-// still above 8 eps (1 + 30 eps) P~), which covers it. The 2D case has 4 roundings per term (2 differences, product,
-// subtraction) and uses 4 eps (1 + 32 eps). Underflow: sums and differences are exact in the subnormal range, but each
-// product may lose up to 2^-1075 absolutely. In orient3d the two products of a normal component n_k lose at most
-// 2^-1074 together, which the multiplication by w_k scales by |w_k|, and the three final products add 3 * 2^-1075:
-// the slack 2^-1072 (|w.x| + |w.y| + |w.z| + 1) covers that (and the rounding of the slack itself) with a margin. In
-// orient2d the two products lose at most 2^-1074; the slack is 2^-1072. Overflow produces inf or NaN, for which the
-// comparisons fail and the exact stage decides.
+// gamma_8 / (1 - eps)^8 < 8 eps (1 + 17 eps). The filter multiplies P~ by 8 eps (1 + 64 eps) (rounded once more,
+// still above 8 eps (1 + 62 eps) P~), which covers it with a relative margin of more than 40 eps. The 2D case has 4
+// roundings per term (2 differences, product, subtraction) and uses 4 eps (1 + 64 eps).
+// Underflow: sums and differences are exact in the subnormal range, but each product may lose up to 2^-1075
+// absolutely. In orient3d the two products of a normal component n_k lose at most 2^-1074 together, which the
+// multiplication by w_k scales by |w_k|, and the three final products add 3 * 2^-1075: in all at most
+// U = 2^-1072 (|w.x| + |w.y| + |w.z| + 1) (in orient2d at most 2^-1074). The filter decides only when its bound
+// exceeds 2^-1000 (|w.x| + |w.y| + |w.z| + 1) (in 2D: 2^-1000), so U < 2^-72 * bound, far inside the margin. That
+// test is computed in the normal range (no subnormal operands, which are slow on common hardware). Overflow produces
+// inf or NaN, for which the comparisons fail and the exact stage decides.
 //
 // Exact evaluation, floating-point expansions (every non-zero coordinate in [2^-300, 2^300]). Each difference
 // b_i - a_i is computed exactly as a two-term expansion (Two-Diff), then the determinant is expanded with exact
@@ -298,6 +300,11 @@ void multiply(const BigInt& a, const BigInt& b, BigInt& r) {
 
 /// Integer significand and exponent of a finite non-zero double: x == m * 2^e, m < 2^53.
 void decompose(double x, std::uint64_t& m, int& e) {
+    if (!std::isfinite(x)) {  // outside the contract; keep the conversion well-defined
+        m = 0;
+        e = 0;
+        return;
+    }
     int k = 0;
     const double f = std::frexp(std::fabs(x), &k);  // f in [0.5, 1)
     m = static_cast<std::uint64_t>(std::ldexp(f, 53));
@@ -383,9 +390,16 @@ inline bool inExpansionRange(const double* x, int n) {
 int orient3dExpansion(const double* a, const double* b, const double* c, const double* d);
 int orient2dExpansion(double ax, double ay, double bx, double by, double cx, double cy);
 
+inline bool samePoint3(const double* p, const double* q) { return p[0] == q[0] && p[1] == q[1] && p[2] == q[2]; }
+
 }  // namespace
 
 int orient3dExact(const double* a, const double* b, const double* c, const double* d) {
+    // Repeated points (shared vertices, degenerate triangles) make the determinant exactly zero: answer at once.
+    if (samePoint3(a, b) || samePoint3(a, c) || samePoint3(a, d) || samePoint3(b, c) || samePoint3(b, d) ||
+        samePoint3(c, d)) {
+        return 0;
+    }
     if (inExpansionRange(a, 3) && inExpansionRange(b, 3) && inExpansionRange(c, 3) && inExpansionRange(d, 3)) {
         return orient3dExpansion(a, b, c, d);
     }
@@ -393,6 +407,7 @@ int orient3dExact(const double* a, const double* b, const double* c, const doubl
 }
 
 int orient2dExact(double ax, double ay, double bx, double by, double cx, double cy) {
+    if ((ax == bx && ay == by) || (ax == cx && ay == cy) || (bx == cx && by == cy)) return 0;
     const double x[6] = {ax, ay, bx, by, cx, cy};
     if (inExpansionRange(x, 6)) return orient2dExpansion(ax, ay, bx, by, cx, cy);
     return orient2dBig(ax, ay, bx, by, cx, cy);

@@ -25,17 +25,20 @@ namespace detail {
 
 /// Unit round-off of binary64 (2^-53).
 constexpr double kEpsilon = 0x1p-53;
-/// orient3d filter: |computed - exact| <= 8 eps (1 + 32 eps) * permanent (see ExactPredicates.cpp for the derivation).
-constexpr double kOrient3dBound = 0x1p-50 + 0x1p-98;
-/// orient2d filter: |computed - exact| <= 4 eps (1 + 32 eps) * permanent.
-constexpr double kOrient2dBound = 0x1p-51 + 0x1p-99;
-/// Unit of the absolute slack that covers products landing in the subnormal range (each loses at most 2^-1075).
-constexpr double kUnderflowUnit = 0x1p-1072;
+/// orient3d filter: |computed - exact| <= 8 eps (1 + 64 eps) * permanent (see ExactPredicates.cpp for the derivation).
+constexpr double kOrient3dBound = 0x1p-50 + 0x1p-97;
+/// orient2d filter: |computed - exact| <= 4 eps (1 + 64 eps) * permanent.
+constexpr double kOrient2dBound = 0x1p-51 + 0x1p-98;
+/// The filter only decides when its bound exceeds 2^-1000 (|w.x| + |w.y| + |w.z| + 1): then the absolute errors of
+/// products that underflow are negligible against the bound's margin. The test stays in the normal range, so typical
+/// inputs never pay for subnormal arithmetic.
+constexpr double kUnderflowGuard = 0x1p-1000;
 
-/// Filter bound of orient3d from the computed permanent and |w.x| + |w.y| + |w.z| (w = d - a): the relative bound plus
-/// the underflow errors (two products per normal component, amplified by |w_k|, and the three final products).
+/// The orient3d filter's error bound from the computed permanent and |w.x| + |w.y| + |w.z| (w = d - a), or a negative
+/// value when the filter must not decide (underflow zone, or NaN).
 inline double orient3dErrorBound(double permanent, double absW) {
-    return kOrient3dBound * permanent + kUnderflowUnit * (absW + 1.0);
+    const double bound = kOrient3dBound * permanent;
+    return bound > kUnderflowGuard * (absW + 1.0) ? bound : -1.0;
 }
 
 // Out-of-line exact evaluation used when the filter fails; counts the fallback.
@@ -65,8 +68,10 @@ inline int orient3d(const double* a, const double* b, const double* c, const dou
     const double perm = awx * (std::fabs(uyvz) + std::fabs(uzvy)) + awy * (std::fabs(uzvx) + std::fabs(uxvz)) +
                         awz * (std::fabs(uxvy) + std::fabs(uyvx));
     const double bound = detail::orient3dErrorBound(perm, awx + awy + awz);
-    if (det > bound) return 1;
-    if (-det > bound) return -1;
+    if (bound >= 0.0) {
+        if (det > bound) return 1;
+        if (-det > bound) return -1;
+    }
     return detail::orient3dFallback(a, b, c, d);
 }
 
@@ -81,9 +86,11 @@ inline int orient2d(double ax, double ay, double bx, double by, double cx, doubl
     const double vx = cx - ax, vy = cy - ay;
     const double l = ux * vy, r = uy * vx;
     const double det = l - r;
-    const double bound = detail::kOrient2dBound * (std::fabs(l) + std::fabs(r)) + detail::kUnderflowUnit;
-    if (det > bound) return 1;
-    if (-det > bound) return -1;
+    const double bound = detail::kOrient2dBound * (std::fabs(l) + std::fabs(r));
+    if (bound > detail::kUnderflowGuard) {
+        if (det > bound) return 1;
+        if (-det > bound) return -1;
+    }
     return detail::orient2dFallback(ax, ay, bx, by, cx, cy);
 }
 
@@ -113,8 +120,10 @@ public:
         const double awx = std::fabs(wx), awy = std::fabs(wy), awz = std::fabs(wz);
         const double perm = awx * p_[0] + awy * p_[1] + awz * p_[2];
         const double bound = detail::orient3dErrorBound(perm, awx + awy + awz);
-        if (det > bound) return 1;
-        if (-det > bound) return -1;
+        if (bound >= 0.0) {
+            if (det > bound) return 1;
+            if (-det > bound) return -1;
+        }
         return detail::orient3dFallback(a_, b_, c_, d);
     }
     int side(const Eigen::Vector3d& d) const { return side(d.data()); }

@@ -1,6 +1,12 @@
 // Exact triangle-triangle intersection from exact predicate signs, plus a double-precision distance.
 //
-// Formulation: two closed triangles intersect iff an edge (closed segment) of one meets the other triangle.
+// Pipeline of trianglesIntersect: exact box reject; the signs of B's vertices against A's plane and of A's vertices
+// against B's plane (filtered orient3d, plane cross products computed once per triangle), rejecting when one triangle
+// lies strictly on one side; when all six signs are non-zero, a Guigue-Devillers style interval test with two more
+// orient3d (intersectStraddling); every other configuration (a vertex on the other plane, coplanar, degenerate) goes
+// through the edge formulation below. In typical use only the first two steps run and no exact arithmetic is needed.
+//
+// Edge formulation: two closed triangles intersect iff an edge (closed segment) of one meets the other triangle.
 //  * Non-coplanar, non-degenerate: the intersection is a segment on the planes' common line whose end points lie on
 //    edges of the triangles, so one of those edges meets the other triangle.
 //  * Coplanar: either boundaries cross or one triangle contains the other, and then its edges lie in the other.
@@ -108,7 +114,7 @@ bool segmentsIntersect3(const Vec3& p, const Vec3& q, const Vec3& r, const Vec3&
         return inBox3(r, p, q) || inBox3(s, p, q) || inBox3(p, r, s) || inBox3(q, r, s);
     }
     const int k = projectionAxis(p, q, *off);
-    return segmentsIntersect2(p, q, r, s, k);
+    return k >= 0 && segmentsIntersect2(p, q, r, s, k);  // k < 0 only for non-finite input
 }
 
 /// A triangle with lazily computed projection data.
@@ -127,9 +133,17 @@ struct Tri {
     }
 };
 
+/// Exact: closed segment pq meets one of the edges of t (for collinear t).
+bool segmentMeetsEdges(const Vec3& p, const Vec3& q, const Tri& t) {
+    return segmentsIntersect3(p, q, t[0], t[1]) || segmentsIntersect3(p, q, t[1], t[2]) ||
+           segmentsIntersect3(p, q, t[2], t[0]);
+}
+
 /// Exact: p (in the plane of the non-degenerate triangle t) inside the closed triangle.
 bool pointInTriangle2(const Vec3& p, Tri& t) {
     t.ensureAxis();
+    // Exact predicates never get here with a collinear t; the guard only keeps non-finite input well-defined.
+    if (t.axis < 0) return segmentMeetsEdges(p, p, t);
     const int k = t.axis, o = t.orient;
     if (orient2dDrop(t[0], t[1], p, k) == -o) return false;
     if (orient2dDrop(t[1], t[2], p, k) == -o) return false;
@@ -143,6 +157,7 @@ bool segmentTriangle(const Vec3& p, const Vec3& q, int sp, int sq, Tri& t) {
         if (sp != 0) return false;
         // Segment in the triangle's plane.
         t.ensureAxis();
+        if (t.axis < 0) return segmentMeetsEdges(p, q, t);  // non-finite input only, see pointInTriangle2
         const int k = t.axis;
         return pointInTriangle2(p, t) || pointInTriangle2(q, t) || segmentsIntersect2(p, q, t[0], t[1], k) ||
                segmentsIntersect2(p, q, t[1], t[2], k) || segmentsIntersect2(p, q, t[2], t[0], k);
@@ -164,6 +179,21 @@ bool edgesMeetTriangle(const Vec3& e0, const Vec3& e1, const Vec3& e2, const int
            segmentTriangle(e2, e0, s[2], s[0], t);
 }
 
+/// Exact: two coplanar non-degenerate triangles meet (each edge pair and each vertex once, in A's projection, which
+/// is injective on the common plane).
+bool coplanarTriangles(Tri& ta, Tri& tb) {
+    ta.ensureAxis();
+    tb.ensureAxis();
+    const int k = ta.axis;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            if (segmentsIntersect2(ta[i], ta[(i + 1) % 3], tb[j], tb[(j + 1) % 3], k)) return true;
+        }
+    }
+    // No boundary crossing: they meet iff one contains the other, i.e. iff a vertex of one lies in the other.
+    return pointInTriangle2(ta[0], tb) || pointInTriangle2(tb[0], ta);
+}
+
 inline bool allSameStrictSign(const int s[3]) { return s[0] != 0 && s[0] == s[1] && s[1] == s[2]; }
 inline bool allZero(const int s[3]) { return s[0] == 0 && s[1] == 0 && s[2] == 0; }
 
@@ -183,6 +213,39 @@ inline bool boxesDisjoint(const Vec3& a0, const Vec3& a1, const Vec3& a2, const 
     return false;
 }
 
+/// Index of the vertex whose (non-zero) sign differs from the two others'.
+inline int loneVertex(const int s[3]) {
+    if (s[0] == s[1]) return 2;
+    return s[0] == s[2] ? 1 : 0;
+}
+
+/// Both triangles strictly straddle the other's plane (all six signs non-zero). Each triangle then meets the planes'
+/// common line L in a segment, and they intersect iff the two segments overlap. Relabel so that a0 is the vertex of A
+/// alone on the positive side of B's plane and b0 the vertex of B alone on the positive side of A's plane (cyclic
+/// shifts, then swapping the two other vertices of the *other* triangle, which flips its plane). With d = nA x nB,
+/// A's segment on L runs from its point j on a0a2 to its point i on a0a1 and B's from its point k on b0b1 to its point
+/// l on b0b2 (positions t along d). With e = a1 - a0, f = b1 - b0: orient3d(a0, a1, b0, b1) = det[e, b0 - a0, f]
+/// = -(k - i) . (e x f) = -(t_k - t_i) / |d|^2 * (d . (e x f)), and d . (e x f) = -(nA . f)(nB . e) < 0 because b0
+/// is above A and b1 below, a0 above B and a1 below. So its sign is that of t_k - t_i; likewise orient3d(a0, a2, b0,
+/// b2) has the sign of t_l - t_j. The closed intervals [t_j, t_i] and [t_k, t_l] overlap iff t_k <= t_i and
+/// t_j <= t_l.
+bool intersectStraddling(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
+                         const Vec3& b2, const int sa[3], const int sb[3]) {
+    const Vec3* a[3] = {&a0, &a1, &a2};
+    const Vec3* b[3] = {&b0, &b1, &b2};
+    const int ia = loneVertex(sa), ib = loneVertex(sb);
+    const Vec3* p0 = a[ia];
+    const Vec3* p1 = a[(ia + 1) % 3];
+    const Vec3* p2 = a[(ia + 2) % 3];
+    const Vec3* q0 = b[ib];
+    const Vec3* q1 = b[(ib + 1) % 3];
+    const Vec3* q2 = b[(ib + 2) % 3];
+    if (sa[ia] < 0) std::swap(q1, q2);  // flips B's plane: p0 is now on its positive side
+    if (sb[ib] < 0) std::swap(p1, p2);  // flips A's plane: q0 is now on its positive side
+    if (orient3d(*p0, *p1, *q0, *q1) > 0) return false;
+    return orient3d(*p0, *p2, *q0, *q2) >= 0;
+}
+
 bool intersectExact(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
                     const Vec3& b2) {
     const exact::PlaneSide planeA(a0, a1, a2);
@@ -191,6 +254,11 @@ bool intersectExact(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& 
     const exact::PlaneSide planeB(b0, b1, b2);
     const int sa[3] = {planeB.side(a0), planeB.side(a1), planeB.side(a2)};
     if (allSameStrictSign(sa)) return false;
+
+    if (sa[0] != 0 && sa[1] != 0 && sa[2] != 0 && sb[0] != 0 && sb[1] != 0 && sb[2] != 0) {
+        // Generic case: each triangle strictly straddles the other's plane (so neither is degenerate).
+        return intersectStraddling(a0, a1, a2, b0, b1, b2, sa, sb);
+    }
 
     Tri ta(a0, a1, a2), tb(b0, b1, b2);
     // A collinear triangle gives all-zero orientations; only then can it be degenerate.
@@ -215,6 +283,7 @@ bool intersectExact(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& 
     }
     if (aDegenerate) return edgesMeetTriangle(a0, a1, a2, sa, tb);
     if (bDegenerate) return edgesMeetTriangle(b0, b1, b2, sb, ta);
+    if (allZero(sa) && allZero(sb)) return coplanarTriangles(ta, tb);
     return edgesMeetTriangle(a0, a1, a2, sa, tb) || edgesMeetTriangle(b0, b1, b2, sb, ta);
 }
 
@@ -231,64 +300,77 @@ double pointSegmentDistance2(const Vec3& p, const Vec3& a, const Vec3& b) {
     return (ap - (t / len2) * ab).squaredNorm();
 }
 
-double segmentSegmentDistance2(const Vec3& p1, const Vec3& q1, const Vec3& p2, const Vec3& q2) {
-    // The minimum is attained either with an end point involved or at the two lines' mutual closest points.
-    double best = std::min(std::min(pointSegmentDistance2(p1, p2, q2), pointSegmentDistance2(q1, p2, q2)),
-                           std::min(pointSegmentDistance2(p2, p1, q1), pointSegmentDistance2(q2, p1, q1)));
+/// Candidate for the distance of segments p1q1 and p2q2 at the lines' mutual closest points, clamped onto the
+/// segments: a real pair of points, so never below the true distance (up to rounding). Configurations whose minimum
+/// involves an end point (including parallel and degenerate segments) are left to the vertex-triangle candidates.
+double segmentPairCandidate2(const Vec3& p1, const Vec3& q1, const Vec3& p2, const Vec3& q2) {
     const Vec3 d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
     const double a = d1.squaredNorm(), e = d2.squaredNorm();
-    if (a > 0.0 && e > 0.0) {
-        const double b = d1.dot(d2), c = d1.dot(r), f = d2.dot(r);
-        const double denom = a * e - b * b;
-        if (denom > 0.0) {
-            // Interior candidate: every candidate is a real pair of points, so rounding can only overestimate it,
-            // and the end-point candidates above cover the configurations where it is ill-conditioned.
-            double s = clamp01((b * f - c * e) / denom);
-            double t = (b * s + f) / e;
-            if (t < 0.0 || t > 1.0) {
-                t = clamp01(t);
-                s = clamp01((b * t - c) / a);
+    const double b = d1.dot(d2);
+    const double denom = a * e - b * b;
+    if (!(a > 0.0 && e > 0.0 && denom > 0.0)) return std::numeric_limits<double>::infinity();
+    const double c = d1.dot(r), f = d2.dot(r);
+    double s = clamp01((b * f - c * e) / denom);
+    double t = (b * s + f) / e;
+    if (t < 0.0 || t > 1.0) {
+        t = clamp01(t);
+        s = clamp01((b * t - c) / a);
+    }
+    // Relative to p1 - p2 (exact for nearby points), not via absolute coordinates: keeps tiny distances accurate at
+    // large offsets.
+    return (r + s * d1 - t * d2).squaredNorm();
+}
+
+/// A triangle's data for point-triangle distances.
+struct TriangleGeometry {
+    const Vec3 *a, *b, *c;
+    Vec3 ab, bc, ca, n;
+    double nn;
+    bool useFace;  ///< not numerically degenerate: the face region is used
+
+    TriangleGeometry(const Vec3& a0, const Vec3& a1, const Vec3& a2)
+        : a(&a0), b(&a1), c(&a2), ab(a1 - a0), bc(a2 - a1), ca(a0 - a2) {
+        n = ab.cross(a2 - a0);
+        nn = n.squaredNorm();
+        useFace = nn > 0.0 && nn > 1e-24 * ab.squaredNorm() * ca.squaredNorm();
+    }
+
+    /// Squared distance from p to the closed triangle.
+    double distance2(const Vec3& p) const {
+        if (useFace) {
+            const Vec3 ap = p - *a;
+            if (n.dot(ab.cross(ap)) >= 0.0 && n.dot(bc.cross(p - *b)) >= 0.0 && n.dot(ca.cross(p - *c)) >= 0.0) {
+                // Projection inside: the plane distance is the minimum.
+                const double h = n.dot(ap);
+                return h * h / nn;
             }
-            // Relative to p1 - p2 (exact for nearby points), not via absolute coordinates: keeps tiny distances
-            // accurate at large offsets.
-            best = std::min(best, (r + s * d1 - t * d2).squaredNorm());
         }
+        return std::min(std::min(pointSegmentDistance2(p, *a, *b), pointSegmentDistance2(p, *b, *c)),
+                        pointSegmentDistance2(p, *c, *a));
     }
-    return best;
-}
+};
 
-double pointTriangleDistance2(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c) {
-    double best = std::min(std::min(pointSegmentDistance2(p, a, b), pointSegmentDistance2(p, b, c)),
-                           pointSegmentDistance2(p, c, a));
-    const Vec3 ab = b - a, bc = c - b, ca = a - c;
-    const Vec3 n = ab.cross(c - a);
-    const double nn = n.squaredNorm();
-    // Face region only for triangles that are not numerically degenerate (the edges cover the rest).
-    if (nn > 1e-24 * ab.squaredNorm() * ca.squaredNorm() && nn > 0.0) {
-        const Vec3 ap = p - a, bp = p - b, cp = p - c;
-        if (n.dot(ab.cross(ap)) >= 0.0 && n.dot(bc.cross(bp)) >= 0.0 && n.dot(ca.cross(cp)) >= 0.0) {
-            const double h = n.dot(ap);
-            best = std::min(best, h * h / nn);
-        }
-    }
-    return best;
-}
-
-/// Distance between two closed triangles assumed disjoint: vertex-triangle and edge-edge candidates.
+/// Distance between two closed triangles assumed disjoint: the minimum of the vertex-triangle candidates (which also
+/// cover every vertex-edge pair) and the edge-edge interior candidates. Returns early once the squared distance is at
+/// most stop2.
 double disjointDistance(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
-                        const Vec3& b2) {
+                        const Vec3& b2, double stop2 = -1.0) {
     double best = std::numeric_limits<double>::infinity();
-    best = std::min(best, pointTriangleDistance2(a0, b0, b1, b2));
-    best = std::min(best, pointTriangleDistance2(a1, b0, b1, b2));
-    best = std::min(best, pointTriangleDistance2(a2, b0, b1, b2));
-    best = std::min(best, pointTriangleDistance2(b0, a0, a1, a2));
-    best = std::min(best, pointTriangleDistance2(b1, a0, a1, a2));
-    best = std::min(best, pointTriangleDistance2(b2, a0, a1, a2));
+    const TriangleGeometry ga(a0, a1, a2), gb(b0, b1, b2);
+    for (const Vec3* p : {&a0, &a1, &a2}) {
+        best = std::min(best, gb.distance2(*p));
+        if (best <= stop2) return std::sqrt(best);
+    }
+    for (const Vec3* p : {&b0, &b1, &b2}) {
+        best = std::min(best, ga.distance2(*p));
+        if (best <= stop2) return std::sqrt(best);
+    }
     const Vec3* a[3] = {&a0, &a1, &a2};
     const Vec3* b[3] = {&b0, &b1, &b2};
     for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) {
-            best = std::min(best, segmentSegmentDistance2(*a[i], *a[(i + 1) % 3], *b[j], *b[(j + 1) % 3]));
+            best = std::min(best, segmentPairCandidate2(*a[i], *a[(i + 1) % 3], *b[j], *b[(j + 1) % 3]));
+            if (best <= stop2) return std::sqrt(best);
         }
     }
     return std::sqrt(best);
@@ -314,6 +396,7 @@ bool separatedByPlane(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3
         const double perm = std::fabs(wx) * pn[0] + std::fabs(wy) * pn[1] + std::fabs(wz) * pn[2];
         const double slack =
             exact::detail::orient3dErrorBound(perm, std::fabs(wx) + std::fabs(wy) + std::fabs(wz));
+        if (slack < 0.0) return false;  // underflow zone: no conservative answer from floating point
         int s = 0;
         if (det - slack > need) {
             s = 1;
@@ -349,7 +432,11 @@ bool trianglesWithin(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3&
         return false;
     }
     if (intersectExact(a0, a1, a2, b0, b1, b2)) return true;
-    return disjointDistance(a0, a1, a2, b0, b1, b2) <= margin;
+    // Early exit below (margin (1 - 4 eps))^2, where the square root is certainly <= margin: the answer is then the
+    // same as comparing triangleDistance with the margin.
+    const double shrunk = margin * (1.0 - 4.0 * exact::detail::kEpsilon);
+    const double stop2 = shrunk * shrunk;
+    return disjointDistance(a0, a1, a2, b0, b1, b2, std::isfinite(stop2) ? stop2 : -1.0) <= margin;
 }
 
 }  // namespace cullide
