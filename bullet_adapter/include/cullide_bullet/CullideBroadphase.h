@@ -1,0 +1,169 @@
+// CullideBroadphase: a drop-in btBroadphaseInterface whose overlapping pairs come from CULLIDE (GPU image-space
+// visibility culling) instead of AABB overlap.
+//
+//     auto* broadphase = new cullide::CullideBroadphase();                             // was: new btDbvtBroadphase()
+//     auto* dispatcher = new cullide::CullideCollisionDispatcher(config, broadphase);  // was: new btCollisionDispatcher(config)
+//
+// Design (see bullet_adapter/README.md for the details and the limits):
+// - Proxies live in an internal Bullet btDbvt used only to answer rayTest / aabbTest (convex sweeps, contactTest).
+// - calculateOverlappingPairs() builds one culling frame: shapes with triangle geometry (btGImpactMeshShape,
+//   btBvhTriangleMeshShape / btTriangleMeshShape, btConvexHullShape) as world-space triangles, every other shape as
+//   its broadphase AABB; static objects only where they are near a moving one (and never paired with each other).
+//   The culler runs once; the pair cache (a btHashedOverlappingPairCache, own or given) is synchronised with its
+//   object pairs: new pairs are added through the cache (filters, ghost pair callback), pairs that can no longer
+//   collide are removed (their algorithms freed through the dispatcher).
+// - Infinite shapes (btStaticPlaneShape, any AABB beyond 1e15) are never rasterised: planes pair by a half-space
+//   test, other huge boxes by an AABB test. Ghost objects keep Bullet's ghost semantics: they pair by AABB overlap
+//   (grown by getGhostPairMargin()) and filters only, eagerly in createProxy/setAabb like btDbvtBroadphase.
+// - A proxy with a non-finite AABB is rejected: one line on stderr per object, a counter, no pairs; nothing else
+//   is affected.
+// - The culler's distance margin d is kept >= 2 * (largest triangle-shape collision margin) + 1.5 * the contact
+//   breaking threshold (size-relative, as Bullet's dispatcher computes it by default), so every triangle pair
+//   that Bullet's narrow phase could turn into a contact point, or keep a persistent one alive, survives. The surviving triangle pairs of GImpact-GImpact and
+//   convex-hull-mesh pairs are kept for CullideCollisionDispatcher (trianglePairsFor).
+#pragma once
+
+#include "cullide/Culler.h"
+#include "cullide/Settings.h"
+#include "cullide/Stats.h"
+#include "cullide_bullet/Precision.h"
+
+#include <BulletCollision/BroadphaseCollision/btBroadphaseInterface.h>
+#include <BulletCollision/BroadphaseCollision/btOverlappingPairCache.h>
+#include <LinearMath/btVector3.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+class btCollisionObjectWrapper;
+class btCollisionShape;
+
+namespace cullide {
+
+/// A triangle as Bullet's narrow phase names it: part = GImpact mesh part or btStridingMeshInterface subpart,
+/// index = triangle index within that part.
+struct BulletTriangle {
+    int part = 0;
+    int index = 0;
+    friend bool operator==(const BulletTriangle& x, const BulletTriangle& y) {
+        return x.part == y.part && x.index == y.index;
+    }
+    friend bool operator<(const BulletTriangle& x, const BulletTriangle& y) {
+        return x.part != y.part ? x.part < y.part : x.index < y.index;
+    }
+};
+
+struct BulletTrianglePair {
+    BulletTriangle a;  ///< triangle of the first object of the pair
+    BulletTriangle b;  ///< triangle of the second object
+};
+
+/// What CULLIDE kept for one object pair in the last calculateOverlappingPairs().
+struct PairTriangles {
+    /// GImpact-GImpact: surviving triangle pairs (within the margin, boxes grown by the shapes' margins overlap),
+    /// sorted by (a.part, b.part, a.index, b.index).
+    std::vector<BulletTrianglePair> pairs;
+    /// Convex-hull-mesh: the mesh's surviving triangles, sorted, and their vertices in the mesh's local frame
+    /// exactly as Bullet's processAllTriangles yields them (3 per triangle).
+    std::vector<BulletTriangle> meshTriangles;
+    std::vector<btVector3> meshTriangleVertices;
+};
+
+/// Statistics of the last calculateOverlappingPairs().
+struct CullideFrameStats {
+    std::size_t proxies = 0;
+    std::size_t culledObjects = 0;       ///< objects handed to the culler
+    std::size_t meshObjects = 0;         ///< ... of which with triangle geometry
+    std::size_t triangles = 0;           ///< triangles handed to the culler
+    std::size_t staticObjectsSkipped = 0;  ///< static objects far from every moving object (not handed over)
+    std::size_t infiniteObjects = 0;
+    std::size_t ghostObjects = 0;
+    std::size_t rejectedObjects = 0;     ///< invalid AABBs or geometry this frame
+    std::size_t cullerPairs = 0;         ///< object pairs reported by the culler (static-static excluded)
+    std::size_t infinitePairs = 0;       ///< pairs with planes / infinite boxes
+    std::size_t ghostPairs = 0;
+    std::size_t pairs = 0;               ///< pairs in the cache after the update
+    std::size_t pairsAdded = 0;
+    std::size_t pairsRemoved = 0;
+    std::size_t trianglePairs = 0;       ///< surviving triangle pairs kept for the dispatcher
+    double margin = 0.0;                 ///< the culler's distance margin d this frame
+    double buildMs = 0.0;                ///< building the culling frame (world-space triangles, boxes)
+    double cullMs = 0.0;                 ///< culler run
+    double syncMs = 0.0;                 ///< pair cache update
+    double totalMs = 0.0;
+    Stats culler;                        ///< the culler's own statistics
+};
+
+class CullideBroadphase : public btBroadphaseInterface {
+public:
+    /// Creates the culler for `settings` (createGpuCuller unless another factory is given).
+    using CullerFactory = std::function<std::unique_ptr<Culler>(const Settings&)>;
+
+    /// Throws GlUnavailableError without GL, std::invalid_argument for invalid settings. `pairCache` (optional,
+    /// not owned) replaces the internal btHashedOverlappingPairCache, like btDbvtBroadphase(btOverlappingPairCache*).
+    explicit CullideBroadphase(const Settings& settings = Settings{}, btOverlappingPairCache* pairCache = nullptr)
+        : CullideBroadphase(detail::checkBulletPrecision(), settings, pairCache, CullerFactory{}) {}
+    /// Same, with a custom culler factory (e.g. createReferenceCuller for tests without GL).
+    CullideBroadphase(const Settings& settings, btOverlappingPairCache* pairCache, CullerFactory factory)
+        : CullideBroadphase(detail::checkBulletPrecision(), settings, pairCache, std::move(factory)) {}
+    ~CullideBroadphase() override;
+
+    CullideBroadphase(const CullideBroadphase&) = delete;
+    CullideBroadphase& operator=(const CullideBroadphase&) = delete;
+
+    // ---- btBroadphaseInterface ----
+    btBroadphaseProxy* createProxy(const btVector3& aabbMin, const btVector3& aabbMax, int shapeType, void* userPtr,
+                                   int collisionFilterGroup, int collisionFilterMask,
+                                   btDispatcher* dispatcher) override;
+    void destroyProxy(btBroadphaseProxy* proxy, btDispatcher* dispatcher) override;
+    void setAabb(btBroadphaseProxy* proxy, const btVector3& aabbMin, const btVector3& aabbMax,
+                 btDispatcher* dispatcher) override;
+    void getAabb(btBroadphaseProxy* proxy, btVector3& aabbMin, btVector3& aabbMax) const override;
+    void rayTest(const btVector3& rayFrom, const btVector3& rayTo, btBroadphaseRayCallback& rayCallback,
+                 const btVector3& aabbMin = btVector3(0, 0, 0),
+                 const btVector3& aabbMax = btVector3(0, 0, 0)) override;
+    void aabbTest(const btVector3& aabbMin, const btVector3& aabbMax, btBroadphaseAabbCallback& callback) override;
+    void calculateOverlappingPairs(btDispatcher* dispatcher) override;
+    btOverlappingPairCache* getOverlappingPairCache() override;
+    const btOverlappingPairCache* getOverlappingPairCache() const override;
+    void getBroadphaseAabb(btVector3& aabbMin, btVector3& aabbMax) const override;
+    void resetPool(btDispatcher* dispatcher) override;
+    void printStats() override;
+
+    // ---- CULLIDE ----
+    /// The surviving triangles for the pair of the two wrapped objects, computed by the last
+    /// calculateOverlappingPairs(), or nullptr when there are none to trust: not a GImpact-GImpact or
+    /// convex-hull-mesh pair of this broadphase, a child shape (compound), or either object moved since.
+    /// `swapped` is set when body0Wrap is the record's second object.
+    const PairTriangles* trianglePairsFor(const btCollisionObjectWrapper* body0Wrap,
+                                          const btCollisionObjectWrapper* body1Wrap, bool& swapped) const;
+
+    /// Drop cached triangle geometry of `shape` (call after deforming a mesh, e.g. with GImpact's postUpdate()).
+    void invalidateShape(const btCollisionShape* shape);
+
+    /// Ghost objects pair with every object whose AABB comes within this distance of theirs (default 0.1).
+    /// btDbvtBroadphase's fattened leaves and lazy pair removal give ghosts such slack, and
+    /// btKinematicCharacterController sweeps only against its ghost's pairs: use at least the distance a
+    /// character moves per step.
+    void setGhostPairMargin(btScalar margin);
+    btScalar getGhostPairMargin() const;
+
+    const CullideFrameStats& getLastFrameStats() const;
+    /// Number of rejected non-finite AABBs (createProxy/setAabb calls) and geometry since construction.
+    std::size_t getRejectedCount() const;
+    /// The culler's current distance margin d.
+    double getCullingMargin() const;
+    const Settings& getSettings() const;
+
+private:
+    CullideBroadphase(detail::PrecisionChecked, const Settings& settings, btOverlappingPairCache* pairCache,
+                      CullerFactory factory);
+
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
+};
+
+}  // namespace cullide

@@ -1,0 +1,75 @@
+// CullideCollisionDispatcher: a btCollisionDispatcher that hands only CULLIDE's surviving triangle pairs to Bullet's
+// narrow phase.
+//
+// - GImpact-GImpact (once the application called btGImpactCollisionAlgorithm::registerAlgorithm(dispatcher), as it
+//   must with Bullet's own dispatcher): a btGImpactCollisionAlgorithm subclass runs Bullet's triangle-triangle
+//   routine (collide_sat_triangles) on the surviving triangle pairs only.
+// - Convex hull vs btBvhTriangleMeshShape / btTriangleMeshShape: a btConvexConcaveCollisionAlgorithm subclass drives
+//   btConvexTriangleCallback with the mesh's surviving triangles only.
+// - Everything else (primitives, compounds per child, planes, soft bodies, GImpact vs convex) goes to Bullet's
+//   algorithms unchanged; so does any pair for which the broadphase has no fresh triangle data (a character
+//   controller's private pair cache after the ghost moved, contactTest, compound children, another broadphase).
+// - Triangle pairs are processed in sorted order: contacts are deterministic.
+// - Algorithms larger than the configuration's pool element are allocated from the heap, never from the pool.
+#pragma once
+
+#include "cullide_bullet/CullideBroadphase.h"
+#include "cullide_bullet/Precision.h"
+
+#include <BulletCollision/CollisionDispatch/btCollisionDispatcher.h>
+
+#include <cstddef>
+
+class btCollisionConfiguration;
+
+namespace cullide {
+
+struct CullideDispatchStats {
+    std::size_t pairsDispatched = 0;    ///< pairs in the dispatched caches (all dispatchAllCollisionPairs calls)
+    std::size_t cullidePairs = 0;       ///< pairs processed from CULLIDE's triangle lists
+    std::size_t trianglePairs = 0;      ///< triangle pairs (or mesh triangles for convex-mesh) handed over
+    std::size_t fallbackPairs = 0;      ///< triangle-capable pairs processed by Bullet's full algorithm instead
+    std::size_t clearedPairs = 0;       ///< pairs with no surviving triangle: manifolds cleared
+    double dispatchMs = 0.0;            ///< wall time in dispatchAllCollisionPairs
+    void reset() { *this = CullideDispatchStats{}; }
+};
+
+class CullideCollisionDispatcher : public btCollisionDispatcher {
+public:
+    /// `broadphase` may be null (then this behaves exactly like btCollisionDispatcher) or set later.
+    explicit CullideCollisionDispatcher(btCollisionConfiguration* collisionConfiguration,
+                                        CullideBroadphase* broadphase = nullptr)
+        : CullideCollisionDispatcher(detail::checkBulletPrecision(), collisionConfiguration, broadphase) {}
+    ~CullideCollisionDispatcher() override;
+
+    btCollisionAlgorithm* findAlgorithm(const btCollisionObjectWrapper* body0Wrap,
+                                        const btCollisionObjectWrapper* body1Wrap,
+                                        btPersistentManifold* sharedManifold,
+                                        ebtDispatcherQueryType queryType) override;
+    void dispatchAllCollisionPairs(btOverlappingPairCache* pairCache, const btDispatcherInfo& dispatchInfo,
+                                   btDispatcher* dispatcher) override;
+    void* allocateCollisionAlgorithm(int size) override;
+
+    void setCullideBroadphase(CullideBroadphase* broadphase) { m_broadphase = broadphase; }
+    CullideBroadphase* getCullideBroadphase() const { return m_broadphase; }
+
+    /// Statistics of the last dispatchAllCollisionPairs() with the broadphase's own pair cache (one step).
+    const CullideDispatchStats& getLastStepStats() const { return m_lastStep; }
+    /// Accumulated over every call since the last resetStats().
+    const CullideDispatchStats& getTotalStats() const { return m_total; }
+    void resetStats() { m_total.reset(); }
+
+    /// Used by the algorithms: counters for the current dispatch.
+    CullideDispatchStats& currentStats() { return m_current; }
+
+private:
+    CullideCollisionDispatcher(detail::PrecisionChecked, btCollisionConfiguration* collisionConfiguration,
+                               CullideBroadphase* broadphase);
+
+    CullideBroadphase* m_broadphase;
+    CullideDispatchStats m_current;
+    CullideDispatchStats m_lastStep;
+    CullideDispatchStats m_total;
+};
+
+}  // namespace cullide

@@ -1,0 +1,876 @@
+#include "cullide_bullet/CullideBroadphase.h"
+
+#include "ShapeGeometry.h"
+#include "cullide/Result.h"
+
+#include <BulletCollision/BroadphaseCollision/btDbvt.h>
+#include <BulletCollision/CollisionDispatch/btCollisionDispatcher.h>
+#include <BulletCollision/CollisionDispatch/btCollisionObject.h>
+#include <BulletCollision/CollisionDispatch/btCollisionObjectWrapper.h>
+#include <BulletCollision/CollisionShapes/btCollisionShape.h>
+#include <BulletCollision/CollisionShapes/btStaticPlaneShape.h>
+#include <BulletCollision/NarrowPhaseCollision/btPersistentManifold.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <new>
+#include <string>
+#include <unordered_map>
+#include <utility>
+
+namespace cullide {
+
+int detail::bulletScalarSizeOfLibrary() noexcept { return static_cast<int>(sizeof(btScalar)); }
+
+namespace {
+
+/// AABB coordinates beyond this are "infinite" (btStaticPlaneShape reports +-BT_LARGE_FLOAT = 1e18 in float builds).
+constexpr double kInfiniteCoordinate = 1e15;
+/// Fattening of the query tree's leaves (like btDbvtBroadphase's gDbvtMargin): fewer tree updates.
+constexpr btScalar kTreeMargin = btScalar(0.05);
+/// Used for the first culler when Settings::margin is 0: 2 * Bullet's default convex margin + 1.5 * breaking
+/// threshold (see requiredMargin); the culler is recreated with a larger margin when the scene needs one.
+constexpr double kDefaultMargin = 0.12;
+
+class Stopwatch {
+public:
+    double ms() const {
+        return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - m_start).count();
+    }
+
+private:
+    std::chrono::steady_clock::time_point m_start = std::chrono::steady_clock::now();
+};
+
+enum class Role : std::uint8_t { Invalid, Infinite, Ghost, Dynamic, Static };
+
+struct Proxy : btBroadphaseProxy {
+    Proxy(const btVector3& aabbMin, const btVector3& aabbMax, void* userPtr, int group, int mask, int type)
+        : btBroadphaseProxy(aabbMin, aabbMax, userPtr, group, mask), shapeType(type) {}
+
+    int shapeType;
+    btDbvtNode* leaf = nullptr;
+    std::size_t slot = 0;
+    bool valid = true;
+    bool reported = false;
+    std::uint64_t key = 0;  ///< staticKey for the culler (never reused)
+
+    // Triangle geometry (shared per shape) and its world-space copy.
+    std::shared_ptr<bullet::ShapeTriangles> geometry;
+    TriangleMesh world;
+    btTransform worldFrom;
+    bool worldValid = false;
+    std::uint64_t version = 0;
+
+    // Per-frame scratch.
+    Role role = Role::Invalid;
+    std::uint64_t nearFrame = 0;
+};
+
+btCollisionObject* objectOf(const btBroadphaseProxy* p) { return static_cast<btCollisionObject*>(p->m_clientObject); }
+
+bool finiteBox(const btVector3& mn, const btVector3& mx) {
+    for (int a = 0; a < 3; ++a)
+        if (!std::isfinite(mn[a]) || !std::isfinite(mx[a])) return false;
+    return true;
+}
+
+bool boxesOverlap(const btBroadphaseProxy* a, const btBroadphaseProxy* b, btScalar grow = 0) {
+    for (int i = 0; i < 3; ++i)
+        if (a->m_aabbMin[i] - grow > b->m_aabbMax[i] || b->m_aabbMin[i] - grow > a->m_aabbMax[i]) return false;
+    return true;
+}
+
+std::uint64_t pairKey(const btBroadphaseProxy* a, const btBroadphaseProxy* b) {
+    auto x = static_cast<std::uint32_t>(a->m_uniqueId);
+    auto y = static_cast<std::uint32_t>(b->m_uniqueId);
+    if (x > y) std::swap(x, y);
+    return (static_cast<std::uint64_t>(x) << 32) | y;
+}
+
+Vec3 toVec(const btVector3& v) { return {double(v.x()), double(v.y()), double(v.z())}; }
+
+struct Record {
+    const Proxy* first = nullptr;  ///< lower unique id
+    const Proxy* second = nullptr;
+    const btCollisionShape* shapeFirst = nullptr;
+    const btCollisionShape* shapeSecond = nullptr;
+    btTransform transformFirst;
+    btTransform transformSecond;
+    PairTriangles triangles;
+};
+
+template <typename F>
+struct LeafVisitor : btDbvt::ICollide {
+    explicit LeafVisitor(F f) : fn(std::move(f)) {}
+    using btDbvt::ICollide::Process;
+    void Process(const btDbvtNode* leaf) override { fn(static_cast<Proxy*>(leaf->data)); }
+    F fn;
+};
+template <typename F>
+LeafVisitor<F> visitLeaves(F f) {
+    return LeafVisitor<F>(std::move(f));
+}
+
+}  // namespace
+
+struct CullideBroadphase::Impl {
+    Settings settings;
+    CullerFactory factory;
+    std::unique_ptr<Culler> culler;
+    double margin = 0.0;
+
+    btOverlappingPairCache* cache = nullptr;
+    bool ownsCache = false;
+
+    btDbvt tree;
+    btAlignedObjectArray<const btDbvtNode*> rayStack;
+    std::vector<Proxy*> proxies;
+    int nextUid = 0;
+    std::uint64_t nextKey = 0;
+    std::uint64_t frame = 0;
+
+    std::unordered_map<const btCollisionShape*, std::weak_ptr<bullet::ShapeTriangles>> shapeCache;
+    std::unordered_map<std::uint64_t, Record> records;
+
+    /// Ghost pairs: AABBs within this distance (btDbvtBroadphase pairs fattened leaves, gDbvtMargin = 0.05;
+    /// btKinematicCharacterController sweeps only against its ghost's pairs and relies on that slack).
+    btScalar ghostMargin = btScalar(0.1);
+    std::vector<Proxy*> ghosts;  ///< proxies of ghost objects (eager pairing)
+
+    CullideFrameStats stats;
+    std::size_t rejectedTotal = 0;
+    bool cullerFailureReported = false;
+
+    // Per-frame scratch (members to reuse allocations).
+    std::vector<Object> objects;
+    std::vector<Proxy*> objectProxy;
+    Result result;
+    std::vector<std::pair<Proxy*, Proxy*>> desired;
+    std::vector<std::uint64_t> desiredKeys;
+    std::vector<std::pair<btBroadphaseProxy*, btBroadphaseProxy*>> toRemove;
+
+    Impl(const Settings& s, btOverlappingPairCache* pairCache, CullerFactory f) : settings(s), factory(std::move(f)) {
+        if (!factory) factory = [](const Settings& cs) { return createGpuCuller(cs); };
+        const std::string error = settings.validate();
+        if (!error.empty()) throw std::invalid_argument("cullide::CullideBroadphase: invalid settings: " + error);
+        if (pairCache != nullptr) {
+            cache = pairCache;
+        } else {
+            void* mem = btAlignedAlloc(sizeof(btHashedOverlappingPairCache), 16);
+            cache = new (mem) btHashedOverlappingPairCache();
+            ownsCache = true;
+        }
+        try {
+            makeCuller(settings.margin > 0.0 ? settings.margin : kDefaultMargin);
+        } catch (...) {
+            releaseCache();
+            throw;
+        }
+    }
+
+    ~Impl() {
+        for (Proxy* p : proxies) delete p;
+        proxies.clear();
+        releaseCache();
+    }
+
+    void releaseCache() {
+        if (ownsCache && cache != nullptr) {
+            cache->~btOverlappingPairCache();
+            btAlignedFree(cache);
+        }
+        cache = nullptr;
+    }
+
+    void makeCuller(double d) {
+        Settings s = settings;
+        s.margin = d;
+        culler = factory(s);
+        if (!culler) throw std::runtime_error("cullide::CullideBroadphase: the culler factory returned nothing");
+        margin = culler->settings().margin;
+    }
+
+    /// Keeps the culler's margin at least `required` (recreates it with some headroom when it must grow).
+    void ensureMargin(double required) {
+        if (required <= margin) return;
+        // Before the first frame: exactly what the scene needs; later with headroom, so a growing scene does not
+        // recreate the culler every frame.
+        makeCuller(std::max(settings.margin, (frame > 1 ? 1.25 : 1.0) * required));
+    }
+
+    // ---- proxies ----
+
+    void reject(Proxy* p, const char* where, const std::string& why) {
+        ++rejectedTotal;
+        if (p->leaf != nullptr) {
+            tree.remove(p->leaf);
+            p->leaf = nullptr;
+        }
+        p->valid = false;
+        if (p->reported) return;
+        p->reported = true;
+        const btCollisionObject* obj = objectOf(p);
+        std::fprintf(stderr,
+                     "cullide::CullideBroadphase: %s: collision object %p (proxy %d, shape type %d) rejected: %s. "
+                     "It gets no pairs until this is fixed; every other object is unaffected. "
+                     "(Reported once per object; getRejectedCount() counts every occurrence.)\n",
+                     where, static_cast<const void*>(obj), p->m_uniqueId, p->shapeType, why.c_str());
+    }
+
+    static std::string boxText(const btVector3& mn, const btVector3& mx) {
+        char buf[256];
+        std::snprintf(buf, sizeof buf, "non-finite AABB [%g %g %g] - [%g %g %g]", double(mn.x()), double(mn.y()),
+                      double(mn.z()), double(mx.x()), double(mx.y()), double(mx.z()));
+        return buf;
+    }
+
+    void placeInTree(Proxy* p) {
+        btDbvtVolume volume = btDbvtVolume::FromMM(p->m_aabbMin, p->m_aabbMax);
+        if (p->leaf == nullptr)
+            p->leaf = tree.insert(volume, p);
+        else
+            tree.update(p->leaf, volume, kTreeMargin);
+    }
+
+    static bool isGhost(const Proxy* p) {
+        const btCollisionObject* obj = objectOf(p);
+        return obj != nullptr && (obj->getInternalType() & btCollisionObject::CO_GHOST_OBJECT) != 0;
+    }
+    static bool isStatic(const Proxy* p) {
+        const btCollisionObject* obj = objectOf(p);
+        return obj != nullptr && obj->isStaticObject();
+    }
+    static bool isInfinite(const Proxy* p) {
+        const btCollisionObject* obj = objectOf(p);
+        const int type = obj != nullptr && obj->getCollisionShape() != nullptr
+                             ? obj->getCollisionShape()->getShapeType()
+                             : p->shapeType;
+        if (btBroadphaseProxy::isInfinite(type)) return true;
+        for (int a = 0; a < 3; ++a)
+            if (std::fabs(double(p->m_aabbMin[a])) > kInfiniteCoordinate ||
+                std::fabs(double(p->m_aabbMax[a])) > kInfiniteCoordinate)
+                return true;
+        return false;
+    }
+
+    btDbvtVolume ghostVolume(const Proxy* ghost) const {
+        const btVector3 g(ghostMargin, ghostMargin, ghostMargin);
+        return btDbvtVolume::FromMM(ghost->m_aabbMin - g, ghost->m_aabbMax + g);
+    }
+
+    /// Ghost objects keep Bullet's semantics (pairs = AABB overlaps, filters only; Bullet creates ghosts with the
+    /// static flag, so no static-static rule here) and, like btDbvtBroadphase, get new pairs at once.
+    void addGhostPairs(Proxy* ghost) {
+        if (tree.m_root == nullptr) return;
+        auto visitor = visitLeaves([&](Proxy* q) {
+            if (q == ghost || !q->valid || !boxesOverlap(ghost, q, ghostMargin)) return;
+            cache->addOverlappingPair(ghost, q);
+        });
+        tree.collideTV(tree.m_root, ghostVolume(ghost), visitor);
+    }
+
+    btBroadphaseProxy* createProxy(const btVector3& mn, const btVector3& mx, int shapeType, void* userPtr, int group,
+                                   int mask) {
+        auto* p = new Proxy(mn, mx, userPtr, group, mask, shapeType);
+        p->m_uniqueId = ++nextUid;
+        p->key = ++nextKey;
+        p->slot = proxies.size();
+        proxies.push_back(p);
+        if (!finiteBox(mn, mx)) {
+            if (isGhost(p)) ghosts.push_back(p);
+            reject(p, "createProxy", boxText(mn, mx));
+            return p;
+        }
+        placeInTree(p);
+        if (isGhost(p)) {
+            ghosts.push_back(p);
+            addGhostPairs(p);
+        } else {
+            pairWithGhosts(p);
+        }
+        return p;
+    }
+
+    /// btDbvtBroadphase updates pairs in setAabb: a ghost sees an object entering at once.
+    void pairWithGhosts(Proxy* p) {
+        for (Proxy* g : ghosts)
+            if (g->valid && boxesOverlap(g, p, ghostMargin)) cache->addOverlappingPair(g, p);
+    }
+
+    void destroyProxy(btBroadphaseProxy* abs, btDispatcher* dispatcher) {
+        auto* p = static_cast<Proxy*>(abs);
+        cache->removeOverlappingPairsContainingProxy(p, dispatcher);
+        if (p->leaf != nullptr) tree.remove(p->leaf);
+        ghosts.erase(std::remove(ghosts.begin(), ghosts.end(), p), ghosts.end());
+        Proxy* last = proxies.back();
+        proxies[p->slot] = last;
+        last->slot = p->slot;
+        proxies.pop_back();
+        for (auto it = records.begin(); it != records.end();) {
+            if (it->second.first == p || it->second.second == p)
+                it = records.erase(it);
+            else
+                ++it;
+        }
+        delete p;
+    }
+
+    void setAabb(btBroadphaseProxy* abs, const btVector3& mn, const btVector3& mx) {
+        auto* p = static_cast<Proxy*>(abs);
+        p->m_aabbMin = mn;
+        p->m_aabbMax = mx;
+        if (!finiteBox(mn, mx)) {
+            reject(p, "setAabb", boxText(mn, mx));
+            return;
+        }
+        p->valid = true;
+        placeInTree(p);
+        if (isGhost(p))
+            addGhostPairs(p);
+        else if (!ghosts.empty())
+            pairWithGhosts(p);
+    }
+
+    // ---- geometry ----
+
+    std::shared_ptr<bullet::ShapeTriangles> geometryFor(Proxy* p, const btCollisionShape* shape) {
+        if (shape == nullptr || bullet::geometryKindOf(shape) == bullet::GeometryKind::None) {
+            p->geometry.reset();
+            p->worldValid = false;
+            return nullptr;
+        }
+        if (p->geometry && bullet::stillMatches(*p->geometry, shape)) return p->geometry;
+        p->worldValid = false;
+        auto it = shapeCache.find(shape);
+        if (it != shapeCache.end()) {
+            if (auto shared = it->second.lock(); shared && bullet::stillMatches(*shared, shape)) {
+                p->geometry = shared;
+                return shared;
+            }
+        }
+        auto built = bullet::buildShapeTriangles(shape);
+        if (built)
+            shapeCache[shape] = built;
+        else
+            shapeCache.erase(shape);
+        p->geometry = built;
+        return built;
+    }
+
+    void updateWorld(Proxy* p, const btTransform& t) {
+        const bullet::ShapeTriangles& g = *p->geometry;
+        if (p->worldValid && p->worldFrom == t && p->world.vertices.size() == g.vertices.size()) return;
+        p->world.triangles = g.triangles;
+        p->world.vertices.resize(g.vertices.size());
+        const btMatrix3x3& basis = t.getBasis();
+        const btVector3& origin = t.getOrigin();
+        for (std::size_t i = 0; i < g.vertices.size(); ++i) {
+            const btVector3& v = g.vertices[i];
+            Vec3& w = p->world.vertices[i];
+            for (int r = 0; r < 3; ++r)
+                w[r] = double(basis[r].x()) * double(v.x()) + double(basis[r].y()) * double(v.y()) +
+                       double(basis[r].z()) * double(v.z()) + double(origin[r]);
+        }
+        p->worldFrom = t;
+        p->worldValid = true;
+        ++p->version;
+    }
+
+    // ---- the frame ----
+
+    void classify() {
+        for (Proxy* p : proxies) {
+            if (!p->valid)
+                p->role = Role::Invalid;
+            else if (isInfinite(p))
+                p->role = Role::Infinite;
+            else if (isGhost(p))
+                p->role = Role::Ghost;
+            else if (isStatic(p))
+                p->role = Role::Static;
+            else
+                p->role = Role::Dynamic;
+        }
+    }
+
+    /// d must cover every triangle pair Bullet's narrow phase can turn into a contact point, or keep one alive:
+    /// both collision margins plus the contact breaking threshold t (with CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD,
+    /// Bullet's default, t = gContactBreakingThreshold * the smaller angular motion disc of the two shapes).
+    /// Algorithms with a persistent manifold (convex vs mesh, convex vs convex) keep a point while its refreshed
+    /// normal distance and its tangential drift both stay within t, i.e. up to sqrt(2) t apart: 1.5 t for those.
+    /// GImpact rebuilds its manifold every frame: t. Box proxies already carry Bullet's AABB padding.
+    double requiredMargin(btDispatcher* dispatcher) const {
+        const auto* collisionDispatcher = dynamic_cast<const btCollisionDispatcher*>(dispatcher);
+        const bool relative = collisionDispatcher == nullptr ||
+                              (collisionDispatcher->getDispatcherFlags() &
+                               btCollisionDispatcher::CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD) != 0;
+        double gimpact = -1.0, hull = -1.0, mesh = -1.0;  // largest margin per kind (-1: none in the frame)
+        double largest = 0.0, second = 0.0, largestDynamic = 0.0;
+        for (const Proxy* p : proxies) {
+            if (p->role != Role::Dynamic && p->role != Role::Static) continue;
+            const btCollisionObject* obj = objectOf(p);
+            const btCollisionShape* shape = obj != nullptr ? obj->getCollisionShape() : nullptr;
+            if (shape == nullptr) continue;
+            if (relative) {
+                const double disc = double(shape->getAngularMotionDisc());
+                if (disc > largest) {
+                    second = largest;
+                    largest = disc;
+                } else {
+                    second = std::max(second, disc);
+                }
+                if (p->role == Role::Dynamic) largestDynamic = std::max(largestDynamic, disc);
+            }
+            switch (bullet::geometryKindOf(shape)) {
+                case bullet::GeometryKind::GImpactMesh:
+                    gimpact = std::max(gimpact, double(bullet::triangleMarginOf(shape)));
+                    break;
+                case bullet::GeometryKind::ConvexHull:
+                    hull = std::max(hull, double(shape->getMargin()));
+                    break;
+                case bullet::GeometryKind::TriangleMesh:
+                    mesh = std::max(mesh, double(shape->getMargin()));
+                    break;
+                case bullet::GeometryKind::None:
+                    break;
+            }
+        }
+        double t = double(gContactBreakingThreshold);
+        if (relative) t *= std::max(1.0, std::min(second, largestDynamic));
+        const double g = std::max(gimpact, 0.0), h = std::max(hull, 0.0), m = std::max(mesh, 0.0);
+        double d = 1.5 * t;  // box proxies against each other and against meshes (plus the triangle margins below)
+        if (gimpact >= 0) d = std::max({d, 2 * g + t, g + h + t, g + m + t});
+        if (hull >= 0) d = std::max({d, 2 * h + 1.5 * t, h + m + 1.5 * t});
+        if (mesh >= 0) d = std::max(d, m + 1.5 * t);
+        return d;
+    }
+
+    /// Static objects are handed to the culler only where a moving object's box comes within the margin.
+    void markStaticsNearDynamics() {
+        if (tree.m_root == nullptr) return;
+        const btScalar grow = btScalar(margin);
+        const btVector3 g(grow, grow, grow);
+        for (Proxy* p : proxies) {
+            if (p->role != Role::Dynamic) continue;
+            auto visitor = visitLeaves([&](Proxy* q) {
+                if (q->role == Role::Static) q->nearFrame = frame;
+            });
+            tree.collideTV(tree.m_root, btDbvtVolume::FromMM(p->m_aabbMin - g, p->m_aabbMax + g), visitor);
+        }
+    }
+
+    void buildObjects() {
+        objects.clear();
+        objectProxy.clear();
+        for (Proxy* p : proxies) {
+            const bool include = p->role == Role::Dynamic || (p->role == Role::Static && p->nearFrame == frame);
+            if (!include) {
+                if (p->role == Role::Static) ++stats.staticObjectsSkipped;
+                continue;
+            }
+            const btCollisionObject* obj = objectOf(p);
+            const btCollisionShape* shape = obj != nullptr ? obj->getCollisionShape() : nullptr;
+            Object o;
+            if (geometryFor(p, shape)) {
+                updateWorld(p, obj->getWorldTransform());
+                o.mesh = &p->world;
+                ++stats.meshObjects;
+                stats.triangles += p->world.triangles.size();
+            } else {
+                o.box.min = toVec(p->m_aabbMin);
+                o.box.max = toVec(p->m_aabbMax);
+            }
+            if (p->role == Role::Static) {
+                o.staticKey = p->key;
+                o.version = p->version;
+            }
+            objects.push_back(o);
+            objectProxy.push_back(p);
+        }
+        stats.culledObjects = objects.size();
+    }
+
+    /// Without a working culler: conservative AABB pairs (the dispatcher then runs Bullet's full algorithms).
+    void boxPairsFallback() {
+        result.clear();
+        for (std::uint32_t i = 0; i < objectProxy.size(); ++i)
+            for (std::uint32_t j = i + 1; j < objectProxy.size(); ++j)
+                if (boxesOverlap(objectProxy[i], objectProxy[j])) {
+                    ObjectPair pair;
+                    pair.a = i;
+                    pair.b = j;
+                    result.pairs.push_back(pair);
+                }
+    }
+
+    void runCuller() {
+        result.clear();
+        if (objects.size() < 2) return;
+        try {
+            culler->run(objects, result);
+        } catch (const std::exception& e) {
+            reportCullerFailure(e);
+            boxPairsFallback();
+        }
+    }
+
+    void reportCullerFailure(const std::exception& e) {
+        if (cullerFailureReported) return;
+        cullerFailureReported = true;
+        std::fprintf(stderr,
+                     "cullide::CullideBroadphase: the culler failed (%s); AABB pairs are used for such frames "
+                     "(reported once)\n",
+                     e.what());
+    }
+
+    void addDesired(Proxy* a, Proxy* b) {
+        if (a->m_uniqueId > b->m_uniqueId) std::swap(a, b);
+        desired.emplace_back(a, b);
+    }
+
+    void makeRecord(Proxy* pa, Proxy* pb, const ObjectPair& op) {
+        using bullet::GeometryKind;
+        const GeometryKind ka = pa->geometry ? pa->geometry->kind : GeometryKind::None;
+        const GeometryKind kb = pb->geometry ? pb->geometry->kind : GeometryKind::None;
+        const bool gimpactPair = ka == GeometryKind::GImpactMesh && kb == GeometryKind::GImpactMesh;
+        const bool hullMesh = (ka == GeometryKind::ConvexHull && kb == GeometryKind::TriangleMesh) ||
+                              (ka == GeometryKind::TriangleMesh && kb == GeometryKind::ConvexHull);
+        if (!gimpactPair && !hullMesh) return;
+        // Record orientation: first = lower unique id; culler orientation: a = pa.
+        const bool flip = pa->m_uniqueId > pb->m_uniqueId;
+        const Proxy* first = flip ? pb : pa;
+        const Proxy* second = flip ? pa : pb;
+        Record rec;
+        rec.first = first;
+        rec.second = second;
+        rec.shapeFirst = objectOf(first)->getCollisionShape();
+        rec.shapeSecond = objectOf(second)->getCollisionShape();
+        rec.transformFirst = objectOf(first)->getWorldTransform();
+        rec.transformSecond = objectOf(second)->getWorldTransform();
+        if (gimpactPair) {
+            // Only pairs whose triangle boxes, grown by the shapes' margins, overlap (Bullet's own candidate
+            // criterion; the clip method must not see distant pairs).
+            const double ma = double(bullet::triangleMarginOf(objectOf(pa)->getCollisionShape()));
+            const double mb = double(bullet::triangleMarginOf(objectOf(pb)->getCollisionShape()));
+            auto box = [](const TriangleMesh& m, std::uint32_t t, double grow) {
+                Aabb b;
+                for (std::uint32_t v : m.triangles[t]) b.grow(m.vertices[v]);
+                return b.inflated(grow);
+            };
+            rec.triangles.pairs.reserve(op.triangles.size());
+            for (const TrianglePair& tp : op.triangles) {
+                if (!box(pa->world, tp.a, ma).overlaps(box(pb->world, tp.b, mb))) continue;
+                const BulletTriangle ta = pa->geometry->refs[tp.a];
+                const BulletTriangle tb = pb->geometry->refs[tp.b];
+                rec.triangles.pairs.push_back(flip ? BulletTrianglePair{tb, ta} : BulletTrianglePair{ta, tb});
+            }
+            std::sort(rec.triangles.pairs.begin(), rec.triangles.pairs.end(),
+                      [](const BulletTrianglePair& x, const BulletTrianglePair& y) {
+                          if (x.a.part != y.a.part) return x.a.part < y.a.part;
+                          if (x.b.part != y.b.part) return x.b.part < y.b.part;
+                          if (x.a.index != y.a.index) return x.a.index < y.a.index;
+                          return x.b.index < y.b.index;
+                      });
+            stats.trianglePairs += rec.triangles.pairs.size();
+        } else {
+            const bool meshIsA = ka == GeometryKind::TriangleMesh;
+            const bullet::ShapeTriangles& mesh = meshIsA ? *pa->geometry : *pb->geometry;
+            std::vector<std::uint32_t> tris;
+            tris.reserve(op.triangles.size());
+            for (const TrianglePair& tp : op.triangles) tris.push_back(meshIsA ? tp.a : tp.b);
+            std::sort(tris.begin(), tris.end());
+            tris.erase(std::unique(tris.begin(), tris.end()), tris.end());
+            std::vector<std::pair<BulletTriangle, std::uint32_t>> ordered;
+            ordered.reserve(tris.size());
+            for (std::uint32_t t : tris) ordered.emplace_back(mesh.refs[t], t);
+            std::sort(ordered.begin(), ordered.end(),
+                      [](const auto& x, const auto& y) { return x.first < y.first; });
+            for (const auto& [ref, t] : ordered) {
+                rec.triangles.meshTriangles.push_back(ref);
+                for (std::uint32_t v : mesh.triangles[t]) rec.triangles.meshTriangleVertices.push_back(mesh.vertices[v]);
+            }
+            stats.trianglePairs += rec.triangles.meshTriangles.size();
+        }
+        records[pairKey(pa, pb)] = std::move(rec);
+    }
+
+    void collectCullerPairs() {
+        for (const ObjectDiagnostic& d : result.rejected) {
+            Proxy* p = objectProxy[d.object];
+            p->role = Role::Invalid;  // no infinite or ghost pairs either
+            ++stats.rejectedObjects;
+            ++rejectedTotal;
+            if (!p->reported) {
+                p->reported = true;
+                std::fprintf(stderr,
+                             "cullide::CullideBroadphase: collision object %p (proxy %d) rejected by the culler: %s. "
+                             "It gets no pairs; every other object is unaffected. (Reported once per object.)\n",
+                             static_cast<const void*>(objectOf(p)), p->m_uniqueId, d.message.c_str());
+            }
+        }
+        for (const ObjectPair& op : result.pairs) {
+            Proxy* pa = objectProxy[op.a];
+            Proxy* pb = objectProxy[op.b];
+            if (pa->role == Role::Static && pb->role == Role::Static) continue;
+            addDesired(pa, pb);
+            ++stats.cullerPairs;
+            if (op.hasTriangles) makeRecord(pa, pb, op);
+        }
+    }
+
+    /// Planes pair by a half-space test, other infinite boxes by plain AABB overlap. Never rasterised.
+    bool infiniteTouches(const Proxy* inf, const Proxy* q) const {
+        const btCollisionObject* obj = objectOf(inf);
+        const btCollisionShape* shape = obj != nullptr ? obj->getCollisionShape() : nullptr;
+        if (shape == nullptr || shape->getShapeType() != STATIC_PLANE_PROXYTYPE || q->role == Role::Infinite)
+            return boxesOverlap(inf, q);
+        const auto* plane = static_cast<const btStaticPlaneShape*>(shape);
+        const btTransform& t = obj->getWorldTransform();
+        const btVector3 n = t.getBasis() * plane->getPlaneNormal();
+        const btVector3 onPlane = t * (plane->getPlaneNormal() * plane->getPlaneConstant());
+        const double c = double(n.dot(onPlane));
+        const btVector3 centre = (q->m_aabbMin + q->m_aabbMax) * btScalar(0.5);
+        const btVector3 half = (q->m_aabbMax - q->m_aabbMin) * btScalar(0.5);
+        const double lowest = double(n.dot(centre)) - (std::fabs(double(n.x())) * double(half.x()) +
+                                                       std::fabs(double(n.y())) * double(half.y()) +
+                                                       std::fabs(double(n.z())) * double(half.z()));
+        return lowest <= c + double(plane->getMargin()) + margin;
+    }
+
+    void collectInfinitePairs() {
+        for (Proxy* inf : proxies) {
+            if (inf->role != Role::Infinite) continue;
+            ++stats.infiniteObjects;
+            for (Proxy* q : proxies) {
+                if (q == inf || q->role == Role::Invalid || q->role == Role::Ghost) continue;
+                if (q->role == Role::Infinite && q->m_uniqueId < inf->m_uniqueId) continue;  // once per pair
+                if (isStatic(inf) && isStatic(q)) continue;
+                if (!infiniteTouches(inf, q)) continue;
+                addDesired(inf, q);
+                ++stats.infinitePairs;
+            }
+        }
+    }
+
+    void collectGhostPairs() {
+        if (tree.m_root == nullptr) return;
+        for (Proxy* g : proxies) {
+            if (g->role != Role::Ghost) continue;
+            ++stats.ghostObjects;
+            auto visitor = visitLeaves([&](Proxy* q) {
+                if (q == g || q->role == Role::Invalid || !boxesOverlap(g, q, ghostMargin)) return;
+                if (q->role == Role::Ghost && q->m_uniqueId < g->m_uniqueId) return;  // once per pair
+                addDesired(g, q);
+                ++stats.ghostPairs;
+            });
+            tree.collideTV(tree.m_root, ghostVolume(g), visitor);
+        }
+    }
+
+    void syncPairCache(btDispatcher* dispatcher) {
+        std::sort(desired.begin(), desired.end(), [](const auto& x, const auto& y) {
+            return pairKey(x.first, x.second) < pairKey(y.first, y.second);
+        });
+        desired.erase(std::unique(desired.begin(), desired.end()), desired.end());
+        desiredKeys.clear();
+        for (const auto& [a, b] : desired) desiredKeys.push_back(pairKey(a, b));
+
+        toRemove.clear();
+        const btBroadphasePairArray& array = cache->getOverlappingPairArray();
+        for (int i = 0; i < array.size(); ++i) {
+            btBroadphaseProxy* p0 = array[i].m_pProxy0;
+            btBroadphaseProxy* p1 = array[i].m_pProxy1;
+            if (!std::binary_search(desiredKeys.begin(), desiredKeys.end(), pairKey(p0, p1)) ||
+                !cache->needsBroadphaseCollision(p0, p1))
+                toRemove.emplace_back(p0, p1);
+        }
+        for (const auto& [p0, p1] : toRemove) cache->removeOverlappingPair(p0, p1, dispatcher);
+        stats.pairsRemoved = toRemove.size();
+
+        for (const auto& [a, b] : desired) {
+            const int before = cache->getNumOverlappingPairs();
+            cache->addOverlappingPair(a, b);
+            if (cache->getNumOverlappingPairs() > before) ++stats.pairsAdded;
+        }
+        stats.pairs = static_cast<std::size_t>(cache->getNumOverlappingPairs());
+    }
+
+    void calculateOverlappingPairs(btDispatcher* dispatcher) {
+        Stopwatch total;
+        ++frame;
+        stats = CullideFrameStats{};
+        stats.proxies = proxies.size();
+        records.clear();
+        desired.clear();
+
+        Stopwatch build;
+        classify();
+        for (const Proxy* p : proxies)
+            if (p->role == Role::Invalid) ++stats.rejectedObjects;
+        bool cullerUsable = true;
+        try {
+            ensureMargin(requiredMargin(dispatcher));
+        } catch (const std::exception& e) {
+            // The old culler's margin is too small for this scene: conservative AABB pairs instead.
+            reportCullerFailure(e);
+            cullerUsable = false;
+        }
+        stats.margin = margin;
+        markStaticsNearDynamics();
+        buildObjects();
+        stats.buildMs = build.ms();
+
+        Stopwatch cull;
+        if (cullerUsable)
+            runCuller();
+        else
+            boxPairsFallback();
+        stats.cullMs = cull.ms();
+        stats.culler = result.stats;
+
+        Stopwatch sync;
+        collectCullerPairs();
+        collectInfinitePairs();
+        collectGhostPairs();
+        syncPairCache(dispatcher);
+        stats.syncMs = sync.ms();
+        stats.totalMs = total.ms();
+    }
+
+    const PairTriangles* trianglePairsFor(const btCollisionObjectWrapper* w0, const btCollisionObjectWrapper* w1,
+                                          bool& swapped) const {
+        swapped = false;
+        if (records.empty() || w0 == nullptr || w1 == nullptr) return nullptr;
+        const btCollisionObject* o0 = w0->getCollisionObject();
+        const btCollisionObject* o1 = w1->getCollisionObject();
+        if (o0 == nullptr || o1 == nullptr) return nullptr;
+        if (w0->getCollisionShape() != o0->getCollisionShape() || w1->getCollisionShape() != o1->getCollisionShape())
+            return nullptr;  // a child shape (compound, GImpact part): not what was culled
+        const btBroadphaseProxy* p0 = o0->getBroadphaseHandle();
+        const btBroadphaseProxy* p1 = o1->getBroadphaseHandle();
+        if (p0 == nullptr || p1 == nullptr) return nullptr;
+        const auto it = records.find(pairKey(p0, p1));
+        if (it == records.end()) return nullptr;
+        const Record& rec = it->second;
+        if (rec.first == p0 && rec.second == p1)
+            swapped = false;
+        else if (rec.first == p1 && rec.second == p0)
+            swapped = true;
+        else
+            return nullptr;
+        const btCollisionShape* s0 = swapped ? rec.shapeSecond : rec.shapeFirst;
+        const btCollisionShape* s1 = swapped ? rec.shapeFirst : rec.shapeSecond;
+        const btTransform& t0 = swapped ? rec.transformSecond : rec.transformFirst;
+        const btTransform& t1 = swapped ? rec.transformFirst : rec.transformSecond;
+        if (s0 != w0->getCollisionShape() || s1 != w1->getCollisionShape()) return nullptr;
+        if (!(t0 == w0->getWorldTransform()) || !(t1 == w1->getWorldTransform())) return nullptr;  // moved since
+        return &rec.triangles;
+    }
+};
+
+CullideBroadphase::CullideBroadphase(detail::PrecisionChecked, const Settings& settings,
+                                     btOverlappingPairCache* pairCache, CullerFactory factory)
+    : m_impl(std::make_unique<Impl>(settings, pairCache, std::move(factory))) {}
+
+CullideBroadphase::~CullideBroadphase() = default;
+
+btBroadphaseProxy* CullideBroadphase::createProxy(const btVector3& aabbMin, const btVector3& aabbMax, int shapeType,
+                                                  void* userPtr, int collisionFilterGroup, int collisionFilterMask,
+                                                  btDispatcher* /*dispatcher*/) {
+    return m_impl->createProxy(aabbMin, aabbMax, shapeType, userPtr, collisionFilterGroup, collisionFilterMask);
+}
+
+void CullideBroadphase::destroyProxy(btBroadphaseProxy* proxy, btDispatcher* dispatcher) {
+    m_impl->destroyProxy(proxy, dispatcher);
+}
+
+void CullideBroadphase::setAabb(btBroadphaseProxy* proxy, const btVector3& aabbMin, const btVector3& aabbMax,
+                                btDispatcher* /*dispatcher*/) {
+    m_impl->setAabb(proxy, aabbMin, aabbMax);
+}
+
+void CullideBroadphase::getAabb(btBroadphaseProxy* proxy, btVector3& aabbMin, btVector3& aabbMax) const {
+    aabbMin = proxy->m_aabbMin;
+    aabbMax = proxy->m_aabbMax;
+}
+
+void CullideBroadphase::rayTest(const btVector3& rayFrom, const btVector3& rayTo, btBroadphaseRayCallback& rayCallback,
+                                const btVector3& aabbMin, const btVector3& aabbMax) {
+    auto visitor = visitLeaves([&](Proxy* p) { rayCallback.process(p); });
+    btDbvt& tree = m_impl->tree;
+    tree.rayTestInternal(tree.m_root, rayFrom, rayTo, rayCallback.m_rayDirectionInverse, rayCallback.m_signs,
+                         rayCallback.m_lambda_max, aabbMin, aabbMax, m_impl->rayStack, visitor);
+}
+
+void CullideBroadphase::aabbTest(const btVector3& aabbMin, const btVector3& aabbMax,
+                                 btBroadphaseAabbCallback& callback) {
+    auto visitor = visitLeaves([&](Proxy* p) { callback.process(p); });
+    btDbvt& tree = m_impl->tree;
+    tree.collideTV(tree.m_root, btDbvtVolume::FromMM(aabbMin, aabbMax), visitor);
+}
+
+void CullideBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
+    m_impl->calculateOverlappingPairs(dispatcher);
+}
+
+btOverlappingPairCache* CullideBroadphase::getOverlappingPairCache() { return m_impl->cache; }
+const btOverlappingPairCache* CullideBroadphase::getOverlappingPairCache() const { return m_impl->cache; }
+
+void CullideBroadphase::getBroadphaseAabb(btVector3& aabbMin, btVector3& aabbMax) const {
+    const btDbvt& tree = m_impl->tree;
+    if (tree.m_root != nullptr) {
+        aabbMin = tree.m_root->volume.Mins();
+        aabbMax = tree.m_root->volume.Maxs();
+    } else {
+        aabbMin.setValue(0, 0, 0);
+        aabbMax.setValue(0, 0, 0);
+    }
+}
+
+void CullideBroadphase::resetPool(btDispatcher* /*dispatcher*/) {
+    if (!m_impl->proxies.empty()) return;
+    m_impl->tree.clear();
+    m_impl->records.clear();
+    m_impl->shapeCache.clear();
+    m_impl->nextUid = 0;
+}
+
+void CullideBroadphase::printStats() {
+    const CullideFrameStats& s = m_impl->stats;
+    std::printf(
+        "CullideBroadphase: %zu proxies, %zu culled (%zu meshes, %zu triangles, %zu static skipped), %zu infinite, "
+        "%zu ghosts, %zu rejected; pairs %zu (culler %zu, infinite %zu, ghost %zu; +%zu -%zu), %zu triangle pairs, "
+        "margin %.4g; build %.3f ms, cull %.3f ms, sync %.3f ms, total %.3f ms\n",
+        s.proxies, s.culledObjects, s.meshObjects, s.triangles, s.staticObjectsSkipped, s.infiniteObjects,
+        s.ghostObjects, s.rejectedObjects, s.pairs, s.cullerPairs, s.infinitePairs, s.ghostPairs, s.pairsAdded,
+        s.pairsRemoved, s.trianglePairs, s.margin, s.buildMs, s.cullMs, s.syncMs, s.totalMs);
+}
+
+const PairTriangles* CullideBroadphase::trianglePairsFor(const btCollisionObjectWrapper* body0Wrap,
+                                                         const btCollisionObjectWrapper* body1Wrap,
+                                                         bool& swapped) const {
+    return m_impl->trianglePairsFor(body0Wrap, body1Wrap, swapped);
+}
+
+void CullideBroadphase::invalidateShape(const btCollisionShape* shape) {
+    m_impl->shapeCache.erase(shape);
+    for (Proxy* p : m_impl->proxies) {
+        if (p->geometry && p->geometry->shape == shape) {
+            p->geometry.reset();
+            p->worldValid = false;
+        }
+    }
+}
+
+void CullideBroadphase::setGhostPairMargin(btScalar margin) { m_impl->ghostMargin = btMax(margin, btScalar(0)); }
+btScalar CullideBroadphase::getGhostPairMargin() const { return m_impl->ghostMargin; }
+
+const CullideFrameStats& CullideBroadphase::getLastFrameStats() const { return m_impl->stats; }
+std::size_t CullideBroadphase::getRejectedCount() const { return m_impl->rejectedTotal; }
+double CullideBroadphase::getCullingMargin() const { return m_impl->margin; }
+const Settings& CullideBroadphase::getSettings() const { return m_impl->settings; }
+
+}  // namespace cullide

@@ -1,0 +1,271 @@
+#include "cullide_bullet/CullideCollisionDispatcher.h"
+
+#include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
+#include <BulletCollision/CollisionDispatch/btCollisionConfiguration.h>
+#include <BulletCollision/CollisionDispatch/btCollisionObjectWrapper.h>
+#include <BulletCollision/CollisionDispatch/btConvexConcaveCollisionAlgorithm.h>
+#include <BulletCollision/CollisionDispatch/btManifoldResult.h>
+#include <BulletCollision/CollisionShapes/btConcaveShape.h>
+#include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
+#include <BulletCollision/Gimpact/btGImpactShape.h>
+#include <LinearMath/btPoolAllocator.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <typeinfo>
+#include <vector>
+
+namespace cullide {
+namespace {
+
+CullideCollisionDispatcher& cullideDispatcher(btDispatcher* d) { return *static_cast<CullideCollisionDispatcher*>(d); }
+
+/// The surviving triangle pairs of a GImpact-GImpact pair go straight to Bullet's triangle-triangle routine
+/// (collide_sat_triangles); no BVH traversal, no box tests. Same size as btGImpactCollisionAlgorithm.
+class CullideGImpactAlgorithm final : public btGImpactCollisionAlgorithm {
+public:
+    CullideGImpactAlgorithm(const btCollisionAlgorithmConstructionInfo& ci, const btCollisionObjectWrapper* body0Wrap,
+                            const btCollisionObjectWrapper* body1Wrap)
+        : btGImpactCollisionAlgorithm(ci, body0Wrap, body1Wrap) {}
+
+    void processCollision(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
+                          const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut) override {
+        CullideCollisionDispatcher& dispatcher = cullideDispatcher(m_dispatcher);
+        CullideDispatchStats& stats = dispatcher.currentStats();
+        bool swapped = false;
+        const CullideBroadphase* broadphase = dispatcher.getCullideBroadphase();
+        const PairTriangles* triangles =
+            broadphase != nullptr ? broadphase->trianglePairsFor(body0Wrap, body1Wrap, swapped) : nullptr;
+        if (triangles == nullptr) {
+            ++stats.fallbackPairs;
+            btGImpactCollisionAlgorithm::processCollision(body0Wrap, body1Wrap, dispatchInfo, resultOut);
+            return;
+        }
+        ++stats.cullidePairs;
+        clearCache();  // GImpact recreates its manifold every frame; with no surviving pair it stays cleared
+        m_resultOut = resultOut;
+        m_dispatchInfo = &dispatchInfo;
+        if (triangles->pairs.empty()) {
+            ++stats.clearedPairs;
+            return;
+        }
+        stats.trianglePairs += triangles->pairs.size();
+
+        // Pairs in (body0, body1) order, grouped by part pair, deterministic order.
+        static thread_local std::vector<std::array<int, 4>> ordered;  // part0, part1, tri0, tri1
+        static thread_local std::vector<int> interleaved;
+        ordered.clear();
+        for (const BulletTrianglePair& p : triangles->pairs) {
+            const BulletTriangle& t0 = swapped ? p.b : p.a;
+            const BulletTriangle& t1 = swapped ? p.a : p.b;
+            ordered.push_back({t0.part, t1.part, t0.index, t1.index});
+        }
+        if (swapped) std::sort(ordered.begin(), ordered.end());
+
+        const auto* shape0 = static_cast<const btGImpactMeshShape*>(body0Wrap->getCollisionShape());
+        const auto* shape1 = static_cast<const btGImpactMeshShape*>(body1Wrap->getCollisionShape());
+        std::size_t begin = 0;
+        while (begin < ordered.size()) {
+            std::size_t end = begin;
+            interleaved.clear();
+            while (end < ordered.size() && ordered[end][0] == ordered[begin][0] &&
+                   ordered[end][1] == ordered[begin][1]) {
+                interleaved.push_back(ordered[end][2]);
+                interleaved.push_back(ordered[end][3]);
+                ++end;
+            }
+            m_part0 = ordered[begin][0];
+            m_part1 = ordered[begin][1];
+            // collide_sat_triangles locks the parts' child shapes itself.
+            collide_sat_triangles(body0Wrap, body1Wrap, shape0->getMeshPart(m_part0), shape1->getMeshPart(m_part1),
+                                  interleaved.data(), static_cast<int>(end - begin));
+            begin = end;
+        }
+        if (getLastManifold() != nullptr) m_resultOut->refreshContactPoints();
+    }
+
+    struct CreateFunc : btCollisionAlgorithmCreateFunc {
+        btCollisionAlgorithm* CreateCollisionAlgorithm(btCollisionAlgorithmConstructionInfo& ci,
+                                                       const btCollisionObjectWrapper* body0Wrap,
+                                                       const btCollisionObjectWrapper* body1Wrap) override {
+            void* mem = ci.m_dispatcher1->allocateCollisionAlgorithm(sizeof(CullideGImpactAlgorithm));
+            return new (mem) CullideGImpactAlgorithm(ci, body0Wrap, body1Wrap);
+        }
+    };
+};
+
+/// A stand-in for a triangle mesh that enumerates only CULLIDE's surviving triangles (mesh-local vertices, Bullet's
+/// part and triangle ids). Lives on the stack for one processCollision call.
+class SurvivingTrianglesShape final : public btConcaveShape {
+public:
+    SurvivingTrianglesShape(const btConcaveShape& mesh, const PairTriangles& triangles)
+        : m_mesh(mesh), m_triangles(triangles) {
+        m_shapeType = mesh.getShapeType();
+        setMargin(mesh.getMargin());
+    }
+
+    void processAllTriangles(btTriangleCallback* callback, const btVector3& /*aabbMin*/,
+                             const btVector3& /*aabbMax*/) const override {
+        btVector3 triangle[3];
+        const std::vector<btVector3>& v = m_triangles.meshTriangleVertices;
+        for (std::size_t i = 0; i < m_triangles.meshTriangles.size(); ++i) {
+            triangle[0] = v[3 * i];
+            triangle[1] = v[3 * i + 1];
+            triangle[2] = v[3 * i + 2];
+            callback->processTriangle(triangle, m_triangles.meshTriangles[i].part, m_triangles.meshTriangles[i].index);
+        }
+    }
+    void getAabb(const btTransform& t, btVector3& aabbMin, btVector3& aabbMax) const override {
+        m_mesh.getAabb(t, aabbMin, aabbMax);
+    }
+    void setLocalScaling(const btVector3& /*scaling*/) override {}
+    const btVector3& getLocalScaling() const override { return m_mesh.getLocalScaling(); }
+    void calculateLocalInertia(btScalar /*mass*/, btVector3& inertia) const override { inertia.setValue(0, 0, 0); }
+    const char* getName() const override { return "CullideSurvivingTriangles"; }
+
+private:
+    const btConcaveShape& m_mesh;
+    const PairTriangles& m_triangles;
+};
+
+/// Convex hull vs triangle mesh: Bullet's btConvexConcaveCollisionAlgorithm (btConvexTriangleCallback, persistent
+/// manifold) driven with the surviving mesh triangles only. Same size as the base class.
+template <bool MeshFirst>
+class CullideConvexMeshAlgorithm final : public btConvexConcaveCollisionAlgorithm {
+public:
+    CullideConvexMeshAlgorithm(const btCollisionAlgorithmConstructionInfo& ci,
+                               const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap)
+        : btConvexConcaveCollisionAlgorithm(ci, body0Wrap, body1Wrap, MeshFirst) {}
+
+    void processCollision(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
+                          const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut) override {
+        CullideCollisionDispatcher& dispatcher = cullideDispatcher(m_dispatcher);
+        CullideDispatchStats& stats = dispatcher.currentStats();
+        bool swapped = false;
+        const CullideBroadphase* broadphase = dispatcher.getCullideBroadphase();
+        const PairTriangles* triangles =
+            broadphase != nullptr ? broadphase->trianglePairsFor(body0Wrap, body1Wrap, swapped) : nullptr;
+        const btCollisionObjectWrapper* meshWrap = MeshFirst ? body0Wrap : body1Wrap;
+        if (triangles == nullptr || !meshWrap->getCollisionShape()->isConcave()) {
+            ++stats.fallbackPairs;
+            btConvexConcaveCollisionAlgorithm::processCollision(body0Wrap, body1Wrap, dispatchInfo, resultOut);
+            return;
+        }
+        ++stats.cullidePairs;
+        if (triangles->meshTriangles.empty()) {
+            ++stats.clearedPairs;
+            btManifoldArray manifolds;
+            getAllContactManifolds(manifolds);
+            for (int i = 0; i < manifolds.size(); ++i) m_dispatcher->clearManifold(manifolds[i]);
+            return;
+        }
+        stats.trianglePairs += triangles->meshTriangles.size();
+        const SurvivingTrianglesShape surviving(*static_cast<const btConcaveShape*>(meshWrap->getCollisionShape()),
+                                                *triangles);
+        const btCollisionObjectWrapper filtered(meshWrap->m_parent, &surviving, meshWrap->getCollisionObject(),
+                                                meshWrap->getWorldTransform(), meshWrap->m_partId,
+                                                meshWrap->m_index);
+        if (MeshFirst)
+            btConvexConcaveCollisionAlgorithm::processCollision(&filtered, body1Wrap, dispatchInfo, resultOut);
+        else
+            btConvexConcaveCollisionAlgorithm::processCollision(body0Wrap, &filtered, dispatchInfo, resultOut);
+    }
+
+    struct CreateFunc : btCollisionAlgorithmCreateFunc {
+        btCollisionAlgorithm* CreateCollisionAlgorithm(btCollisionAlgorithmConstructionInfo& ci,
+                                                       const btCollisionObjectWrapper* body0Wrap,
+                                                       const btCollisionObjectWrapper* body1Wrap) override {
+            void* mem = ci.m_dispatcher1->allocateCollisionAlgorithm(sizeof(CullideConvexMeshAlgorithm));
+            return new (mem) CullideConvexMeshAlgorithm(ci, body0Wrap, body1Wrap);
+        }
+    };
+};
+
+CullideGImpactAlgorithm::CreateFunc g_gimpactCreate;
+CullideConvexMeshAlgorithm<false>::CreateFunc g_convexMeshCreate;
+CullideConvexMeshAlgorithm<true>::CreateFunc g_meshConvexCreate;
+
+template <typename T>
+bool registeredIs(const btCollisionAlgorithmCreateFunc* f) {
+    return f != nullptr && typeid(*f) == typeid(T);
+}
+
+class Stopwatch {
+public:
+    double ms() const {
+        return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - m_start).count();
+    }
+
+private:
+    std::chrono::steady_clock::time_point m_start = std::chrono::steady_clock::now();
+};
+
+}  // namespace
+
+CullideCollisionDispatcher::CullideCollisionDispatcher(detail::PrecisionChecked,
+                                                       btCollisionConfiguration* collisionConfiguration,
+                                                       CullideBroadphase* broadphase)
+    : btCollisionDispatcher(collisionConfiguration), m_broadphase(broadphase) {}
+
+CullideCollisionDispatcher::~CullideCollisionDispatcher() = default;
+
+btCollisionAlgorithm* CullideCollisionDispatcher::findAlgorithm(const btCollisionObjectWrapper* body0Wrap,
+                                                                const btCollisionObjectWrapper* body1Wrap,
+                                                                btPersistentManifold* sharedManifold,
+                                                                ebtDispatcherQueryType queryType) {
+    if (queryType == BT_CONTACT_POINT_ALGORITHMS && m_broadphase != nullptr) {
+        const int t0 = body0Wrap->getCollisionShape()->getShapeType();
+        const int t1 = body1Wrap->getCollisionShape()->getShapeType();
+        // Replace Bullet's algorithm only where the application's table holds Bullet's own one, so
+        // btGImpactCollisionAlgorithm::registerAlgorithm(dispatcher) (or not calling it) keeps its meaning and any
+        // custom registration wins.
+        const btCollisionAlgorithmCreateFunc* registered = m_doubleDispatchContactPoints[t0][t1];
+        btCollisionAlgorithmCreateFunc* replacement = nullptr;
+        if (t0 == GIMPACT_SHAPE_PROXYTYPE && t1 == GIMPACT_SHAPE_PROXYTYPE &&
+            registeredIs<btGImpactCollisionAlgorithm::CreateFunc>(registered))
+            replacement = &g_gimpactCreate;
+        else if (t0 == CONVEX_HULL_SHAPE_PROXYTYPE && t1 == TRIANGLE_MESH_SHAPE_PROXYTYPE &&
+                 registeredIs<btConvexConcaveCollisionAlgorithm::CreateFunc>(registered))
+            replacement = &g_convexMeshCreate;
+        else if (t0 == TRIANGLE_MESH_SHAPE_PROXYTYPE && t1 == CONVEX_HULL_SHAPE_PROXYTYPE &&
+                 registeredIs<btConvexConcaveCollisionAlgorithm::SwappedCreateFunc>(registered))
+            replacement = &g_meshConvexCreate;
+        if (replacement != nullptr) {
+            btCollisionAlgorithmConstructionInfo ci;
+            ci.m_dispatcher1 = this;
+            ci.m_manifold = sharedManifold;
+            return replacement->CreateCollisionAlgorithm(ci, body0Wrap, body1Wrap);
+        }
+    }
+    return btCollisionDispatcher::findAlgorithm(body0Wrap, body1Wrap, sharedManifold, queryType);
+}
+
+void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCache* pairCache,
+                                                           const btDispatcherInfo& dispatchInfo,
+                                                           btDispatcher* dispatcher) {
+    const CullideDispatchStats outer = m_current;  // nested dispatches (rare) keep the outer counters
+    m_current.reset();
+    Stopwatch watch;
+    btCollisionDispatcher::dispatchAllCollisionPairs(pairCache, dispatchInfo, dispatcher);
+    m_current.dispatchMs = watch.ms();
+    m_current.pairsDispatched = static_cast<std::size_t>(pairCache->getNumOverlappingPairs());
+    m_total.pairsDispatched += m_current.pairsDispatched;
+    m_total.cullidePairs += m_current.cullidePairs;
+    m_total.trianglePairs += m_current.trianglePairs;
+    m_total.fallbackPairs += m_current.fallbackPairs;
+    m_total.clearedPairs += m_current.clearedPairs;
+    m_total.dispatchMs += m_current.dispatchMs;
+    if (m_broadphase != nullptr && pairCache == m_broadphase->getOverlappingPairCache()) m_lastStep = m_current;
+    m_current = outer;
+}
+
+void* CullideCollisionDispatcher::allocateCollisionAlgorithm(int size) {
+    // btPoolAllocator only asserts on the size: an algorithm larger than the pool element would silently corrupt
+    // memory in release builds. Such algorithms come from the heap (freeCollisionAlgorithm handles both).
+    if (m_collisionAlgorithmPoolAllocator != nullptr && size > m_collisionAlgorithmPoolAllocator->getElementSize())
+        return btAlignedAlloc(static_cast<size_t>(size), 16);
+    return btCollisionDispatcher::allocateCollisionAlgorithm(size);
+}
+
+}  // namespace cullide

@@ -1,0 +1,222 @@
+#include "ShapeGeometry.h"
+
+#include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
+#include <BulletCollision/CollisionShapes/btConvexHullShape.h>
+#include <BulletCollision/CollisionShapes/btStridingMeshInterface.h>
+#include <BulletCollision/CollisionShapes/btTriangleMeshShape.h>
+#include <BulletCollision/Gimpact/btGImpactShape.h>
+#include <LinearMath/btConvexHullComputer.h>
+
+#include <algorithm>
+#include <cstring>
+
+namespace cullide::bullet {
+namespace {
+
+const btGImpactMeshShape* asGImpactMesh(const btCollisionShape* shape) {
+    if (shape == nullptr || shape->getShapeType() != GIMPACT_SHAPE_PROXYTYPE) return nullptr;
+    const auto* g = static_cast<const btGImpactShapeInterface*>(shape);
+    if (g->getGImpactShapeType() != CONST_GIMPACT_TRIMESH_SHAPE) return nullptr;
+    return static_cast<const btGImpactMeshShape*>(g);
+}
+
+int gimpactVertexCount(const btGImpactMeshShape& mesh) {
+    int n = 0;
+    for (int p = 0; p < mesh.getMeshPartCount(); ++p) {
+        const btGImpactMeshShapePart* part = mesh.getMeshPart(p);
+        part->lockChildShapes();  // the vertex count is read from the striding mesh at lock time
+        n += part->getVertexCount();
+        part->unlockChildShapes();
+    }
+    return n;
+}
+
+int meshVertexCount(const btStridingMeshInterface& mesh) {
+    int n = 0;
+    for (int s = 0; s < mesh.getNumSubParts(); ++s) {
+        const unsigned char* vertexBase = nullptr;
+        const unsigned char* indexBase = nullptr;
+        int numVerts = 0, stride = 0, indexStride = 0, numFaces = 0;
+        PHY_ScalarType type = PHY_FLOAT, indexType = PHY_INTEGER;
+        mesh.getLockedReadOnlyVertexIndexBase(&vertexBase, numVerts, type, stride, &indexBase, indexStride, numFaces,
+                                              indexType, s);
+        mesh.unLockReadOnlyVertexBase(s);
+        n += numVerts;
+    }
+    return n;
+}
+
+void buildGImpact(const btGImpactMeshShape& mesh, ShapeTriangles& out) {
+    for (int p = 0; p < mesh.getMeshPartCount(); ++p) {
+        // The part is logically const; the primitive manager accessor is not.
+        auto* part = const_cast<btGImpactMeshShapePart*>(mesh.getMeshPart(p));
+        part->lockChildShapes();
+        const auto base = static_cast<std::uint32_t>(out.vertices.size());
+        const int vertexCount = part->getVertexCount();
+        for (int v = 0; v < vertexCount; ++v) {
+            btVector3 vertex;
+            part->getVertex(v, vertex);
+            out.vertices.push_back(vertex);
+        }
+        const btGImpactMeshShapePart::TrimeshPrimitiveManager* manager = part->getTrimeshPrimitiveManager();
+        const int triangleCount = part->getNumChildShapes();
+        for (int t = 0; t < triangleCount; ++t) {
+            unsigned int i0 = 0, i1 = 0, i2 = 0;
+            manager->get_indices(t, i0, i1, i2);
+            out.triangles.push_back({base + i0, base + i1, base + i2});
+            out.refs.push_back({p, t});
+        }
+        out.margin = std::max(out.margin, part->getMargin());
+        part->unlockChildShapes();
+    }
+}
+
+void buildTriangleMesh(const btStridingMeshInterface& mesh, ShapeTriangles& out) {
+    const btVector3& scaling = mesh.getScaling();
+    for (int s = 0; s < mesh.getNumSubParts(); ++s) {
+        const unsigned char* vertexBase = nullptr;
+        const unsigned char* indexBase = nullptr;
+        int numVerts = 0, stride = 0, indexStride = 0, numFaces = 0;
+        PHY_ScalarType type = PHY_FLOAT, indexType = PHY_INTEGER;
+        mesh.getLockedReadOnlyVertexIndexBase(&vertexBase, numVerts, type, stride, &indexBase, indexStride, numFaces,
+                                              indexType, s);
+        const auto base = static_cast<std::uint32_t>(out.vertices.size());
+        // Same arithmetic as btBvhTriangleMeshShape::processAllTriangles, so the triangles are bit-identical.
+        for (int v = 0; v < numVerts; ++v) {
+            const unsigned char* p = vertexBase + static_cast<std::ptrdiff_t>(v) * stride;
+            if (type == PHY_DOUBLE) {
+                double c[3];
+                std::memcpy(c, p, sizeof c);
+                out.vertices.emplace_back(btScalar(c[0]) * scaling.getX(), btScalar(c[1]) * scaling.getY(),
+                                          btScalar(c[2]) * scaling.getZ());
+            } else {
+                float c[3];
+                std::memcpy(c, p, sizeof c);
+                out.vertices.emplace_back(c[0] * scaling.getX(), c[1] * scaling.getY(), c[2] * scaling.getZ());
+            }
+        }
+        for (int t = 0; t < numFaces; ++t) {
+            const unsigned char* q = indexBase + static_cast<std::ptrdiff_t>(t) * indexStride;
+            std::uint32_t idx[3] = {0, 0, 0};
+            for (int j = 0; j < 3; ++j) {
+                if (indexType == PHY_SHORT) {
+                    unsigned short i = 0;
+                    std::memcpy(&i, q + j * sizeof(unsigned short), sizeof i);
+                    idx[j] = i;
+                } else if (indexType == PHY_UCHAR) {
+                    idx[j] = q[j];
+                } else {
+                    unsigned int i = 0;
+                    std::memcpy(&i, q + j * sizeof(unsigned int), sizeof i);
+                    idx[j] = i;
+                }
+            }
+            out.triangles.push_back({base + idx[0], base + idx[1], base + idx[2]});
+            out.refs.push_back({s, t});
+        }
+        mesh.unLockReadOnlyVertexBase(s);
+    }
+}
+
+void buildConvexHull(const btConvexHullShape& hull, ShapeTriangles& out) {
+    const int n = hull.getNumPoints();
+    btAlignedObjectArray<btVector3> points;
+    points.resize(n);
+    for (int i = 0; i < n; ++i) points[i] = hull.getScaledPoint(i);
+    btConvexHullComputer computer;
+    computer.compute(points[0].m_floats, static_cast<int>(sizeof(btVector3)), n, 0, 0);
+    for (int v = 0; v < computer.vertices.size(); ++v) out.vertices.push_back(computer.vertices[v]);
+    std::vector<std::uint32_t> polygon;
+    for (int f = 0; f < computer.faces.size(); ++f) {
+        const btConvexHullComputer::Edge* start = &computer.edges[computer.faces[f]];
+        const btConvexHullComputer::Edge* e = start;
+        polygon.clear();
+        do {
+            polygon.push_back(static_cast<std::uint32_t>(e->getSourceVertex()));
+            e = e->getNextEdgeOfFace();
+        } while (e != start && polygon.size() <= static_cast<std::size_t>(computer.vertices.size()));
+        for (std::size_t k = 1; k + 1 < polygon.size(); ++k) {
+            out.refs.push_back({0, static_cast<int>(out.triangles.size())});
+            out.triangles.push_back({polygon[0], polygon[k], polygon[k + 1]});
+        }
+    }
+    out.margin = hull.getMargin();
+}
+
+}  // namespace
+
+GeometryKind geometryKindOf(const btCollisionShape* shape) {
+    if (shape == nullptr) return GeometryKind::None;
+    switch (shape->getShapeType()) {
+        case GIMPACT_SHAPE_PROXYTYPE:
+            return asGImpactMesh(shape) != nullptr ? GeometryKind::GImpactMesh : GeometryKind::None;
+        case TRIANGLE_MESH_SHAPE_PROXYTYPE:
+            return GeometryKind::TriangleMesh;
+        case CONVEX_HULL_SHAPE_PROXYTYPE:
+            return GeometryKind::ConvexHull;
+        default:
+            return GeometryKind::None;
+    }
+}
+
+std::shared_ptr<ShapeTriangles> buildShapeTriangles(const btCollisionShape* shape) {
+    const GeometryKind kind = geometryKindOf(shape);
+    if (kind == GeometryKind::None) return nullptr;
+    auto out = std::make_shared<ShapeTriangles>();
+    out->kind = kind;
+    out->shape = shape;
+    out->scaling = shape->getLocalScaling();
+    switch (kind) {
+        case GeometryKind::GImpactMesh: {
+            const btGImpactMeshShape& mesh = *asGImpactMesh(shape);
+            out->sourceCount = gimpactVertexCount(mesh);
+            buildGImpact(mesh, *out);
+            break;
+        }
+        case GeometryKind::TriangleMesh: {
+            const auto* mesh = static_cast<const btTriangleMeshShape*>(shape);
+            out->sourceCount = meshVertexCount(*mesh->getMeshInterface());
+            buildTriangleMesh(*mesh->getMeshInterface(), *out);
+            out->margin = shape->getMargin();
+            break;
+        }
+        case GeometryKind::ConvexHull: {
+            const auto* hull = static_cast<const btConvexHullShape*>(shape);
+            out->sourceCount = hull->getNumPoints();
+            if (out->sourceCount > 0) buildConvexHull(*hull, *out);
+            break;
+        }
+        case GeometryKind::None:
+            break;
+    }
+    if (out->triangles.empty()) return nullptr;
+    return out;
+}
+
+bool stillMatches(const ShapeTriangles& geometry, const btCollisionShape* shape) {
+    if (geometry.shape != shape || geometryKindOf(shape) != geometry.kind) return false;
+    if (!(shape->getLocalScaling() == geometry.scaling)) return false;
+    switch (geometry.kind) {
+        case GeometryKind::GImpactMesh:
+            return gimpactVertexCount(*asGImpactMesh(shape)) == geometry.sourceCount;
+        case GeometryKind::TriangleMesh:
+            return meshVertexCount(*static_cast<const btTriangleMeshShape*>(shape)->getMeshInterface()) ==
+                   geometry.sourceCount;
+        case GeometryKind::ConvexHull:
+            return static_cast<const btConvexHullShape*>(shape)->getNumPoints() == geometry.sourceCount;
+        case GeometryKind::None:
+            return false;
+    }
+    return false;
+}
+
+btScalar triangleMarginOf(const btCollisionShape* shape) {
+    if (const btGImpactMeshShape* mesh = asGImpactMesh(shape)) {
+        btScalar m = 0;
+        for (int p = 0; p < mesh->getMeshPartCount(); ++p) m = std::max(m, mesh->getMeshPart(p)->getMargin());
+        return m;
+    }
+    return shape != nullptr ? shape->getMargin() : btScalar(0);
+}
+
+}  // namespace cullide::bullet

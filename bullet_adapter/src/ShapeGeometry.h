@@ -1,0 +1,46 @@
+// Triangle geometry of Bullet shapes in the shape's local frame, as Bullet's narrow phase sees it.
+#pragma once
+
+#include "cullide/Types.h"
+#include "cullide_bullet/CullideBroadphase.h"
+
+#include <LinearMath/btVector3.h>
+
+#include <memory>
+#include <vector>
+
+class btCollisionShape;
+
+namespace cullide::bullet {
+
+enum class GeometryKind {
+    None,         ///< no triangle geometry: the culler sees the broadphase AABB
+    GImpactMesh,  ///< btGImpactMeshShape (CONST_GIMPACT_TRIMESH_SHAPE)
+    TriangleMesh, ///< btBvhTriangleMeshShape / btTriangleMeshShape (TRIANGLE_MESH_SHAPE_PROXYTYPE)
+    ConvexHull,   ///< btConvexHullShape: the hull of its scaled points
+};
+
+GeometryKind geometryKindOf(const btCollisionShape* shape);
+
+struct ShapeTriangles {
+    GeometryKind kind = GeometryKind::None;
+    const btCollisionShape* shape = nullptr;
+    btVector3 scaling{1, 1, 1};  ///< scaling it was built with (change detection)
+    int sourceCount = 0;         ///< vertex/point count it was built from (change detection)
+    /// Local vertices computed exactly as Bullet computes them (btScalar precision, scaling applied).
+    std::vector<btVector3> vertices;
+    std::vector<TriangleIndices> triangles;
+    std::vector<BulletTriangle> refs;  ///< Bullet's (part, index) of each triangle
+    btScalar margin = 0;               ///< largest collision margin Bullet uses for these triangles
+};
+
+/// Builds the local triangle geometry of `shape`, or nullptr when it has none (or an empty one).
+std::shared_ptr<ShapeTriangles> buildShapeTriangles(const btCollisionShape* shape);
+
+/// True while `geometry` still describes `shape` (same pointer, kind, scaling and source size).
+bool stillMatches(const ShapeTriangles& geometry, const btCollisionShape* shape);
+
+/// The collision margin Bullet applies to the shape's triangles (GImpact: the parts' margins).
+btScalar triangleMarginOf(const btCollisionShape* shape);
+
+}  // namespace cullide::bullet

@@ -1,0 +1,374 @@
+#include "BulletTestWorld.h"
+
+#include "cullide/Culler.h"
+
+#include <BulletCollision/Gimpact/btGImpactShape.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <random>
+
+namespace cullide::test {
+namespace {
+
+class Stopwatch {
+public:
+    double ms() const {
+        return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - m_start).count();
+    }
+
+private:
+    std::chrono::steady_clock::time_point m_start = std::chrono::steady_clock::now();
+};
+
+/// Times a broadphase's work of one step: every setAabb since the last calculateOverlappingPairs (btDbvtBroadphase
+/// finds most pairs there) plus calculateOverlappingPairs itself.
+template <class Base>
+class TimedBroadphase final : public Base {
+public:
+    using Base::Base;
+    void setAabb(btBroadphaseProxy* proxy, const btVector3& aabbMin, const btVector3& aabbMax,
+                 btDispatcher* dispatcher) override {
+        Stopwatch w;
+        Base::setAabb(proxy, aabbMin, aabbMax, dispatcher);
+        m_setAabbMs += w.ms();
+    }
+    void calculateOverlappingPairs(btDispatcher* dispatcher) override {
+        Stopwatch w;
+        Base::calculateOverlappingPairs(dispatcher);
+        lastMs = w.ms() + m_setAabbMs;
+        m_setAabbMs = 0.0;
+    }
+    double lastMs = 0.0;
+
+private:
+    double m_setAabbMs = 0.0;
+};
+
+/// Times dispatchAllCollisionPairs on the world's own pair cache.
+template <class Base>
+class TimedDispatcher final : public Base {
+public:
+    using Base::Base;
+    void dispatchAllCollisionPairs(btOverlappingPairCache* cache, const btDispatcherInfo& info,
+                                   btDispatcher* dispatcher) override {
+        Stopwatch w;
+        Base::dispatchAllCollisionPairs(cache, info, dispatcher);
+        if (cache == worldCache) {
+            lastMs = w.ms();
+            lastPairs = static_cast<std::size_t>(cache->getNumOverlappingPairs());
+        }
+    }
+    const btOverlappingPairCache* worldCache = nullptr;
+    double lastMs = 0.0;
+    std::size_t lastPairs = 0;
+};
+
+using DefaultBroadphase = TimedBroadphase<btDbvtBroadphase>;
+using DefaultDispatcher = TimedDispatcher<btCollisionDispatcher>;
+using CullideBp = TimedBroadphase<CullideBroadphase>;
+using CullideDisp = TimedDispatcher<CullideCollisionDispatcher>;
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------------------------
+
+struct ShapeStore::Mesh {
+    std::vector<btScalar> vertices;
+    std::vector<int> indices;
+    std::unique_ptr<btTriangleIndexVertexArray> array;
+
+    void finish() {
+        array = std::make_unique<btTriangleIndexVertexArray>(
+            static_cast<int>(indices.size() / 3), indices.data(), static_cast<int>(3 * sizeof(int)),
+            static_cast<int>(vertices.size() / 3), vertices.data(), static_cast<int>(3 * sizeof(btScalar)));
+    }
+};
+
+ShapeStore::ShapeStore() = default;
+ShapeStore::~ShapeStore() {
+    m_shapes.clear();  // shapes reference the meshes
+    m_meshes.clear();
+}
+
+btCollisionShape* ShapeStore::box(const btVector3& halfExtents) {
+    m_shapes.push_back(std::make_unique<btBoxShape>(halfExtents));
+    return m_shapes.back().get();
+}
+
+btCollisionShape* ShapeStore::sphere(btScalar radius) {
+    m_shapes.push_back(std::make_unique<btSphereShape>(radius));
+    return m_shapes.back().get();
+}
+
+btCollisionShape* ShapeStore::capsule(btScalar radius, btScalar height) {
+    m_shapes.push_back(std::make_unique<btCapsuleShape>(radius, height));
+    return m_shapes.back().get();
+}
+
+btCollisionShape* ShapeStore::hull(const btVector3& radii, int points, std::uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    auto shape = std::make_unique<btConvexHullShape>();
+    for (int i = 0; i < points; ++i) {
+        btVector3 d;
+        do {
+            d.setValue(btScalar(u(rng)), btScalar(u(rng)), btScalar(u(rng)));
+        } while (d.length2() < btScalar(0.05) || d.length2() > btScalar(1));
+        d.normalize();
+        shape->addPoint(d * radii, false);
+    }
+    shape->recalcLocalAabb();
+    m_shapes.push_back(std::move(shape));
+    return m_shapes.back().get();
+}
+
+btCollisionShape* ShapeStore::landscape(int cells, btScalar cellSize, btScalar amplitude) {
+    auto mesh = std::make_unique<Mesh>();
+    const int n = cells + 1;
+    const btScalar half = btScalar(cells) * cellSize / 2;
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const btScalar x = btScalar(i) * cellSize - half;
+            const btScalar z = btScalar(j) * cellSize - half;
+            const btScalar y = amplitude * (std::sin(x * btScalar(0.35)) * std::cos(z * btScalar(0.27)) +
+                                            btScalar(0.3) * std::sin(btScalar(0.9) * x + btScalar(0.6) * z));
+            mesh->vertices.insert(mesh->vertices.end(), {x, y, z});
+        }
+    for (int j = 0; j < cells; ++j)
+        for (int i = 0; i < cells; ++i) {
+            const int a = j * n + i, b = a + 1, c = a + n, d = c + 1;
+            mesh->indices.insert(mesh->indices.end(), {a, c, b, b, c, d});
+        }
+    mesh->finish();
+    m_shapes.push_back(std::make_unique<btBvhTriangleMeshShape>(mesh->array.get(), true));
+    m_meshes.push_back(std::move(mesh));
+    return m_shapes.back().get();
+}
+
+btCollisionShape* ShapeStore::gimpactTorus(btScalar R, btScalar r, int segments, int sides, btScalar margin) {
+    auto mesh = std::make_unique<Mesh>();
+    const double twoPi = 6.283185307179586;
+    for (int s = 0; s < segments; ++s)
+        for (int t = 0; t < sides; ++t) {
+            const double u = twoPi * s / segments, v = twoPi * t / sides;
+            const double x = (R + r * std::cos(v)) * std::cos(u);
+            const double y = r * std::sin(v);
+            const double z = (R + r * std::cos(v)) * std::sin(u);
+            mesh->vertices.insert(mesh->vertices.end(), {btScalar(x), btScalar(y), btScalar(z)});
+        }
+    for (int s = 0; s < segments; ++s)
+        for (int t = 0; t < sides; ++t) {
+            const int a = s * sides + t;
+            const int b = s * sides + (t + 1) % sides;
+            const int c = ((s + 1) % segments) * sides + t;
+            const int d = ((s + 1) % segments) * sides + (t + 1) % sides;
+            mesh->indices.insert(mesh->indices.end(), {a, b, c, b, d, c});
+        }
+    mesh->finish();
+    auto shape = std::make_unique<btGImpactMeshShape>(mesh->array.get());
+    shape->setMargin(margin);
+    shape->updateBound();
+    m_shapes.push_back(std::move(shape));
+    m_meshes.push_back(std::move(mesh));
+    return m_shapes.back().get();
+}
+
+btCollisionShape* ShapeStore::plane(const btVector3& normal, btScalar constant) {
+    m_shapes.push_back(std::make_unique<btStaticPlaneShape>(normal, constant));
+    return m_shapes.back().get();
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+
+class TestWorld::World final : public btDiscreteDynamicsWorld {
+public:
+    World(TestWorld& owner, btDispatcher* d, btBroadphaseInterface* b, btConstraintSolver* s,
+          btCollisionConfiguration* c)
+        : btDiscreteDynamicsWorld(d, b, s, c), m_owner(owner) {}
+
+protected:
+    void solveConstraints(btContactSolverInfo& info) override {
+        btDiscreteDynamicsWorld::solveConstraints(info);
+        if (m_owner.midStep) m_owner.midStep(m_owner);
+    }
+
+private:
+    TestWorld& m_owner;
+};
+
+TestWorld::TestWorld(PipelineKind kind, CullideBroadphase::CullerFactory factory, const Settings& settings)
+    : m_kind(kind), m_config(std::make_unique<btDefaultCollisionConfiguration>()) {
+    if (kind == PipelineKind::Default) {
+        auto bp = std::make_unique<DefaultBroadphase>();
+        auto disp = std::make_unique<DefaultDispatcher>(m_config.get());
+        disp->worldCache = bp->getOverlappingPairCache();
+        m_broadphase = std::move(bp);
+        m_dispatcher = std::move(disp);
+    } else {
+        auto bp = std::make_unique<CullideBp>(settings, nullptr, factory ? factory : gpuFactory());
+        auto disp = std::make_unique<CullideDisp>(m_config.get(), bp.get());
+        disp->worldCache = bp->getOverlappingPairCache();
+        m_cullideBroadphase = bp.get();
+        m_cullideDispatcher = disp.get();
+        m_broadphase = std::move(bp);
+        m_dispatcher = std::move(disp);
+    }
+    m_solver = std::make_unique<btSequentialImpulseConstraintSolver>();
+    m_world = std::make_unique<World>(*this, m_dispatcher.get(), m_broadphase.get(), m_solver.get(), m_config.get());
+    m_world->setGravity(btVector3(0, -9.81f, 0));
+}
+
+TestWorld::~TestWorld() {
+    for (int i = m_world->getNumCollisionObjects() - 1; i >= 0; --i)
+        m_world->removeCollisionObject(m_world->getCollisionObjectArray()[i]);
+    m_world.reset();
+    m_solver.reset();
+    m_broadphase.reset();
+    m_dispatcher.reset();
+    m_owned.clear();
+    m_config.reset();
+}
+
+btRigidBody* TestWorld::addBody(btCollisionShape* shape, btScalar mass, const btTransform& transform, int group,
+                                int mask) {
+    btVector3 inertia(0, 0, 0);
+    if (mass > 0) shape->calculateLocalInertia(mass, inertia);
+    btRigidBody::btRigidBodyConstructionInfo info(mass, nullptr, shape, inertia);
+    info.m_startWorldTransform = transform;
+    auto body = std::make_unique<btRigidBody>(info);
+    btRigidBody* raw = body.get();
+    raw->setUserIndex(nextIndex());
+    m_objectsByIndex.push_back(raw);
+    m_owned.push_back(std::move(body));
+    if (group != 0 || mask != 0)
+        m_world->addRigidBody(raw, group, mask);
+    else
+        m_world->addRigidBody(raw);
+    return raw;
+}
+
+void TestWorld::removeBody(btRigidBody* body) { m_world->removeRigidBody(body); }
+
+btCollisionObject* TestWorld::objectByIndex(int index) const { return m_objectsByIndex.at(std::size_t(index)); }
+
+void TestWorld::adopt(std::unique_ptr<btCollisionObject> object) {
+    object->setUserIndex(nextIndex());
+    m_objectsByIndex.push_back(object.get());
+    m_owned.push_back(std::move(object));
+}
+
+void TestWorld::step(btScalar dt) { m_world->stepSimulation(dt, 1, dt); }
+
+void TestWorld::detectCollisions() { m_world->performDiscreteCollisionDetection(); }
+
+double TestWorld::lastBroadphaseMs() const {
+    if (m_kind == PipelineKind::Default) return static_cast<const DefaultBroadphase&>(*m_broadphase).lastMs;
+    return static_cast<const CullideBp&>(*m_broadphase).lastMs;
+}
+
+double TestWorld::lastNarrowPhaseMs() const {
+    if (m_kind == PipelineKind::Default) return static_cast<const DefaultDispatcher&>(*m_dispatcher).lastMs;
+    return static_cast<const CullideDisp&>(*m_dispatcher).lastMs;
+}
+
+std::size_t TestWorld::lastPairCount() const {
+    if (m_kind == PipelineKind::Default) return static_cast<const DefaultDispatcher&>(*m_dispatcher).lastPairs;
+    return static_cast<const CullideDisp&>(*m_dispatcher).lastPairs;
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+
+ContactMap contactsOf(btCollisionWorld& world) {
+    ContactMap out;
+    btDispatcher* dispatcher = world.getDispatcher();
+    for (int i = 0; i < dispatcher->getNumManifolds(); ++i) {
+        const btPersistentManifold* m = dispatcher->getManifoldByIndexInternal(i);
+        if (m->getNumContacts() == 0) continue;
+        const int a = m->getBody0()->getUserIndex();
+        const int b = m->getBody1()->getUserIndex();
+        const bool swap = a > b;
+        PairContacts& pc = out[{std::min(a, b), std::max(a, b)}];
+        for (int k = 0; k < m->getNumContacts(); ++k) {
+            const btManifoldPoint& pt = m->getContactPoint(k);
+            ++pc.points;
+            pc.minDistance = std::min(pc.minDistance, double(pt.getDistance()));
+            pc.positionsOnB.push_back(swap ? pt.getPositionWorldOnA() : pt.getPositionWorldOnB());
+            pc.distances.push_back(double(pt.getDistance()));
+        }
+    }
+    return out;
+}
+
+void mirrorState(TestWorld& from, TestWorld& to) {
+    const auto& a = from.objects();
+    const auto& b = to.objects();
+    for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i) {
+        btRigidBody* ra = btRigidBody::upcast(a[i]);
+        btRigidBody* rb = btRigidBody::upcast(b[i]);
+        if (ra == nullptr || rb == nullptr) continue;
+        rb->setWorldTransform(ra->getWorldTransform());
+        rb->setInterpolationWorldTransform(ra->getInterpolationWorldTransform());
+        rb->setLinearVelocity(ra->getLinearVelocity());
+        rb->setAngularVelocity(ra->getAngularVelocity());
+        rb->setInterpolationLinearVelocity(ra->getInterpolationLinearVelocity());
+        rb->setInterpolationAngularVelocity(ra->getInterpolationAngularVelocity());
+        rb->forceActivationState(ra->getActivationState());
+        rb->setDeactivationTime(ra->getDeactivationTime());
+    }
+}
+
+void ContactAgreement::add(const ContactMap& reference, const ContactMap& other,
+                           const std::function<double(const std::pair<int, int>&)>& tolerance,
+                           const std::set<std::pair<int, int>>& skipDepth) {
+    for (const auto& [key, ref] : reference) {
+        ++referencePairs;
+        const auto it = other.find(key);
+        if (it == other.end()) {
+            ++missingPairs;
+            if (firstMissing.empty()) {
+                char buf[160];
+                std::snprintf(buf, sizeof buf, "pair (%d, %d) with %d points, min distance %.5f", key.first,
+                              key.second, ref.points, ref.minDistance);
+                firstMissing = buf;
+            }
+            continue;
+        }
+        if (skipDepth.count(key) != 0) {
+            ++uncomparedDepths;
+            continue;
+        }
+        ++comparedPairs;
+        const double diff = std::fabs(ref.minDistance - it->second.minDistance);
+        maxDepthDifference = std::max(maxDepthDifference, diff);
+        if (diff > tolerance(key)) {
+            ++depthMismatches;
+            if (std::getenv("CULLIDE_BULLET_DEBUG") != nullptr)
+                std::printf("  mismatch pair (%d,%d): ref %d pts min %.5f, other %d pts min %.5f\n", key.first,
+                            key.second, ref.points, ref.minDistance, it->second.points, it->second.minDistance);
+        }
+    }
+    for (const auto& [key, pc] : other)
+        if (reference.find(key) == reference.end()) ++extraPairs;
+}
+
+std::string StepTimes::summary(const char* name) const {
+    char buf[200];
+    const double n = steps > 0 ? double(steps) : 1.0;
+    std::snprintf(buf, sizeof buf, "%-8s broadphase %7.3f ms/step, narrow phase %7.3f ms/step, %7.1f pairs/step",
+                  name, broadphaseMs / n, narrowMs / n, double(pairs) / n);
+    return buf;
+}
+
+CullideBroadphase::CullerFactory gpuFactory() {
+    return [](const Settings& s) { return createGpuCuller(s); };
+}
+
+CullideBroadphase::CullerFactory referenceFactory() {
+    return [](const Settings& s) { return createReferenceCuller(s); };
+}
+
+}  // namespace cullide::test

@@ -1,0 +1,278 @@
+// The btBroadphaseInterface / btCollisionDispatcher contract, with the CPU reference culler (no GL needed):
+// static-static pairs, planes, external pair caches, proxy lifetime, non-finite AABBs, precision guard, the
+// algorithm pool, custom registrations, and the landscape scene against the default pipeline.
+#include "SceneSupport.h"
+
+#include <BulletCollision/CollisionDispatch/btEmptyCollisionAlgorithm.h>
+#include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
+#include <LinearMath/btPoolAllocator.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <string>
+
+namespace cullide::test {
+namespace {
+
+std::set<std::pair<int, int>> pairsOf(btCollisionWorld& w) {
+    std::set<std::pair<int, int>> out;
+    btOverlappingPairCache* cache = w.getPairCache();
+    for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) {
+        const btBroadphasePair& p = cache->getOverlappingPairArrayPtr()[i];
+        const int a = static_cast<btCollisionObject*>(p.m_pProxy0->m_clientObject)->getUserIndex();
+        const int b = static_cast<btCollisionObject*>(p.m_pProxy1->m_clientObject)->getUserIndex();
+        out.insert({std::min(a, b), std::max(a, b)});
+    }
+    return out;
+}
+
+TEST(BulletContract, StaticStaticNeverPairedPlanesByHalfSpace) {
+    ShapeStore shapes;
+    btCollisionShape* box = shapes.box(btVector3(1, 1, 1));
+    btCollisionShape* plane = shapes.plane(btVector3(0, 1, 0), 0);
+    btCollisionShape* sphere = shapes.sphere(btScalar(0.5));
+    TestWorld w(PipelineKind::Cullide, referenceFactory());
+    // Statics added as plain collision objects pass Bullet's default filter (DefaultFilter / AllFilter).
+    for (int k = 0; k < 3; ++k) {
+        auto o = std::make_unique<btCollisionObject>();
+        o->setCollisionShape(k == 2 ? plane : box);
+        o->setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(btScalar(k == 1 ? 1.5 : 0), 0, 0)));
+        btCollisionObject* raw = o.get();
+        w.adopt(std::move(o));
+        w.world().addCollisionObject(raw);
+    }
+    w.addBody(sphere, 1, btTransform(btQuaternion::getIdentity(), btVector3(-5, btScalar(0.49), 0)));  // on the plane
+    w.addBody(sphere, 1, btTransform(btQuaternion::getIdentity(), btVector3(-5, 30, 0)));             // far above
+    w.addBody(sphere, 1, btTransform(btQuaternion::getIdentity(), btVector3(-9, -3, 0)));             // below it
+    w.addBody(sphere, 1, btTransform(btQuaternion::getIdentity(), btVector3(0, btScalar(1.4), 0)));   // on the boxes
+    w.detectCollisions();
+    const std::set<std::pair<int, int>> expected = {{2, 3}, {2, 5}, {0, 6}, {1, 6}};
+    EXPECT_EQ(pairsOf(w.world()), expected);
+    EXPECT_EQ(w.cullideBroadphase()->getLastFrameStats().infiniteObjects, 1u);
+}
+
+TEST(BulletContract, ExternalPairCacheProxyLifetimeAndQueries) {
+    btHashedOverlappingPairCache external;
+    btDefaultCollisionConfiguration config;
+    {
+        CullideBroadphase broadphase(Settings{}, &external, referenceFactory());
+        CullideCollisionDispatcher dispatcher(&config, &broadphase);
+        EXPECT_EQ(broadphase.getOverlappingPairCache(), &external);
+        btVector3 mn, mx;
+        broadphase.getBroadphaseAabb(mn, mx);
+        EXPECT_EQ(mn, btVector3(0, 0, 0));
+        // No collision objects behind these proxies: box proxies, dynamic.
+        btBroadphaseProxy* a = broadphase.createProxy(btVector3(0, 0, 0), btVector3(1, 1, 1), BOX_SHAPE_PROXYTYPE,
+                                                      nullptr, 1, -1, &dispatcher);
+        btBroadphaseProxy* b = broadphase.createProxy(btVector3(btScalar(0.5), 0, 0), btVector3(2, 1, 1),
+                                                      BOX_SHAPE_PROXYTYPE, nullptr, 1, -1, &dispatcher);
+        btBroadphaseProxy* c = broadphase.createProxy(btVector3(5, 5, 5), btVector3(6, 6, 6), BOX_SHAPE_PROXYTYPE,
+                                                      nullptr, 1, -1, &dispatcher);
+        EXPECT_NE(a->m_uniqueId, b->m_uniqueId);
+        broadphase.calculateOverlappingPairs(&dispatcher);
+        EXPECT_EQ(external.getNumOverlappingPairs(), 1);
+        EXPECT_NE(external.findPair(a, b), nullptr);
+        broadphase.getBroadphaseAabb(mn, mx);
+        EXPECT_EQ(mn, btVector3(0, 0, 0));
+        EXPECT_EQ(mx, btVector3(6, 6, 6));
+        btVector3 amin, amax;
+        broadphase.getAabb(c, amin, amax);
+        EXPECT_EQ(amax, btVector3(6, 6, 6));
+        // aabbTest and rayTest through the internal tree.
+        struct Collect : btBroadphaseAabbCallback {
+            std::set<btBroadphaseProxy*> hits;
+            bool process(const btBroadphaseProxy* p) override {
+                hits.insert(const_cast<btBroadphaseProxy*>(p));
+                return true;
+            }
+        } collect;
+        broadphase.aabbTest(btVector3(4, 4, 4), btVector3(7, 7, 7), collect);
+        EXPECT_EQ(collect.hits, std::set<btBroadphaseProxy*>{c});
+        // Moving c onto a creates the pair; moving it away removes it again.
+        broadphase.setAabb(c, btVector3(btScalar(0.2), 0, 0), btVector3(btScalar(0.8), 1, 1), &dispatcher);
+        broadphase.calculateOverlappingPairs(&dispatcher);
+        EXPECT_EQ(external.getNumOverlappingPairs(), 3);
+        broadphase.setAabb(c, btVector3(5, 5, 5), btVector3(6, 6, 6), &dispatcher);
+        broadphase.calculateOverlappingPairs(&dispatcher);
+        EXPECT_EQ(external.getNumOverlappingPairs(), 1);
+        // Destroying a proxy removes its pairs at once.
+        broadphase.destroyProxy(a, &dispatcher);
+        EXPECT_EQ(external.getNumOverlappingPairs(), 0);
+        broadphase.printStats();
+        broadphase.destroyProxy(b, &dispatcher);
+        broadphase.destroyProxy(c, &dispatcher);
+        broadphase.resetPool(&dispatcher);
+        broadphase.calculateOverlappingPairs(&dispatcher);
+        struct NoHit : btBroadphaseRayCallback {
+            bool process(const btBroadphaseProxy*) override {
+                ADD_FAILURE() << "hit in an empty broadphase";
+                return false;
+            }
+        } ray;
+        broadphase.rayTest(btVector3(0, 0, 0), btVector3(1, 1, 1), ray);
+    }
+    EXPECT_EQ(external.getNumOverlappingPairs(), 0);  // the external cache outlives the broadphase
+}
+
+TEST(BulletContract, NonFiniteAabbRejectedOnceOthersUnaffected) {
+    ShapeStore shapes;
+    btCollisionShape* ground = shapes.box(btVector3(10, 1, 10));
+    btCollisionShape* box = shapes.box(btVector3(btScalar(0.5), btScalar(0.5), btScalar(0.5)));
+    auto populate = [&](TestWorld& w) {
+        w.addBody(ground, 0, btTransform(btQuaternion::getIdentity(), btVector3(0, -1, 0)));
+        for (int k = 0; k < 6; ++k)
+            w.addBody(box, 1, btTransform(btQuaternion::getIdentity(), btVector3(btScalar(0.3 * k), btScalar(0.5 + 1.1 * k), 0)));
+    };
+    TestWorld reference(PipelineKind::Default);
+    TestWorld cullide(PipelineKind::Cullide, referenceFactory());
+    populate(reference);
+    populate(cullide);
+    testing::internal::CaptureStderr();
+    // A static object whose transform is NaN: Bullet passes its NaN AABB to createProxy and setAabb unchecked.
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    cullide.addBody(box, 0, btTransform(btQuaternion::getIdentity(), btVector3(nan, 0, 0)));
+    MirrorOptions options;
+    options.steps = 90;
+    const MirrorRun run = runMirrored(reference, cullide, options);
+    const std::string err = testing::internal::GetCapturedStderr();
+    expectAgreement(run, 300);
+    EXPECT_NE(err.find("non-finite AABB"), std::string::npos) << err;
+    EXPECT_EQ(err.find("non-finite AABB"), err.rfind("non-finite AABB")) << "reported more than once:\n" << err;
+    EXPECT_GE(cullide.cullideBroadphase()->getRejectedCount(), 90u);
+    EXPECT_EQ(cullide.cullideBroadphase()->getLastFrameStats().rejectedObjects, 1u);
+    for (const auto& pair : pairsOf(cullide.world())) {
+        EXPECT_NE(pair.second, 7);
+    }
+    // Fixing the transform brings the object back: moved into the stack, it pairs with the boxes around it.
+    btCollisionObject* fixedObject = cullide.objectByIndex(7);
+    fixedObject->setWorldTransform(cullide.objectByIndex(3)->getWorldTransform());
+    cullide.detectCollisions();
+    int pairsOfFixed = 0;
+    for (const auto& pair : pairsOf(cullide.world())) pairsOfFixed += pair.second == 7 ? 1 : 0;
+    EXPECT_GE(pairsOfFixed, 2);
+}
+
+TEST(BulletContract, PrecisionGuardAndAlgorithmPool) {
+    EXPECT_EQ(detail::bulletScalarSizeOfLibrary(), int(sizeof(btScalar)));
+    EXPECT_NO_THROW(detail::requireMatchingBulletPrecision());
+    btDefaultCollisionConfiguration config;
+    CullideCollisionDispatcher dispatcher(&config);
+    btPoolAllocator* pool = config.getCollisionAlgorithmPool();
+    void* big = dispatcher.allocateCollisionAlgorithm(pool->getElementSize() + 64);
+    EXPECT_FALSE(pool->validPtr(big)) << "an oversized algorithm must not come from the pool";
+    dispatcher.freeCollisionAlgorithm(big);
+    void* small = dispatcher.allocateCollisionAlgorithm(64);
+    EXPECT_TRUE(pool->validPtr(small));
+    dispatcher.freeCollisionAlgorithm(small);
+}
+
+/// CULLIDE's own algorithms fit Bullet's pool (they are as large as the Bullet classes they extend) and replace
+/// only Bullet's own registrations.
+TEST(BulletContract, AlgorithmsFitThePoolAndCustomRegistrationsWin) {
+    ShapeStore shapes;
+    btCollisionShape* torus = shapes.gimpactTorus(1, btScalar(0.3), 16, 8, btScalar(0.04));
+    btCollisionShape* ground = shapes.landscape(8, 1, btScalar(0.3));
+    btCollisionShape* hull = shapes.hull(btVector3(btScalar(0.5), btScalar(0.5), btScalar(0.5)), 16, 4);
+    btEmptyAlgorithm::CreateFunc empty;  // registered below; outlives the world
+    TestWorld w(PipelineKind::Cullide, referenceFactory());
+    btGImpactCollisionAlgorithm::registerAlgorithm(&w.dispatcher());
+    w.addBody(ground, 0, btTransform::getIdentity());
+    w.addBody(torus, 1, btTransform(btQuaternion::getIdentity(), btVector3(0, 3, 0)));
+    w.addBody(torus, 1, btTransform(btQuaternion(btVector3(1, 0, 0), SIMD_HALF_PI), btVector3(btScalar(1.6), 3, 0)));
+    w.addBody(hull, 1, btTransform(btQuaternion::getIdentity(), btVector3(-2, 0, 2)));  // cut by the ground
+    w.detectCollisions();
+    EXPECT_GE(w.cullideDispatcher()->getLastStepStats().cullidePairs, 2u);  // torus-torus and hull-ground
+    btPoolAllocator* pool = static_cast<btDefaultCollisionConfiguration&>(
+                                *w.dispatcher().getCollisionConfiguration()).getCollisionAlgorithmPool();
+    btOverlappingPairCache* cache = w.world().getPairCache();
+    for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) {
+        btCollisionAlgorithm* algorithm = cache->getOverlappingPairArrayPtr()[i].m_algorithm;
+        if (algorithm != nullptr) {
+            EXPECT_TRUE(pool->validPtr(algorithm));
+        }
+    }
+    // A custom (GIMPACT, GIMPACT) registration is respected: CULLIDE does not replace it.
+    w.dispatcher().registerCollisionCreateFunc(GIMPACT_SHAPE_PROXYTYPE, GIMPACT_SHAPE_PROXYTYPE, &empty);
+    btCollisionObject* second = w.objectByIndex(2);
+    w.world().removeCollisionObject(second);
+    w.world().addCollisionObject(second);
+    w.detectCollisions();
+    EXPECT_EQ(contactsOf(w.world()).count({1, 2}), 0u);
+}
+
+TEST(BulletContract, CullerFactoryErrorsPropagate) {
+    const CullideBroadphase::CullerFactory failing = [](const Settings&) -> std::unique_ptr<Culler> {
+        throw GlUnavailableError("no EGL device (test)");
+    };
+    EXPECT_THROW(CullideBroadphase(Settings{}, nullptr, failing), GlUnavailableError);
+    Settings invalid;
+    invalid.resolution = 3;
+    EXPECT_THROW(CullideBroadphase(invalid, nullptr, referenceFactory()), std::invalid_argument);
+}
+
+/// When the culler cannot be recreated with the margin a new shape needs, frames fall back to AABB pairs (and the
+/// dispatcher to Bullet's full algorithms): contacts stay right.
+TEST(BulletContract, CullerRecreationFailureFallsBackToAabbPairs) {
+    ShapeStore shapes;
+    btCollisionShape* plane = shapes.plane(btVector3(0, 1, 0), 0);
+    btCollisionShape* torus = shapes.gimpactTorus(1, btScalar(0.3), 16, 8, btScalar(0.2));  // needs d > 0.4
+    int calls = 0;
+    const CullideBroadphase::CullerFactory onlyOnce = [&calls](const Settings& s) {
+        if (++calls > 1) throw GlUnavailableError("EGL context lost (test)");
+        return createReferenceCuller(s);
+    };
+    auto populate = [&](TestWorld& w) {
+        btGImpactCollisionAlgorithm::registerAlgorithm(&w.dispatcher());
+        w.addBody(plane, 0, btTransform::getIdentity());
+        for (int k = 0; k < 3; ++k)
+            w.addBody(torus, 1, btTransform(btQuaternion(btVector3(1, 0, 0), btScalar(0.4 * k)),
+                                            btVector3(btScalar(0.3 * k), btScalar(1 + 1.2 * k), 0)));
+    };
+    TestWorld reference(PipelineKind::Default);
+    TestWorld cullide(PipelineKind::Cullide, onlyOnce);
+    populate(reference);
+    populate(cullide);
+    testing::internal::CaptureStderr();
+    MirrorOptions options;
+    options.steps = 60;
+    const MirrorRun run = runMirrored(reference, cullide, options);
+    const std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_NE(err.find("EGL context lost (test)"), std::string::npos) << err;
+    expectAgreement(run, 50);
+    EXPECT_EQ(run.cullidePairsFromTriangles, 0u);
+    EXPECT_GT(run.fallbackPairs, 0u);
+}
+
+/// The landscape scene with the CPU reference culler: the adapter's logic without GL.
+TEST(BulletContract, LandscapeWithReferenceCuller) {
+    ShapeStore shapes;
+    btCollisionShape* ground = shapes.landscape(32, 1, btScalar(1.2));
+    btCollisionShape* kinds[] = {shapes.box(btVector3(btScalar(0.5), btScalar(0.4), btScalar(0.6))),
+                                 shapes.sphere(btScalar(0.5)), shapes.capsule(btScalar(0.3), btScalar(0.8)),
+                                 shapes.hull(btVector3(btScalar(0.7), btScalar(0.5), btScalar(0.6)), 24, 7)};
+    auto populate = [&](TestWorld& w) {
+        w.addBody(ground, 0, btTransform::getIdentity());
+        for (int k = 0; k < 16; ++k)
+            w.addBody(kinds[k % 4], 1,
+                      btTransform(btQuaternion(btScalar(0.3 * k), 0, 0),
+                                  btVector3(btScalar(6 * (k % 4) - 9), btScalar(3), btScalar(6 * (k / 4) - 9))));
+    };
+    TestWorld reference(PipelineKind::Default);
+    TestWorld cullide(PipelineKind::Cullide, referenceFactory());
+    populate(reference);
+    populate(cullide);
+    MirrorOptions options;
+    options.steps = 150;
+    options.tolerance = [](const std::pair<int, int>& pair) {
+        return pair.first == 0 && pair.second % 4 == 0 ? double(gContactBreakingThreshold) : 1e-6;
+    };
+    const MirrorRun run = runMirrored(reference, cullide, options);
+    printMirrorRun("landscape, reference culler", run);
+    expectAgreement(run, 1000);
+    EXPECT_GT(run.cullidePairsFromTriangles, 0u);
+}
+
+}  // namespace
+}  // namespace cullide::test

@@ -1,0 +1,85 @@
+// btSoftRigidDynamicsWorld with CULLIDE's broadphase and dispatcher: a cloth falls onto a static box and a
+// resting rigid body. Soft bodies are box proxies for the culler (their contacts live in the soft body, not in
+// manifolds), so the cloth must end up exactly where it does with Bullet's default pipeline.
+#include "SceneSupport.h"
+
+#include <BulletSoftBody/btSoftBodyHelpers.h>
+#include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
+#include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
+
+#include <gtest/gtest.h>
+
+#include <memory>
+#include <vector>
+
+namespace cullide::test {
+namespace {
+
+std::vector<btVector3> runCloth(PipelineKind kind) {
+    btSoftBodyRigidBodyCollisionConfiguration config;
+    std::unique_ptr<btBroadphaseInterface> broadphase;
+    std::unique_ptr<btCollisionDispatcher> dispatcher;
+    if (kind == PipelineKind::Default) {
+        broadphase = std::make_unique<btDbvtBroadphase>();
+        dispatcher = std::make_unique<btCollisionDispatcher>(&config);
+    } else {
+        auto bp = std::make_unique<CullideBroadphase>(Settings{}, nullptr, gpuFactory());
+        dispatcher = std::make_unique<CullideCollisionDispatcher>(&config, bp.get());
+        broadphase = std::move(bp);
+    }
+    btSequentialImpulseConstraintSolver solver;
+    btSoftRigidDynamicsWorld world(dispatcher.get(), broadphase.get(), &solver, &config);
+    world.setGravity(btVector3(0, -10, 0));
+    btSoftBodyWorldInfo& info = world.getWorldInfo();
+    info.m_broadphase = broadphase.get();
+    info.m_dispatcher = dispatcher.get();
+    info.m_gravity = world.getGravity();
+    info.m_sparsesdf.Initialize();
+
+    btBoxShape groundShape(btVector3(10, 1, 10));
+    btBoxShape boxShape(btVector3(btScalar(0.6), btScalar(0.6), btScalar(0.6)));
+    btRigidBody ground(0, nullptr, &groundShape);
+    ground.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(0, -1, 0)));
+    world.addRigidBody(&ground);
+    btVector3 inertia;
+    boxShape.calculateLocalInertia(1, inertia);
+    btRigidBody box(1, nullptr, &boxShape, inertia);
+    box.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(btScalar(0.5), btScalar(0.6), 0)));
+    world.addRigidBody(&box);
+
+    std::unique_ptr<btSoftBody> cloth(btSoftBodyHelpers::CreatePatch(
+        info, btVector3(-2, 3, -2), btVector3(2, 3, -2), btVector3(-2, 3, 2), btVector3(2, 3, 2), 12, 12, 0, true));
+    cloth->getCollisionShape()->setMargin(btScalar(0.05));
+    cloth->setTotalMass(1);
+    cloth->m_cfg.piterations = 4;
+    world.addSoftBody(cloth.get());
+    for (int s = 0; s < 180; ++s) world.stepSimulation(btScalar(1.0 / 60.0), 1, btScalar(1.0 / 60.0));
+    std::vector<btVector3> nodes;
+    for (int i = 0; i < cloth->m_nodes.size(); ++i) nodes.push_back(cloth->m_nodes[i].m_x);
+    nodes.push_back(box.getWorldTransform().getOrigin());
+    world.removeSoftBody(cloth.get());
+    world.removeRigidBody(&box);
+    world.removeRigidBody(&ground);
+    return nodes;
+}
+
+TEST(BulletSoftBody, ClothSettlesExactlyAsWithDefaultPipeline) {
+    CULLIDE_BULLET_REQUIRE_GL();
+    const std::vector<btVector3> a = runCloth(PipelineKind::Default);
+    const std::vector<btVector3> b = runCloth(PipelineKind::Cullide);
+    ASSERT_EQ(a.size(), b.size());
+    double maxDeviation = 0.0;
+    btScalar lowest = 1e9;
+    for (std::size_t i = 0; i < a.size(); ++i) {
+        maxDeviation = std::max(maxDeviation, double((a[i] - b[i]).length()));
+        lowest = std::min(lowest, b[i].y());
+    }
+    std::printf("[soft body] %zu cloth nodes after 180 steps: max deviation from the default pipeline %.3e, lowest "
+                "node y %.3f\n",
+                a.size() - 1, maxDeviation, double(lowest));
+    EXPECT_GT(lowest, btScalar(-0.1)) << "the cloth fell through the ground";
+    EXPECT_LT(maxDeviation, 1e-4);
+}
+
+}  // namespace
+}  // namespace cullide::test
