@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <unordered_map>
 #include <utility>
 
 namespace cullide {
@@ -16,15 +17,37 @@ struct BoxRef {
     std::uint32_t triangle;
 };
 
-/// Boxes (inflated) of the given triangles that overlap `region`.
-void boxesIn(const TriangleMesh& mesh, const std::vector<std::uint32_t>& triangles, double inflate,
-             const Aabb& region, std::vector<BoxRef>& out) {
-    out.clear();
-    for (std::uint32_t t : triangles) {
-        const Aabb box = triangleBounds(mesh, t).inflated(inflate);
-        if (box.overlaps(region)) out.push_back({box, t});
+/// One object's surviving triangles' boxes (inflated), sorted by min x, computed once per frame for all its pairs.
+struct ObjectBoxes {
+    std::vector<BoxRef> sorted;
+    double maxExtentX = 0.0;
+    Aabb bounds;
+
+    void build(const TriangleMesh& mesh, const std::vector<std::uint32_t>& triangles, double inflate) {
+        sorted.clear();
+        sorted.reserve(triangles.size());
+        maxExtentX = 0.0;
+        bounds = Aabb{};
+        for (std::uint32_t t : triangles) {
+            const Aabb box = triangleBounds(mesh, t).inflated(inflate);
+            sorted.push_back({box, t});
+            maxExtentX = std::max(maxExtentX, box.max.x() - box.min.x());
+            bounds.grow(box);
+        }
+        std::sort(sorted.begin(), sorted.end(), [](const BoxRef& x, const BoxRef& y) {
+            return x.box.min.x() != y.box.min.x() ? x.box.min.x() < y.box.min.x() : x.triangle < y.triangle;
+        });
     }
-}
+
+    /// The boxes overlapping `region`: a binary search on min x, then a scan of the x-slab.
+    void inRegion(const Aabb& region, std::vector<BoxRef>& out) const {
+        out.clear();
+        auto it = std::lower_bound(sorted.begin(), sorted.end(), region.min.x() - maxExtentX,
+                                   [](const BoxRef& r, double v) { return r.box.min.x() < v; });
+        for (; it != sorted.end() && it->box.min.x() <= region.max.x(); ++it)
+            if (it->box.overlaps(region)) out.push_back(*it);
+    }
+};
 
 /// Every pair (one box from each list) whose boxes overlap, exactly once: a uniform grid over the region where
 /// both sets overlap. Each pair is reported from the grid cell holding the minimum corner of the two boxes'
@@ -148,21 +171,36 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
     // grid over the second object's boxes; then queries of the first object's boxes, in chunks on every worker.
     std::vector<JobGrid> grids(jobs.size());
     const double inflate = 0.5 * margin;
+    // Each object's surviving triangle boxes once, however many pairs it is in (a landscape under many bodies).
+    std::vector<const std::vector<std::uint32_t>*> lists;
+    std::vector<std::uint32_t> listObject;
+    std::vector<std::size_t> jobListA(jobs.size()), jobListB(jobs.size());
+    std::unordered_map<const std::vector<std::uint32_t>*, std::size_t> known;
+    auto listIndex = [&](std::uint32_t object, const std::vector<std::uint32_t>* list) {
+        const auto [it, added] = known.emplace(list, lists.size());
+        if (added) {
+            lists.push_back(list);
+            listObject.push_back(object);
+        }
+        return it->second;
+    };
+    for (std::size_t j = 0; j < jobs.size(); ++j) {
+        jobListA[j] = listIndex(jobs[j].a, jobs[j].trianglesA);
+        jobListB[j] = listIndex(jobs[j].b, jobs[j].trianglesB);
+    }
+    std::vector<ObjectBoxes> boxes(lists.size());
+    m_pool.parallelFor(lists.size(), 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) boxes[i].build(*objects[listObject[i]].mesh, *lists[i], inflate);
+    });
     m_pool.parallelFor(jobs.size(), 1, [&](std::size_t begin, std::size_t end) {
         for (std::size_t j = begin; j < end; ++j) {
-            const ExactJob& job = jobs[j];
-            const TriangleMesh& ma = *objects[job.a].mesh;
-            const TriangleMesh& mb = *objects[job.b].mesh;
+            const ObjectBoxes& a = boxes[jobListA[j]];
+            const ObjectBoxes& b = boxes[jobListB[j]];
+            if (!a.bounds.overlaps(b.bounds)) continue;
+            const Aabb region{a.bounds.min.cwiseMax(b.bounds.min), a.bounds.max.cwiseMin(b.bounds.max)};
             JobGrid& g = grids[j];
-            Aabb boundsA, boundsB;
-            for (std::uint32_t t : *job.trianglesA) boundsA.grow(triangleBounds(ma, t));
-            for (std::uint32_t t : *job.trianglesB) boundsB.grow(triangleBounds(mb, t));
-            boundsA = boundsA.inflated(inflate);
-            boundsB = boundsB.inflated(inflate);
-            if (!boundsA.overlaps(boundsB)) continue;
-            const Aabb region{boundsA.min.cwiseMax(boundsB.min), boundsA.max.cwiseMin(boundsB.max)};
-            boxesIn(ma, *job.trianglesA, inflate, region, g.a);
-            boxesIn(mb, *job.trianglesB, inflate, region, g.b);
+            a.inRegion(region, g.a);
+            b.inRegion(region, g.b);
             g.grid.build(g.a, g.b, region);
         }
     });
