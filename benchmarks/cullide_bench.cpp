@@ -55,6 +55,12 @@ int main(int argc, char** argv) {
         else if (a == "--resolution") settings.resolution = std::atoi(value().c_str());
         else if (a == "--pipeline") settings.pipeline = value() == "paper" ? cullide::Pipeline::Paper : cullide::Pipeline::Auto;
         else if (a == "--backend") settings.backend = value() == "raster" ? cullide::Backend::Raster : cullide::Backend::Compute;
+        else if (a == "--gpu-levels") {
+            const std::string v = value();
+            settings.gpuLevels = v == "always" ? cullide::GpuLevels::Always
+                               : v == "never"  ? cullide::GpuLevels::Never
+                                               : cullide::GpuLevels::Auto;
+        }
         else if (a == "--exact-threshold") settings.exactThreshold = std::strtoull(value().c_str(), nullptr, 10);
         else if (a == "--iterations") settings.maxIterations = std::atoi(value().c_str());
         else if (a == "--group") settings.groupSize = std::atoi(value().c_str());
@@ -109,7 +115,9 @@ int main(int argc, char** argv) {
         for (const auto& l : s.levels) {
             levelItems += l.name + ":";
             for (std::size_t n : l.itemsPerIteration) levelItems += std::to_string(n) + "/";
-            levelItems += " ";
+            char ms[64];
+            std::snprintf(ms, sizeof ms, "(%.1f ms) ", l.cpuMs);
+            levelItems += ms;
         }
         if (csv) {
             csv << f << ',' << s.objects << ',' << s.triangles << ',' << s.prepassGroupsOut << ",\"" << levelItems

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <stdexcept>
 
 namespace cullide {
@@ -27,7 +28,7 @@ float floatUp(double v) {
 
 struct Group {
     std::uint32_t object;
-    std::uint32_t first;
+    std::uint32_t first;  ///< into the object's spatial triangle order
     std::uint32_t count;
     Aabb box;  ///< world, inflated by margin / 2
 };
@@ -71,6 +72,8 @@ public:
             stats.prepassObjectsOut += m_active[i];
         }
         m_survivingTriangles.assign(objects.size(), {});
+        m_gpuLevels = paper || m_settings.gpuLevels == GpuLevels::Always ||
+                      (m_settings.gpuLevels == GpuLevels::Auto && !m_context.isSoftware());
         buildGroups(!paper, stats);
         stats.prepassMs = prepass.ms();
 
@@ -97,18 +100,47 @@ private:
 
     Aabb relative(const Aabb& b) const { return {b.min - m_origin, b.max - m_origin}; }
 
-    /// Groups of k consecutive triangles of every active mesh; with `prepass`, only groups whose box overlaps a
-    /// partner object's box are kept.
+    /// Orders an object's triangles along a Morton curve of their centroids, so that k consecutive ones are close
+    /// together whatever the file order (scanned meshes and soups are not stored spatially). Per frame, O(n log n).
+    void spatialOrder(std::uint32_t o, std::vector<std::uint32_t>& order) const {
+        const TriangleMesh& mesh = meshOf(o);
+        const Aabb& box = m_valid[o].box;
+        const Vec3 scale = (box.extent().array().max(1e-300)).inverse() * 1023.0;
+        m_mortonScratch.clear();
+        for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+            const auto& tri = mesh.triangles[t];
+            const Vec3 c = (mesh.vertices[tri[0]] + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]) / 3.0;
+            std::uint64_t code = 0;
+            for (int a = 0; a < 3; ++a) {
+                const auto q = static_cast<std::uint64_t>(std::clamp((c[a] - box.min[a]) * scale[a], 0.0, 1023.0));
+                for (int bit = 0; bit < 10; ++bit) code |= ((q >> bit) & 1u) << (3 * bit + a);
+            }
+            m_mortonScratch.push_back(code << 32 | t);
+        }
+        std::sort(m_mortonScratch.begin(), m_mortonScratch.end());
+        order.resize(m_mortonScratch.size());
+        for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(m_mortonScratch[i]);
+    }
+
+    /// Groups of k spatially consecutive triangles of every active mesh; with `prepass`, only groups whose box
+    /// overlaps a partner object's box are kept.
     void buildGroups(bool prepass, Stats& stats) {
         m_groups.clear();
+        m_order.resize(m_valid.size());
         const auto k = static_cast<std::uint32_t>(m_settings.groupSize);
         for (std::uint32_t o = 0; o < m_valid.size(); ++o) {
             if (!m_active[o] || !isMesh(o)) continue;
             const TriangleMesh& mesh = meshOf(o);
+            if (m_gpuLevels) {
+                spatialOrder(o, m_order[o]);
+            } else {  // CPU only: groups are just a coarse filter, not worth a sort
+                m_order[o].resize(mesh.triangles.size());
+                std::iota(m_order[o].begin(), m_order[o].end(), 0u);
+            }
             const auto n = static_cast<std::uint32_t>(mesh.triangles.size());
             for (std::uint32_t first = 0; first < n; first += k) {
                 Group g{o, first, std::min(k, n - first), {}};
-                for (std::uint32_t t = first; t < first + g.count; ++t) g.box.grow(triangleBounds(mesh, t));
+                for (std::uint32_t i = first; i < first + g.count; ++i) g.box.grow(triangleBounds(mesh, m_order[o][i]));
                 g.box = g.box.inflated(0.5 * m_settings.margin);
                 ++stats.prepassGroupsIn;
                 if (prepass && !overlapsPartner(o, g.box)) continue;
@@ -190,9 +222,9 @@ private:
         m_items.primBegin.push_back(static_cast<std::uint32_t>(m_items.prims.size()));
         m_items.bounds.push_back(relative(worldBox));
     }
-    void addTriangleItem(std::uint32_t object, std::uint32_t first, std::uint32_t count, const Aabb& worldBox) {
+    void addTriangleItem(std::uint32_t object, const std::uint32_t* triangles, std::uint32_t count, const Aabb& worldBox) {
         m_items.owner.push_back(ownerOf(object));
-        for (std::uint32_t t = first; t < first + count; ++t) m_items.prims.push_back(m_baseTriangle[object] + t);
+        for (std::uint32_t i = 0; i < count; ++i) m_items.prims.push_back(m_baseTriangle[object] + triangles[i]);
         m_items.primBegin.push_back(static_cast<std::uint32_t>(m_items.prims.size()));
         m_items.bounds.push_back(relative(worldBox));
     }
@@ -216,7 +248,8 @@ private:
         for (const Group& g : groups) {
             const TriangleMesh& mesh = meshOf(g.object);
             const bool test = prepass && m_partners[g.object].size() <= 16;
-            for (std::uint32_t t = g.first; t < g.first + g.count; ++t) {
+            for (std::uint32_t i = g.first; i < g.first + g.count; ++i) {
+                const std::uint32_t t = m_order[g.object][i];
                 const Aabb box = triangleBounds(mesh, t).inflated(0.5 * m_settings.margin);
                 if (test && !overlapsPartner(g.object, box)) continue;
                 m_tris.push_back({g.object, t, box});
@@ -226,7 +259,7 @@ private:
 
     void runTriangleLevel(const std::vector<std::uint32_t>& proxies, Stats& stats) {
         beginLevel(stats);
-        for (const Tri& t : m_tris) addTriangleItem(t.object, t.triangle, 1, t.box);
+        for (const Tri& t : m_tris) addTriangleItem(t.object, &t.triangle, 1, t.box);
         for (std::uint32_t o : proxies) addBoxItem(o, m_objectBox[o], m_valid[o].box);
         pruneLevel("triangles", stats);
         finishFromTriangles(m_survivors);
@@ -258,8 +291,7 @@ private:
     void runAutoPipeline(Stats& stats) {
         std::vector<std::uint32_t> proxies = activeProxies();
         std::vector<Group> groups = m_groups;
-        const bool gpu = m_settings.gpuLevels == GpuLevels::Always ||
-                         (m_settings.gpuLevels == GpuLevels::Auto && !m_context.isSoftware());
+        const bool gpu = m_gpuLevels;
         if (gpu && triangleCount(groups) > m_settings.exactThreshold) {
             beginLevel(stats);
             for (std::size_t g = 0; g < groups.size(); ++g)
@@ -303,7 +335,7 @@ private:
         beginLevel(stats);
         for (std::uint32_t o : objects) {
             if (isMesh(o))
-                addTriangleItem(o, 0, static_cast<std::uint32_t>(meshOf(o).triangles.size()), m_valid[o].box);
+                addTriangleItem(o, m_order[o].data(), static_cast<std::uint32_t>(m_order[o].size()), m_valid[o].box);
             else
                 addBoxItem(o, m_objectBox[o], m_valid[o].box);
         }
@@ -319,7 +351,7 @@ private:
         for (std::uint32_t o : proxies)
             if (objectAlive[o]) levelProxies.push_back(o);
         beginLevel(stats);
-        for (const Group& g : groups) addTriangleItem(g.object, g.first, g.count, g.box);
+        for (const Group& g : groups) addTriangleItem(g.object, &m_order[g.object][g.first], g.count, g.box);
         for (std::uint32_t o : levelProxies) addBoxItem(o, m_objectBox[o], m_valid[o].box);
         pruneLevel("groups", stats);
         std::vector<Group> kept;
@@ -385,11 +417,14 @@ private:
     std::vector<std::vector<std::uint32_t>> m_partners;
     std::vector<std::uint8_t> m_active;
     std::vector<Group> m_groups;
+    std::vector<std::vector<std::uint32_t>> m_order;  ///< per active mesh: triangles in Morton order
+    mutable std::vector<std::uint64_t> m_mortonScratch;
     std::vector<std::uint32_t> m_groupBox;
     std::vector<std::uint32_t> m_objectBox;
     std::vector<std::uint32_t> m_baseTriangle;
     Vec3 m_origin = Vec3::Zero();
     bool m_uploaded = false;
+    bool m_gpuLevels = false;  ///< whether GPU levels run this frame (Settings::gpuLevels, the device, the pipeline)
     gl::GpuGeometry m_geometry;
     gl::LevelItems m_items;
     std::vector<std::uint8_t> m_survivors;
