@@ -30,6 +30,7 @@
 #define CULLIDE_LOC_ID_BITS 7       /* uint: low bits of the packed depth that hold the owner id */
 #define CULLIDE_LOC_CONSERVATIVE 8  /* int: 1 = reliable mode, 0 = sampled */
 #define CULLIDE_LOC_PRIM_COUNT 9    /* uint: primitives in the draw/dispatch (compute back-end) */
+#define CULLIDE_LOC_AXES 10         /* uint: bit mask of the view axes in use (x = 1, y = 2, z = 4) */
 
 #define CULLIDE_COMPUTE_GROUP_SIZE 64 /* local_size_x of cull.comp */
 /* The C++ side splits a primitive's footprint into bands of at most this many pixels per compute invocation... */
@@ -46,7 +47,6 @@
 #define CULLIDE_PRIM_BOX_BIT 0x80000000u /* set in a primitive reference that names a box */
 
 /* Flag bits: bit (2 * axis) = not fully visible from the -axis side (near test), bit (2 * axis + 1) = from the
- * +axis side (far test). An item survives a view set when all six bits are set. */
-#define CULLIDE_FLAGS_ALL 63u
+ * +axis side (far test). An item survives an iteration when both bits of every enabled axis are set. */
 
 #endif

@@ -18,6 +18,9 @@ layout(location = CULLIDE_LOC_DEPTH_PAD) uniform vec3 u_depthPad;
 layout(location = CULLIDE_LOC_ID_BITS) uniform uint u_idBits;
 layout(location = CULLIDE_LOC_CONSERVATIVE) uniform int u_conservative;
 layout(location = CULLIDE_LOC_PRIM_COUNT) uniform uint u_primCount;
+layout(location = CULLIDE_LOC_AXES) uniform uint u_axes;
+
+bool axisEnabled(int axis) { return ((u_axes >> uint(axis)) & 1u) != 0u; }
 
 // std430 layout of a primitive record written by cull_setup.comp: 24 floats (vec4-aligned members only).
 struct PrimRecord {

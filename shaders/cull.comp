@@ -10,6 +10,7 @@ void main() {
     uint index = gl_GlobalInvocationID.x;
     if (index >= u_primCount) return;
     int axis = int(gl_GlobalInvocationID.y);
+    if (!axisEnabled(axis)) return;
     uint band = prims[index].z;
     uint bands = prims[index].w;
     Prim p = makePrim(index, axis);

@@ -7,6 +7,7 @@ namespace cullide {
 std::string Settings::validate() const {
     if (resolution < 16 || resolution > 4096) return "resolution must be in 16..4096";
     if (groupSize < 1 || groupSize > 4096) return "groupSize must be in 1..4096";
+    if (axes < 1 || axes > 7) return "axes must be a non-empty bit mask of x=1, y=2, z=4";
     if (maxIterations < 1 || maxIterations > 64) return "maxIterations must be in 1..64";
     if (!std::isfinite(margin) || margin < 0.0) return "margin must be finite and >= 0";
     if (threads > 256) return "threads must be <= 256";

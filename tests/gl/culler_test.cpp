@@ -248,6 +248,26 @@ TEST(GpuCuller, RasterBackendAgreesWithCompute) {
         EXPECT_EQ(r.stats.levels[l].itemsPerIteration, c.stats.levels[l].itemsPerIteration) << l;
 }
 
+TEST(GpuCuller, FewerAxesStayReliableAndPruneLess) {
+    const auto meshes = randomSoups(31, 16, 80, 0.2);
+    const auto objects = asObjects(meshes);
+    Result all, xOnly, reference;
+    createReferenceCuller(Settings{})->run(objects, reference);
+    CULLIDE_GPU_CULLER_OR_SKIP(full, reliable(64));
+    Settings s = reliable(64);
+    s.axes = 1;
+    CULLIDE_GPU_CULLER_OR_SKIP(single, s);
+    full->run(objects, all);
+    single->run(objects, xOnly);
+    EXPECT_EQ(compare(reference, xOnly).missed, 0u);
+    EXPECT_TRUE(compare(reference, xOnly).objectPairsEqual);
+    ASSERT_FALSE(xOnly.stats.levels.empty());
+    // One axis can only keep more (or the same) candidates than three.
+    EXPECT_GE(xOnly.stats.candidateTrianglePairs, all.stats.candidateTrianglePairs);
+    s.axes = 0;
+    EXPECT_NE(s.validate(), "");
+}
+
 TEST(GpuCuller, UnknownDeviceIsAClearError) {
     Settings s;
     s.device = "99";

@@ -50,6 +50,9 @@ struct Settings {
     int resolution = 256;
     /// Sub-object group size k (triangles per group), 1..4096.
     int groupSize = 32;
+    /// View axes used by the visibility levels, a bit mask (1 = x, 2 = y, 4 = z), 1..7. Each enabled axis is viewed
+    /// from both sides; an item is pruned when it is fully visible from any of those views.
+    unsigned axes = 7;
     /// Maximum pruning iterations per level (each iteration draws all three axes, both directions), 1..64.
     int maxIterations = 4;
     /// Distance margin d >= 0: triangle pairs closer than d are reported as well.

@@ -198,6 +198,7 @@ struct VisibilityPass::Impl {
         glUniform1ui(CULLIDE_LOC_ID_BITS, idBits);
         glUniform1i(CULLIDE_LOC_CONSERVATIVE, settings.mode == Mode::Reliable ? 1 : 0);
         glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(primCount));
+        glUniform1ui(CULLIDE_LOC_AXES, settings.axes);
     }
 
     /// One iteration over `alive` items: returns the flags of all items.
@@ -379,10 +380,13 @@ void VisibilityPass::prune(const LevelItems& items, std::vector<std::uint8_t>& s
             break;
         }
         s.runIteration(items, survivors, level, stats);
+        std::uint32_t required = 0;  // both sides of every enabled axis
+        for (unsigned a = 0; a < 3; ++a)
+            if (s.settings.axes & (1u << a)) required |= 3u << (2 * a);
         if (s.overflows != 0) break;  // some footprint was not scanned: keep every item (conservative)
         bool changed = false;
         for (std::size_t i = 0; i < items.size(); ++i) {
-            next[i] = survivors[i] && s.flagScratch[i] == CULLIDE_FLAGS_ALL;
+            next[i] = survivors[i] && (s.flagScratch[i] & required) == required;
             changed |= next[i] != survivors[i];
         }
         survivors.swap(next);
