@@ -1,4 +1,5 @@
 #include "cullide_bullet/CullideBroadphase.h"
+#include "cullide/Timer.h"
 
 #include "ShapeGeometry.h"
 #include "cullide/Result.h"
@@ -12,7 +13,6 @@
 #include <BulletCollision/NarrowPhaseCollision/btPersistentManifold.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <new>
@@ -34,15 +34,6 @@ constexpr btScalar kTreeMargin = btScalar(0.05);
 /// threshold (see requiredMargin); the culler is recreated with a larger margin when the scene needs one.
 constexpr double kDefaultMargin = 0.12;
 
-class Stopwatch {
-public:
-    double ms() const {
-        return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - m_start).count();
-    }
-
-private:
-    std::chrono::steady_clock::time_point m_start = std::chrono::steady_clock::now();
-};
 
 enum class Role : std::uint8_t { Invalid, Infinite, Ghost, Dynamic, Static };
 
@@ -699,14 +690,14 @@ struct CullideBroadphase::Impl {
     }
 
     void calculateOverlappingPairs(btDispatcher* dispatcher) {
-        Stopwatch total;
+        cullide::Timer total;
         ++frame;
         stats = CullideFrameStats{};
         stats.proxies = proxies.size();
         records.clear();
         desired.clear();
 
-        Stopwatch build;
+        cullide::Timer build;
         classify();
         for (const Proxy* p : proxies)
             if (p->role == Role::Invalid) ++stats.rejectedObjects;
@@ -723,7 +714,7 @@ struct CullideBroadphase::Impl {
         buildObjects();
         stats.buildMs = build.ms();
 
-        Stopwatch cull;
+        cullide::Timer cull;
         if (cullerUsable)
             runCuller();
         else
@@ -731,7 +722,7 @@ struct CullideBroadphase::Impl {
         stats.cullMs = cull.ms();
         stats.culler = result.stats;
 
-        Stopwatch sync;
+        cullide::Timer sync;
         collectCullerPairs();
         collectInfinitePairs();
         collectGhostPairs();

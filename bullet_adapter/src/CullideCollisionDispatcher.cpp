@@ -1,4 +1,5 @@
 #include "cullide_bullet/CullideCollisionDispatcher.h"
+#include "cullide/Timer.h"
 
 #include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
 #include <BulletCollision/CollisionDispatch/btCollisionConfiguration.h>
@@ -12,7 +13,6 @@
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <typeinfo>
 #include <vector>
 
@@ -191,15 +191,6 @@ bool registeredIs(const btCollisionAlgorithmCreateFunc* f) {
     return f != nullptr && typeid(*f) == typeid(T);
 }
 
-class Stopwatch {
-public:
-    double ms() const {
-        return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - m_start).count();
-    }
-
-private:
-    std::chrono::steady_clock::time_point m_start = std::chrono::steady_clock::now();
-};
 
 }  // namespace
 
@@ -246,7 +237,7 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
                                                            btDispatcher* dispatcher) {
     const CullideDispatchStats outer = m_current;  // nested dispatches (rare) keep the outer counters
     m_current.reset();
-    Stopwatch watch;
+    cullide::Timer watch;
     btCollisionDispatcher::dispatchAllCollisionPairs(pairCache, dispatchInfo, dispatcher);
     m_current.dispatchMs = watch.ms();
     m_current.pairsDispatched = static_cast<std::size_t>(pairCache->getNumOverlappingPairs());

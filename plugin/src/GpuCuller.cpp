@@ -1,7 +1,7 @@
 // CULLIDE: object, sub-object (group) and triangle levels of image-space visibility pruning, then the exact stage.
 #include "ExactStage.h"
 #include "FrameObjects.h"
-#include "Timer.h"
+#include "cullide/Timer.h"
 #include "bindings.h"
 #include "cullide/Culler.h"
 #include "gl/EglContext.h"
@@ -279,6 +279,18 @@ private:
         return proxies;
     }
 
+    /// After a groups level whose items were `groups` followed by `proxies`: keeps the survivors of both.
+    void keepSurvivingGroups(std::vector<Group>& groups, std::vector<std::uint32_t>& proxies) const {
+        std::vector<Group> kept;
+        for (std::size_t g = 0; g < groups.size(); ++g)
+            if (m_survivors[g]) kept.push_back(groups[g]);
+        std::vector<std::uint32_t> keptProxies;
+        for (std::size_t p = 0; p < proxies.size(); ++p)
+            if (m_survivors[groups.size() + p]) keptProxies.push_back(proxies[p]);
+        groups.swap(kept);
+        proxies.swap(keptProxies);
+    }
+
     static std::size_t triangleCount(const std::vector<Group>& groups) {
         std::size_t n = 0;
         for (const Group& g : groups) n += g.count;
@@ -298,14 +310,7 @@ private:
                 addBoxItem(groups[g].object, m_groupBox[g], groups[g].box);
             for (std::uint32_t o : proxies) addBoxItem(o, m_objectBox[o], m_valid[o].box);
             pruneLevel("groups", stats);
-            std::vector<Group> kept;
-            for (std::size_t g = 0; g < groups.size(); ++g)
-                if (m_survivors[g]) kept.push_back(groups[g]);
-            std::vector<std::uint32_t> keptProxies;
-            for (std::size_t p = 0; p < proxies.size(); ++p)
-                if (m_survivors[groups.size() + p]) keptProxies.push_back(proxies[p]);
-            groups.swap(kept);
-            proxies.swap(keptProxies);
+            keepSurvivingGroups(groups, proxies);
         }
         collectTriangles(groups, true);
         if (gpu && m_tris.size() > m_settings.exactThreshold)
@@ -354,14 +359,9 @@ private:
         for (const Group& g : groups) addTriangleItem(g.object, &m_order[g.object][g.first], g.count, g.box);
         for (std::uint32_t o : levelProxies) addBoxItem(o, m_objectBox[o], m_valid[o].box);
         pruneLevel("groups", stats);
-        std::vector<Group> kept;
-        for (std::size_t g = 0; g < groups.size(); ++g)
-            if (m_survivors[g]) kept.push_back(groups[g]);
-        std::vector<std::uint32_t> keptProxies;
-        for (std::size_t p = 0; p < levelProxies.size(); ++p)
-            if (m_survivors[groups.size() + p]) keptProxies.push_back(levelProxies[p]);
-        collectTriangles(kept, false);
-        runTriangleLevel(keptProxies, stats);
+        keepSurvivingGroups(groups, levelProxies);
+        collectTriangles(groups, false);
+        runTriangleLevel(levelProxies, stats);
     }
 
     /// Pairs are a function of the input alone: mesh pairs with at least one triangle pair within the margin

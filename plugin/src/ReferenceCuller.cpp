@@ -1,7 +1,7 @@
 // The brute-force oracle: every triangle pair of every box-overlapping object pair, exact test.
 #include "FrameObjects.h"
 #include "TaskPool.h"
-#include "Timer.h"
+#include "cullide/Timer.h"
 #include "cullide/Culler.h"
 #include "cullide/TriangleTest.h"
 

@@ -1,11 +1,11 @@
 #include "BulletTestWorld.h"
+#include "cullide/Timer.h"
 
 #include "cullide/Culler.h"
 
 #include <BulletCollision/Gimpact/btGImpactShape.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -14,15 +14,6 @@
 namespace cullide::test {
 namespace {
 
-class Stopwatch {
-public:
-    double ms() const {
-        return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - m_start).count();
-    }
-
-private:
-    std::chrono::steady_clock::time_point m_start = std::chrono::steady_clock::now();
-};
 
 /// Times a broadphase's work of one step: every setAabb since the last calculateOverlappingPairs (btDbvtBroadphase
 /// finds most pairs there) plus calculateOverlappingPairs itself.
@@ -32,12 +23,12 @@ public:
     using Base::Base;
     void setAabb(btBroadphaseProxy* proxy, const btVector3& aabbMin, const btVector3& aabbMax,
                  btDispatcher* dispatcher) override {
-        Stopwatch w;
+        cullide::Timer w;
         Base::setAabb(proxy, aabbMin, aabbMax, dispatcher);
         m_setAabbMs += w.ms();
     }
     void calculateOverlappingPairs(btDispatcher* dispatcher) override {
-        Stopwatch w;
+        cullide::Timer w;
         Base::calculateOverlappingPairs(dispatcher);
         lastMs = w.ms() + m_setAabbMs;
         m_setAabbMs = 0.0;
@@ -55,7 +46,7 @@ public:
     using Base::Base;
     void dispatchAllCollisionPairs(btOverlappingPairCache* cache, const btDispatcherInfo& info,
                                    btDispatcher* dispatcher) override {
-        Stopwatch w;
+        cullide::Timer w;
         Base::dispatchAllCollisionPairs(cache, info, dispatcher);
         if (cache == worldCache) {
             lastMs = w.ms();

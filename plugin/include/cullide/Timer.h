@@ -1,4 +1,4 @@
-// Wall-clock stage timing.
+// Wall-clock stage timing (stats of the culler, the Bullet adapter and the tools).
 #pragma once
 
 #include <chrono>
