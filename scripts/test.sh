@@ -8,6 +8,7 @@ cd "$(dirname "$0")/.."
 sanitize=0
 [ "${1:-}" = "--sanitize" ] && sanitize=1
 scripts/deps.sh
+scripts/fetch_meshes.sh  # the real bunny/dragon/armadillo for the tests that use them (exits 0 with a notice if not)
 jobs=$(nproc)
 if [ $sanitize -eq 1 ]; then
   dir=build-asan
