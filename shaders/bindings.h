@@ -31,6 +31,7 @@
 #define CULLIDE_LOC_CONSERVATIVE 8  /* int: 1 = reliable mode, 0 = sampled */
 #define CULLIDE_LOC_PRIM_COUNT 9    /* uint: primitives in the draw/dispatch (compute back-end) */
 #define CULLIDE_LOC_AXES 10         /* uint: bit mask of the view axes in use (x = 1, y = 2, z = 4) */
+#define CULLIDE_LOC_PRIM_BASE 11    /* uint: first primitive of this dispatch (dispatches are split at the group-count limit) */
 
 #define CULLIDE_COMPUTE_GROUP_SIZE 64 /* local_size_x of cull.comp */
 /* The C++ side splits a primitive's footprint into bands of at most this many pixels per compute invocation... */

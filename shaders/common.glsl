@@ -19,6 +19,7 @@ layout(location = CULLIDE_LOC_ID_BITS) uniform uint u_idBits;
 layout(location = CULLIDE_LOC_CONSERVATIVE) uniform int u_conservative;
 layout(location = CULLIDE_LOC_PRIM_COUNT) uniform uint u_primCount;
 layout(location = CULLIDE_LOC_AXES) uniform uint u_axes;
+layout(location = CULLIDE_LOC_PRIM_BASE) uniform uint u_primBase;
 
 bool axisEnabled(int axis) { return ((u_axes >> uint(axis)) & 1u) != 0u; }
 

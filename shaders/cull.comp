@@ -7,7 +7,7 @@ layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
 layout(std430, binding = CULLIDE_SSBO_COUNTERS) coherent buffer Counters { uint overflows; };
 
 void main() {
-    uint index = gl_GlobalInvocationID.x;
+    uint index = u_primBase + gl_GlobalInvocationID.x;
     if (index >= u_primCount) return;
     int axis = int(gl_GlobalInvocationID.y);
     if (!axisEnabled(axis)) return;

@@ -3,7 +3,7 @@
 layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
 
 void main() {
-    uint index = gl_GlobalInvocationID.x;
+    uint index = u_primBase + gl_GlobalInvocationID.x;
     if (index >= u_primCount) return;
     int axis = int(gl_GlobalInvocationID.y);
     records[uint(axis) * u_primCount + index] = toRecord(makePrim(index, axis));

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <unordered_map>
 #include <utility>
 
@@ -20,32 +21,33 @@ struct BoxRef {
 /// One object's surviving triangles' boxes (inflated), sorted by min x, computed once per frame for all its pairs.
 struct ObjectBoxes {
     std::vector<BoxRef> sorted;
-    double maxExtentX = 0.0;
+    std::vector<double> prefixMaxX;  ///< max of box.max.x over sorted[0..i]: monotone, so searchable exactly
     Aabb bounds;
 
     void build(const TriangleMesh& mesh, const std::vector<std::uint32_t>& triangles, double inflate) {
         sorted.clear();
         sorted.reserve(triangles.size());
-        maxExtentX = 0.0;
         bounds = Aabb{};
         for (std::uint32_t t : triangles) {
             const Aabb box = triangleBounds(mesh, t).inflated(inflate);
             sorted.push_back({box, t});
-            maxExtentX = std::max(maxExtentX, box.max.x() - box.min.x());
             bounds.grow(box);
         }
         std::sort(sorted.begin(), sorted.end(), [](const BoxRef& x, const BoxRef& y) {
             return x.box.min.x() != y.box.min.x() ? x.box.min.x() < y.box.min.x() : x.triangle < y.triangle;
         });
+        prefixMaxX.resize(sorted.size());
+        double running = -std::numeric_limits<double>::infinity();
+        for (std::size_t i = 0; i < sorted.size(); ++i) prefixMaxX[i] = running = std::max(running, sorted[i].box.max.x());
     }
 
-    /// The boxes overlapping `region`: a binary search on min x, then a scan of the x-slab.
+    /// The boxes overlapping `region`: every box before the first prefix maximum reaching region.min.x ends left of
+    /// the region, every box after the last min.x <= region.max.x starts right of it. No arithmetic, no rounding.
     void inRegion(const Aabb& region, std::vector<BoxRef>& out) const {
         out.clear();
-        auto it = std::lower_bound(sorted.begin(), sorted.end(), region.min.x() - maxExtentX,
-                                   [](const BoxRef& r, double v) { return r.box.min.x() < v; });
-        for (; it != sorted.end() && it->box.min.x() <= region.max.x(); ++it)
-            if (it->box.overlaps(region)) out.push_back(*it);
+        const auto first = std::lower_bound(prefixMaxX.begin(), prefixMaxX.end(), region.min.x()) - prefixMaxX.begin();
+        for (auto i = static_cast<std::size_t>(first); i < sorted.size() && sorted[i].box.min.x() <= region.max.x(); ++i)
+            if (sorted[i].box.overlaps(region)) out.push_back(sorted[i]);
     }
 };
 

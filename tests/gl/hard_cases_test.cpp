@@ -79,6 +79,10 @@ TEST(HardCases, TouchingConfigurations) {
           0.0, 1);
     check("zero area vs face", {tri({0.2, 0.2, -1}, {0.2, 0.2, 1}, {0.2, 0.2, 0}), tri({0, 0, 0}, {1, 0, 0}, {0, 1, 0})},
           0.0, 1);
+    // A vertex on the partner's edge exactly where the partner's bounds begin (x = 3): the exact stage's range
+    // search must not lose the wide triangle to rounding of (3 - extent) (found in review).
+    check("touching at the bounds", {tri({0.1, 0, 0}, {3, 0, 0}, {3, 1, 0}), tri({3, 0, -1}, {3, 0, 1}, {4, 0, 0})},
+          0.0, 1);
     check("point vs face", {tri({0.25, 0.25, 0}, {0.25, 0.25, 0}, {0.25, 0.25, 0}), tri({0, 0, 0}, {1, 0, 0}, {0, 1, 0})},
           0.0, 1);
 }

@@ -42,9 +42,14 @@ std::map<EGLDisplay, int>& displayUsers() {
     static std::map<EGLDisplay, int> users;
     return users;
 }
-void retainDisplay(EGLDisplay d) {
+/// eglInitialize + one more user, atomically with respect to releaseDisplay's eglTerminate.
+bool retainDisplay(EGLDisplay d) {
     std::lock_guard<std::mutex> lock(displayMutex());
+    EGLint major = 0;
+    EGLint minor = 0;
+    if (!eglInitialize(d, &major, &minor)) return false;
     ++displayUsers()[d];
+    return true;
 }
 void releaseDisplay(EGLDisplay d) {
     std::lock_guard<std::mutex> lock(displayMutex());
@@ -124,13 +129,10 @@ EglContext::EglContext(const std::string& preferenceArg) {
 }
 
 bool EglContext::tryDisplay(EGLDisplay display, const std::string& description, std::string& whyNot) {
-    EGLint major = 0;
-    EGLint minor = 0;
-    if (!eglInitialize(display, &major, &minor)) {
+    if (!retainDisplay(display)) {
         whyNot += description + ": eglInitialize failed; ";
         return false;
     }
-    retainDisplay(display);
     const char* extensions = eglQueryString(display, EGL_EXTENSIONS);
     if (!hasExtension(extensions, "EGL_KHR_surfaceless_context") ||
         !hasExtension(extensions, "EGL_KHR_no_config_context") || !eglBindAPI(EGL_OPENGL_API)) {

@@ -111,6 +111,7 @@ struct VisibilityPass::Impl {
     GLuint buffers[kBufferCount] = {};
     std::size_t capacity[kBufferCount] = {};
     GLuint timer = 0;
+    std::size_t maxGroups = 65535;  ///< GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]
     double coordinateBound = 0.0;
     std::vector<std::uint32_t> primScratch;
     const GpuGeometry* geometry = nullptr;
@@ -158,6 +159,9 @@ struct VisibilityPass::Impl {
         glNamedFramebufferParameteri(framebuffer, GL_FRAMEBUFFER_DEFAULT_WIDTH, width);
         glNamedFramebufferParameteri(framebuffer, GL_FRAMEBUFFER_DEFAULT_HEIGHT, height);
         if (context.hasTimerQueries()) glGenQueries(1, &timer);
+        GLint limit = 65535;
+        glGetIntegeri_v(GL_MAX_COMPUTE_WORK_GROUP_COUNT, 0, &limit);
+        maxGroups = static_cast<std::size_t>(std::max(1, limit));
         checkGlError("creating the visibility pass");
     }
 
@@ -172,11 +176,20 @@ struct VisibilityPass::Impl {
         if (setupProgram) glDeleteProgram(setupProgram);
     }
 
+    /// (primitive, axis) invocations in dispatches of at most GL_MAX_COMPUTE_WORK_GROUP_COUNT[0] groups each.
+    void dispatchAll(std::size_t primCount) const {
+        const std::size_t groups = (primCount + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
+        for (std::size_t first = 0; first < groups; first += maxGroups) {
+            glUniform1ui(CULLIDE_LOC_PRIM_BASE, static_cast<GLuint>(first * CULLIDE_COMPUTE_GROUP_SIZE));
+            glDispatchCompute(static_cast<GLuint>(std::min<std::size_t>(maxGroups, groups - first)), 3, 1);
+        }
+        glUniform1ui(CULLIDE_LOC_PRIM_BASE, 0);
+    }
+
     void draw(int pass, std::size_t primCount, LevelStats& level, Stats& stats) {
         glUniform1i(CULLIDE_LOC_PASS, pass);
         if (settings.backend == Backend::Compute) {
-            const auto groups = static_cast<GLuint>((primCount + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE);
-            glDispatchCompute(groups, 3, 1);
+            dispatchAll(primCount);
         } else {
             const ThirdPartyLeakScope ignoreMesaDrawLeak;
             glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(3 * 3 * primCount));  // 3 views x primCount records
@@ -273,8 +286,7 @@ struct VisibilityPass::Impl {
         uploadBuffer(buffers[kPrims], capacity[kPrims], primScratch.data(), primScratch.size() * 4);
         stats.bytesUploaded += primScratch.size() * 4;
 
-        const std::uint32_t idBits = bitsFor(maxOwner);
-        if (idBits > 16) throw std::runtime_error("cullide: more than 65536 objects in one level");
+        const std::uint32_t idBits = bitsFor(maxOwner);  // <= 16: prune() skips levels with more owners
 
         glUseProgram(program);
         setUniforms(primCount, idBits, lo, pixelScale, depthScale, halfSize, depthPad);
@@ -309,8 +321,7 @@ struct VisibilityPass::Impl {
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_RECORDS, buffers[kRecords]);
             glUseProgram(setupProgram);
             setUniforms(primCount, idBits, lo, pixelScale, depthScale, halfSize, depthPad);
-            const auto groups = static_cast<GLuint>((primCount + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE);
-            glDispatchCompute(groups, 3, 1);
+            dispatchAll(primCount);
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
             glUseProgram(program);
             level.draws += 1;
@@ -374,6 +385,7 @@ void VisibilityPass::prune(const LevelItems& items, std::vector<std::uint8_t>& s
             if (ownerCount[items.owner[i]]++ == 0) ++owners;
         }
         level.itemsPerIteration.push_back(alive);
+        if (ownerCount.size() > 65536) break;  // owner ids need more than 16 bits: no pruning (conservative)
         if (owners < 2) {  // nothing left to collide with
             std::fill(survivors.begin(), survivors.end(), 0);
             level.itemsPerIteration.push_back(0);
