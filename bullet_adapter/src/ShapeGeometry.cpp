@@ -46,6 +46,58 @@ int meshVertexCount(const btStridingMeshInterface& mesh) {
     return n;
 }
 
+/// 64-bit hash of raw bytes, 8 at a time (about 50 us for 20K vertices): detects deformation with no help from
+/// the application beyond what Bullet itself needs (the vertex data).
+std::uint64_t hashBytes(std::uint64_t h, const unsigned char* data, std::size_t size) {
+    std::size_t i = 0;
+    for (; i + 8 <= size; i += 8) {
+        std::uint64_t w = 0;
+        std::memcpy(&w, data + i, 8);
+        h = (h ^ w) * 0x100000001b3ull;
+        h ^= h >> 29;
+    }
+    for (; i < size; ++i) h = (h ^ data[i]) * 0x100000001b3ull;
+    return h;
+}
+
+/// Hash of one subpart's vertex and index data of a striding mesh.
+std::uint64_t hashSubpart(std::uint64_t h, const btStridingMeshInterface& mesh, int subpart) {
+    const unsigned char* vertexBase = nullptr;
+    const unsigned char* indexBase = nullptr;
+    int numVerts = 0, stride = 0, indexStride = 0, numFaces = 0;
+    PHY_ScalarType type = PHY_FLOAT, indexType = PHY_INTEGER;
+    mesh.getLockedReadOnlyVertexIndexBase(&vertexBase, numVerts, type, stride, &indexBase, indexStride, numFaces,
+                                          indexType, subpart);
+    const std::size_t vertexBytes = type == PHY_DOUBLE ? 3 * sizeof(double) : 3 * sizeof(float);
+    const std::size_t indexBytes = indexType == PHY_SHORT ? 3 * sizeof(unsigned short)
+                                   : indexType == PHY_UCHAR ? 3 : 3 * sizeof(unsigned int);
+    for (int v = 0; v < numVerts; ++v) h = hashBytes(h, vertexBase + static_cast<std::ptrdiff_t>(v) * stride, vertexBytes);
+    for (int f = 0; f < numFaces; ++f)
+        h = hashBytes(h, indexBase + static_cast<std::ptrdiff_t>(f) * indexStride, indexBytes);
+    mesh.unLockReadOnlyVertexBase(subpart);
+    return h;
+}
+
+/// Content hash of the data a shape's triangles are built from (vertices, indices, hull points).
+std::uint64_t sourceHashOf(const btCollisionShape* shape) {
+    std::uint64_t h = 0xcbf29ce484222325ull;
+    if (const btGImpactMeshShape* mesh = asGImpactMesh(shape)) {
+        for (int p = 0; p < mesh->getMeshPartCount(); ++p) {
+            auto* part = const_cast<btGImpactMeshShapePart*>(mesh->getMeshPart(p));
+            const auto* manager = part->getTrimeshPrimitiveManager();
+            h = hashSubpart(h, *manager->m_meshInterface, manager->m_part);
+        }
+    } else if (geometryKindOf(shape) == GeometryKind::TriangleMesh) {
+        const btStridingMeshInterface& striding = *static_cast<const btTriangleMeshShape*>(shape)->getMeshInterface();
+        for (int s = 0; s < striding.getNumSubParts(); ++s) h = hashSubpart(h, striding, s);
+    } else if (geometryKindOf(shape) == GeometryKind::ConvexHull) {
+        const auto* hull = static_cast<const btConvexHullShape*>(shape);
+        h = hashBytes(h, reinterpret_cast<const unsigned char*>(hull->getUnscaledPoints()),
+                      static_cast<std::size_t>(hull->getNumPoints()) * sizeof(btVector3));
+    }
+    return h;
+}
+
 void buildGImpact(const btGImpactMeshShape& mesh, ShapeTriangles& out) {
     for (int p = 0; p < mesh.getMeshPartCount(); ++p) {
         // The part is logically const; the primitive manager accessor is not.
@@ -166,6 +218,7 @@ std::shared_ptr<ShapeTriangles> buildShapeTriangles(const btCollisionShape* shap
     out->kind = kind;
     out->shape = shape;
     out->scaling = shape->getLocalScaling();
+    out->sourceHash = sourceHashOf(shape);
     switch (kind) {
         case GeometryKind::GImpactMesh: {
             const btGImpactMeshShape& mesh = *asGImpactMesh(shape);
@@ -196,18 +249,23 @@ std::shared_ptr<ShapeTriangles> buildShapeTriangles(const btCollisionShape* shap
 bool stillMatches(const ShapeTriangles& geometry, const btCollisionShape* shape) {
     if (geometry.shape != shape || geometryKindOf(shape) != geometry.kind) return false;
     if (!(shape->getLocalScaling() == geometry.scaling)) return false;
+    bool sameSize = false;
     switch (geometry.kind) {
         case GeometryKind::GImpactMesh:
-            return gimpactVertexCount(*asGImpactMesh(shape)) == geometry.sourceCount;
+            sameSize = gimpactVertexCount(*asGImpactMesh(shape)) == geometry.sourceCount;
+            break;
         case GeometryKind::TriangleMesh:
-            return meshVertexCount(*static_cast<const btTriangleMeshShape*>(shape)->getMeshInterface()) ==
-                   geometry.sourceCount;
+            sameSize = meshVertexCount(*static_cast<const btTriangleMeshShape*>(shape)->getMeshInterface()) ==
+                       geometry.sourceCount;
+            break;
         case GeometryKind::ConvexHull:
-            return static_cast<const btConvexHullShape*>(shape)->getNumPoints() == geometry.sourceCount;
+            sameSize = static_cast<const btConvexHullShape*>(shape)->getNumPoints() == geometry.sourceCount;
+            break;
         case GeometryKind::None:
             return false;
     }
-    return false;
+    // Deformation in place (same counts, new vertex data) is caught by the content hash.
+    return sameSize && sourceHashOf(shape) == geometry.sourceHash;
 }
 
 btScalar triangleMarginOf(const btCollisionShape* shape) {

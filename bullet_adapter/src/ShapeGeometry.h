@@ -6,6 +6,7 @@
 
 #include <LinearMath/btVector3.h>
 
+#include <cstdint>
 #include <memory>
 #include <vector>
 
@@ -27,6 +28,7 @@ struct ShapeTriangles {
     const btCollisionShape* shape = nullptr;
     btVector3 scaling{1, 1, 1};  ///< scaling it was built with (change detection)
     int sourceCount = 0;         ///< vertex/point count it was built from (change detection)
+    std::uint64_t sourceHash = 0; ///< content hash of the vertex/index/point data it was built from (deformation)
     /// Local vertices computed exactly as Bullet computes them (btScalar precision, scaling applied).
     std::vector<btVector3> vertices;
     std::vector<TriangleIndices> triangles;

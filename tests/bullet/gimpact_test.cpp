@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <BulletDynamics/Dynamics/btRigidBody.h>
+
 #include <cmath>
 
 namespace cullide::test {
@@ -86,6 +88,78 @@ TEST(BulletGImpact, WithoutRegisterAlgorithmMeshPairsStayEmptyLikeBullet) {
     ASSERT_EQ(contacts.size(), 1u);
     EXPECT_LT(contacts.begin()->second.minDistance, 0.0);  // interlocked tori penetrate
     EXPECT_GT(w.cullideDispatcher()->getLastStepStats().cullidePairs, 0u);
+}
+
+}  // namespace
+}  // namespace cullide::test
+
+namespace cullide::test {
+namespace {
+
+/// Scales every vertex of a GImpact mesh in place, the way an application deforms one: write the vertex buffer,
+/// then postUpdate() + updateBound() as Bullet requires. No CULLIDE call.
+void scaleInPlace(btCollisionShape* shape, const std::vector<btScalar>& original, btScalar factor) {
+    auto* mesh = static_cast<btGImpactMeshShape*>(shape);
+    btStridingMeshInterface* interface = mesh->getMeshPart(0)->getTrimeshPrimitiveManager()->m_meshInterface;
+    unsigned char* vertexBase = nullptr;
+    unsigned char* indexBase = nullptr;
+    int numVerts = 0, stride = 0, indexStride = 0, numFaces = 0;
+    PHY_ScalarType type = PHY_FLOAT, indexType = PHY_INTEGER;
+    interface->getLockedVertexIndexBase(&vertexBase, numVerts, type, stride, &indexBase, indexStride, numFaces,
+                                        indexType, 0);
+    for (int v = 0; v < numVerts; ++v) {
+        auto* p = reinterpret_cast<btScalar*>(vertexBase + static_cast<std::ptrdiff_t>(v) * stride);
+        for (int k = 0; k < 3; ++k) p[k] = original[static_cast<std::size_t>(3 * v + k)] * factor;
+    }
+    interface->unLockVertexBase(0);
+    mesh->postUpdate();
+    mesh->updateBound();
+}
+
+TEST(BulletGImpact, DeformingMeshNeedsNoExtraCall) {
+    CULLIDE_BULLET_REQUIRE_GL();
+    ShapeStore shapes;
+    btCollisionShape* breathing = shapes.gimpactTorus(1, btScalar(0.3), 24, 12, btScalar(0.04));
+    btCollisionShape* still = shapes.gimpactTorus(1, btScalar(0.3), 24, 12, btScalar(0.04));
+    std::vector<btScalar> original;
+    {
+        auto* mesh = static_cast<btGImpactMeshShape*>(breathing);
+        btGImpactMeshShapePart* part = mesh->getMeshPart(0);
+        part->lockChildShapes();
+        for (int v = 0; v < part->getVertexCount(); ++v) {
+            btVector3 p;
+            part->getVertex(v, p);
+            original.insert(original.end(), {p.x(), p.y(), p.z()});
+        }
+        part->unlockChildShapes();
+    }
+    auto populate = [&](TestWorld& w) {
+        btGImpactCollisionAlgorithm::registerAlgorithm(&w.dispatcher());
+        w.world().setGravity(btVector3(0, 0, 0));
+        w.addBody(still, 0, btTransform(btQuaternion::getIdentity(), btVector3(btScalar(2.7), 0, 0)));
+        w.addBody(breathing, 1, btTransform::getIdentity());
+    };
+    TestWorld reference(PipelineKind::Default);
+    TestWorld cullide(PipelineKind::Cullide);
+    populate(reference);
+    populate(cullide);
+    MirrorOptions options;
+    options.steps = 120;
+    options.deepContactDistance = 2 * 0.04;
+    options.tolerance = [](const std::pair<int, int>&) { return 2.0 * double(gContactBreakingThreshold); };
+    // Outer radius 1.3 * factor against a neighbour 2.7 away: out of contact, touching, overlapping, and back.
+    options.before = [&](int step, TestWorld& ref, TestWorld&) {
+        scaleInPlace(breathing, original, btScalar(1.0 + 0.12 * std::sin(0.1 * step)));
+        // Keep the breathing torus in place (contacts push it away); the mirror copies this state to CULLIDE's world.
+        if (btRigidBody* body = btRigidBody::upcast(ref.world().getCollisionObjectArray()[1])) {
+            body->setWorldTransform(btTransform::getIdentity());
+            body->setLinearVelocity(btVector3(0, 0, 0));
+            body->setAngularVelocity(btVector3(0, 0, 0));
+        }
+    };
+    const MirrorRun run = runMirrored(reference, cullide, options);
+    printMirrorRun("deforming gimpact torus", run);
+    expectAgreement(run, 20);
 }
 
 }  // namespace

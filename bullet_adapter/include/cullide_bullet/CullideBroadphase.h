@@ -141,7 +141,8 @@ public:
     const PairTriangles* trianglePairsFor(const btCollisionObjectWrapper* body0Wrap,
                                           const btCollisionObjectWrapper* body1Wrap, bool& swapped) const;
 
-    /// Drop cached triangle geometry of `shape` (call after deforming a mesh, e.g. with GImpact's postUpdate()).
+    /// Drop cached triangle geometry of `shape`. Not needed after deforming a mesh in place: changed vertex data is
+    /// detected every step by a content hash.
     void invalidateShape(const btCollisionShape* shape);
 
     /// Ghost objects pair with every object whose AABB comes within this distance of theirs (default 0.1).
