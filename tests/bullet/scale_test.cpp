@@ -53,6 +53,11 @@ TEST(BulletScale, ManyObjectsOnLandscape) {
     printMirrorRun("scale: 240 objects on an 8192-triangle landscape", run);
     printRenderer(cullide);
     expectAgreement(run, kStepScale == 1 ? 10000 : 1000);
+    // The culled pair set is never larger than btDbvtBroadphase's stale superset, and hulls on the landscape do go
+    // through CULLIDE's triangle lists.
+    EXPECT_LE(run.cullideTimes.pairs, run.defaultTimes.pairs);
+    EXPECT_GT(run.cullidePairsFromTriangles, 0u);
+    EXPECT_EQ(run.fallbackPairs, 0u);
 }
 
 TEST(BulletScale, GImpactTorusPile) {
@@ -86,6 +91,9 @@ TEST(BulletScale, GImpactTorusPile) {
     printMirrorRun("scale: pile of 27 GImpact tori (576 triangles each)", run);
     printRenderer(cullide);
     expectAgreement(run, 1000 / kStepScale);
+    EXPECT_LE(run.cullideTimes.pairs, run.defaultTimes.pairs);
+    EXPECT_GT(run.cullidePairsFromTriangles, 0u);
+    EXPECT_EQ(run.fallbackPairs, 0u);
 }
 
 }  // namespace

@@ -112,7 +112,7 @@ TEST(CullidePairs, MalformedInputExitsWithTwoAndNamesFileAndLine) {
 
 TEST(CullidePairs, NoGlExitsWithThree) {
     const fs::path dir = writeScene(3);
-    const CliRun r = runPairs((dir / "scene.json").string(), "CULLIDE_EGL_DEVICE=99");
+    const CliRun r = runPairs((dir / "scene.json").string(), "CULLIDE_GL_DEVICE=99");
     EXPECT_EQ(r.status, 3) << r.err;
     EXPECT_NE(r.err.find("99"), std::string::npos) << r.err;
 }

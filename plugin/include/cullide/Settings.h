@@ -61,7 +61,7 @@ struct Settings {
     unsigned threads = 0;
     /// Auto pipeline: a level whose input has at most this many triangles goes straight to the exact stage.
     std::size_t exactThreshold = 256;
-    /// EGL device to use: "" = environment variable CULLIDE_EGL_DEVICE, else the first hardware device, else
+    /// GL device to use: "" = environment variable CULLIDE_GL_DEVICE, else the first hardware device, else
     /// Mesa's software device / surfaceless platform. Also "software", "hardware" or a device index "0", "1", ...
     std::string device;
 

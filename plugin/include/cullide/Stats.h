@@ -20,7 +20,7 @@ struct LevelStats {
 
 struct Stats {
     std::string renderer;   ///< GL_RENDERER of the context used ("cpu-reference" for the reference culler)
-    std::string device;     ///< which EGL device/platform was chosen
+    std::string device;     ///< which GL device / platform was chosen
     std::size_t objects = 0;
     std::size_t triangles = 0;
     std::size_t rejectedObjects = 0;

@@ -74,7 +74,7 @@ void checkGlError(const char* what) {
 EglContext::EglContext(const std::string& preferenceArg) {
     std::string preference = preferenceArg;
     if (preference.empty()) {
-        if (const char* env = std::getenv("CULLIDE_EGL_DEVICE")) preference = env;
+        if (const char* env = std::getenv("CULLIDE_GL_DEVICE")) preference = env;
     }
     if (!epoxy_has_egl())
         throw GlUnavailableError(std::string("no EGL library found (libEGL.so.1): ") + kPackages);
@@ -124,7 +124,7 @@ EglContext::EglContext(const std::string& preferenceArg) {
         if (display != EGL_NO_DISPLAY && tryDisplay(display, "Mesa surfaceless platform", reasons)) return;
     }
     if (!preference.empty() && !matchedDevice && !wantSurfaceless)
-        reasons += "no EGL device matches CULLIDE_EGL_DEVICE/device setting '" + preference + "'; ";
+        reasons += "no EGL device matches CULLIDE_GL_DEVICE/device setting '" + preference + "'; ";
     throw GlUnavailableError("no usable headless OpenGL 4.5 core context: " + reasons + kPackages);
 }
 

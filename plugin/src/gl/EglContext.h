@@ -13,7 +13,7 @@ namespace cullide::gl {
 /// cullide::GlUnavailableError naming what is missing and the Debian package that provides it.
 class EglContext {
 public:
-    /// `preference`: "" (env CULLIDE_EGL_DEVICE, else automatic), "hardware", "software", "surfaceless", or a device
+    /// `preference`: "" (env CULLIDE_GL_DEVICE, else automatic), "hardware", "software", "surfaceless", or a device
     /// index ("0", "1", ...).
     explicit EglContext(const std::string& preference);
     ~EglContext();
