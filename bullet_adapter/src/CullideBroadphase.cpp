@@ -124,6 +124,8 @@ struct CullideBroadphase::Impl {
     std::uint64_t frame = 0;
 
     std::unordered_map<const btCollisionShape*, std::weak_ptr<bullet::ShapeTriangles>> shapeCache;
+    /// Content hashes of the shapes seen this frame (cleared every frame: bounded, and shapes may come and go).
+    std::unordered_map<const btCollisionShape*, std::uint64_t> hashThisFrame;
     std::unordered_map<std::uint64_t, Record> records;
 
     /// Ghost pairs: AABBs within this distance (btDbvtBroadphase pairs fattened leaves, gDbvtMargin = 0.05;
@@ -327,22 +329,30 @@ struct CullideBroadphase::Impl {
 
     // ---- geometry ----
 
+    /// A shape's content hash, computed once per frame however many proxies share the shape.
+    std::uint64_t sourceHashThisFrame(const btCollisionShape* shape) {
+        const auto [it, added] = hashThisFrame.emplace(shape, 0);
+        if (added) it->second = bullet::sourceHashOf(shape);
+        return it->second;
+    }
+
     std::shared_ptr<bullet::ShapeTriangles> geometryFor(Proxy* p, const btCollisionShape* shape) {
         if (shape == nullptr || bullet::geometryKindOf(shape) == bullet::GeometryKind::None) {
             p->geometry.reset();
             p->worldValid = false;
             return nullptr;
         }
-        if (p->geometry && bullet::stillMatches(*p->geometry, shape)) return p->geometry;
+        const std::uint64_t hash = sourceHashThisFrame(shape);
+        if (p->geometry && bullet::stillMatches(*p->geometry, shape, hash)) return p->geometry;
         p->worldValid = false;
         auto it = shapeCache.find(shape);
         if (it != shapeCache.end()) {
-            if (auto shared = it->second.lock(); shared && bullet::stillMatches(*shared, shape)) {
+            if (auto shared = it->second.lock(); shared && bullet::stillMatches(*shared, shape, hash)) {
                 p->geometry = shared;
                 return shared;
             }
         }
-        auto built = bullet::buildShapeTriangles(shape);
+        auto built = bullet::buildShapeTriangles(shape, hash);
         if (built)
             shapeCache[shape] = built;
         else
@@ -694,6 +704,7 @@ struct CullideBroadphase::Impl {
         ++frame;
         stats = CullideFrameStats{};
         stats.proxies = proxies.size();
+        hashThisFrame.clear();
         records.clear();
         desired.clear();
 

@@ -21,6 +21,18 @@ namespace {
 
 CullideCollisionDispatcher& cullideDispatcher(btDispatcher* d) { return *static_cast<CullideCollisionDispatcher*>(d); }
 
+/// CULLIDE's surviving triangles for a pair (nullptr: not culled this step, Bullet's own algorithm must run) and
+/// the dispatcher's statistics of the current step.
+const PairTriangles* cullideTrianglesFor(btDispatcher* d, const btCollisionObjectWrapper* body0Wrap,
+                                         const btCollisionObjectWrapper* body1Wrap, bool& swapped,
+                                         CullideDispatchStats*& stats) {
+    CullideCollisionDispatcher& dispatcher = cullideDispatcher(d);
+    stats = &dispatcher.currentStats();
+    swapped = false;
+    const CullideBroadphase* broadphase = dispatcher.getCullideBroadphase();
+    return broadphase != nullptr ? broadphase->trianglePairsFor(body0Wrap, body1Wrap, swapped) : nullptr;
+}
+
 /// The surviving triangle pairs of a GImpact-GImpact pair go straight to Bullet's triangle-triangle routine
 /// (collide_sat_triangles); no BVH traversal, no box tests. Same size as btGImpactCollisionAlgorithm.
 class CullideGImpactAlgorithm final : public btGImpactCollisionAlgorithm {
@@ -31,12 +43,10 @@ public:
 
     void processCollision(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
                           const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut) override {
-        CullideCollisionDispatcher& dispatcher = cullideDispatcher(m_dispatcher);
-        CullideDispatchStats& stats = dispatcher.currentStats();
         bool swapped = false;
-        const CullideBroadphase* broadphase = dispatcher.getCullideBroadphase();
-        const PairTriangles* triangles =
-            broadphase != nullptr ? broadphase->trianglePairsFor(body0Wrap, body1Wrap, swapped) : nullptr;
+        CullideDispatchStats* statsPtr = nullptr;
+        const PairTriangles* triangles = cullideTrianglesFor(m_dispatcher, body0Wrap, body1Wrap, swapped, statsPtr);
+        CullideDispatchStats& stats = *statsPtr;
         if (triangles == nullptr) {
             ++stats.fallbackPairs;
             btGImpactCollisionAlgorithm::processCollision(body0Wrap, body1Wrap, dispatchInfo, resultOut);
@@ -140,12 +150,10 @@ public:
 
     void processCollision(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
                           const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut) override {
-        CullideCollisionDispatcher& dispatcher = cullideDispatcher(m_dispatcher);
-        CullideDispatchStats& stats = dispatcher.currentStats();
         bool swapped = false;
-        const CullideBroadphase* broadphase = dispatcher.getCullideBroadphase();
-        const PairTriangles* triangles =
-            broadphase != nullptr ? broadphase->trianglePairsFor(body0Wrap, body1Wrap, swapped) : nullptr;
+        CullideDispatchStats* statsPtr = nullptr;
+        const PairTriangles* triangles = cullideTrianglesFor(m_dispatcher, body0Wrap, body1Wrap, swapped, statsPtr);
+        CullideDispatchStats& stats = *statsPtr;
         const btCollisionObjectWrapper* meshWrap = MeshFirst ? body0Wrap : body1Wrap;
         if (triangles == nullptr || !meshWrap->getCollisionShape()->isConcave()) {
             ++stats.fallbackPairs;

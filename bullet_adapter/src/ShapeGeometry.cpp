@@ -31,18 +31,27 @@ int gimpactVertexCount(const btGImpactMeshShape& mesh) {
     return n;
 }
 
+/// One subpart of a striding mesh, locked for reading for the lifetime of the view.
+struct SubpartView {
+    const btStridingMeshInterface& mesh;
+    int subpart;
+    const unsigned char* vertexBase = nullptr;
+    const unsigned char* indexBase = nullptr;
+    int numVerts = 0, stride = 0, indexStride = 0, numFaces = 0;
+    PHY_ScalarType type = PHY_FLOAT, indexType = PHY_INTEGER;
+
+    SubpartView(const btStridingMeshInterface& m, int s) : mesh(m), subpart(s) {
+        mesh.getLockedReadOnlyVertexIndexBase(&vertexBase, numVerts, type, stride, &indexBase, indexStride, numFaces,
+                                              indexType, subpart);
+    }
+    ~SubpartView() { mesh.unLockReadOnlyVertexBase(subpart); }
+    SubpartView(const SubpartView&) = delete;
+    SubpartView& operator=(const SubpartView&) = delete;
+};
+
 int meshVertexCount(const btStridingMeshInterface& mesh) {
     int n = 0;
-    for (int s = 0; s < mesh.getNumSubParts(); ++s) {
-        const unsigned char* vertexBase = nullptr;
-        const unsigned char* indexBase = nullptr;
-        int numVerts = 0, stride = 0, indexStride = 0, numFaces = 0;
-        PHY_ScalarType type = PHY_FLOAT, indexType = PHY_INTEGER;
-        mesh.getLockedReadOnlyVertexIndexBase(&vertexBase, numVerts, type, stride, &indexBase, indexStride, numFaces,
-                                              indexType, s);
-        mesh.unLockReadOnlyVertexBase(s);
-        n += numVerts;
-    }
+    for (int s = 0; s < mesh.getNumSubParts(); ++s) n += SubpartView(mesh, s).numVerts;
     return n;
 }
 
@@ -62,23 +71,19 @@ std::uint64_t hashBytes(std::uint64_t h, const unsigned char* data, std::size_t 
 
 /// Hash of one subpart's vertex and index data of a striding mesh.
 std::uint64_t hashSubpart(std::uint64_t h, const btStridingMeshInterface& mesh, int subpart) {
-    const unsigned char* vertexBase = nullptr;
-    const unsigned char* indexBase = nullptr;
-    int numVerts = 0, stride = 0, indexStride = 0, numFaces = 0;
-    PHY_ScalarType type = PHY_FLOAT, indexType = PHY_INTEGER;
-    mesh.getLockedReadOnlyVertexIndexBase(&vertexBase, numVerts, type, stride, &indexBase, indexStride, numFaces,
-                                          indexType, subpart);
-    const std::size_t vertexBytes = type == PHY_DOUBLE ? 3 * sizeof(double) : 3 * sizeof(float);
-    const std::size_t indexBytes = indexType == PHY_SHORT ? 3 * sizeof(unsigned short)
-                                   : indexType == PHY_UCHAR ? 3 : 3 * sizeof(unsigned int);
-    for (int v = 0; v < numVerts; ++v) h = hashBytes(h, vertexBase + static_cast<std::ptrdiff_t>(v) * stride, vertexBytes);
-    for (int f = 0; f < numFaces; ++f)
-        h = hashBytes(h, indexBase + static_cast<std::ptrdiff_t>(f) * indexStride, indexBytes);
-    mesh.unLockReadOnlyVertexBase(subpart);
+    const SubpartView v(mesh, subpart);
+    const std::size_t vertexBytes = v.type == PHY_DOUBLE ? 3 * sizeof(double) : 3 * sizeof(float);
+    const std::size_t indexBytes = v.indexType == PHY_SHORT ? 3 * sizeof(unsigned short)
+                                   : v.indexType == PHY_UCHAR ? 3 : 3 * sizeof(unsigned int);
+    for (int i = 0; i < v.numVerts; ++i)
+        h = hashBytes(h, v.vertexBase + static_cast<std::ptrdiff_t>(i) * v.stride, vertexBytes);
+    for (int f = 0; f < v.numFaces; ++f)
+        h = hashBytes(h, v.indexBase + static_cast<std::ptrdiff_t>(f) * v.indexStride, indexBytes);
     return h;
 }
 
-/// Content hash of the data a shape's triangles are built from (vertices, indices, hull points).
+}  // namespace
+
 std::uint64_t sourceHashOf(const btCollisionShape* shape) {
     std::uint64_t h = 0xcbf29ce484222325ull;
     if (const btGImpactMeshShape* mesh = asGImpactMesh(shape)) {
@@ -97,6 +102,8 @@ std::uint64_t sourceHashOf(const btCollisionShape* shape) {
     }
     return h;
 }
+
+namespace {
 
 void buildGImpact(const btGImpactMeshShape& mesh, ShapeTriangles& out) {
     for (int p = 0; p < mesh.getMeshPartCount(); ++p) {
@@ -126,12 +133,12 @@ void buildGImpact(const btGImpactMeshShape& mesh, ShapeTriangles& out) {
 void buildTriangleMesh(const btStridingMeshInterface& mesh, ShapeTriangles& out) {
     const btVector3& scaling = mesh.getScaling();
     for (int s = 0; s < mesh.getNumSubParts(); ++s) {
-        const unsigned char* vertexBase = nullptr;
-        const unsigned char* indexBase = nullptr;
-        int numVerts = 0, stride = 0, indexStride = 0, numFaces = 0;
-        PHY_ScalarType type = PHY_FLOAT, indexType = PHY_INTEGER;
-        mesh.getLockedReadOnlyVertexIndexBase(&vertexBase, numVerts, type, stride, &indexBase, indexStride, numFaces,
-                                              indexType, s);
+        const SubpartView view(mesh, s);
+        const unsigned char* vertexBase = view.vertexBase;
+        const unsigned char* indexBase = view.indexBase;
+        const int numVerts = view.numVerts, stride = view.stride, indexStride = view.indexStride;
+        const int numFaces = view.numFaces;
+        const PHY_ScalarType type = view.type, indexType = view.indexType;
         const auto base = static_cast<std::uint32_t>(out.vertices.size());
         // Same arithmetic as btBvhTriangleMeshShape::processAllTriangles, so the triangles are bit-identical.
         for (int v = 0; v < numVerts; ++v) {
@@ -166,7 +173,6 @@ void buildTriangleMesh(const btStridingMeshInterface& mesh, ShapeTriangles& out)
             out.triangles.push_back({base + idx[0], base + idx[1], base + idx[2]});
             out.refs.push_back({s, t});
         }
-        mesh.unLockReadOnlyVertexBase(s);
     }
 }
 
@@ -211,14 +217,14 @@ GeometryKind geometryKindOf(const btCollisionShape* shape) {
     }
 }
 
-std::shared_ptr<ShapeTriangles> buildShapeTriangles(const btCollisionShape* shape) {
+std::shared_ptr<ShapeTriangles> buildShapeTriangles(const btCollisionShape* shape, std::uint64_t sourceHash) {
     const GeometryKind kind = geometryKindOf(shape);
     if (kind == GeometryKind::None) return nullptr;
     auto out = std::make_shared<ShapeTriangles>();
     out->kind = kind;
     out->shape = shape;
     out->scaling = shape->getLocalScaling();
-    out->sourceHash = sourceHashOf(shape);
+    out->sourceHash = sourceHash;
     switch (kind) {
         case GeometryKind::GImpactMesh: {
             const btGImpactMeshShape& mesh = *asGImpactMesh(shape);
@@ -246,7 +252,7 @@ std::shared_ptr<ShapeTriangles> buildShapeTriangles(const btCollisionShape* shap
     return out;
 }
 
-bool stillMatches(const ShapeTriangles& geometry, const btCollisionShape* shape) {
+bool stillMatches(const ShapeTriangles& geometry, const btCollisionShape* shape, std::uint64_t sourceHash) {
     if (geometry.shape != shape || geometryKindOf(shape) != geometry.kind) return false;
     if (!(shape->getLocalScaling() == geometry.scaling)) return false;
     bool sameSize = false;
@@ -265,7 +271,7 @@ bool stillMatches(const ShapeTriangles& geometry, const btCollisionShape* shape)
             return false;
     }
     // Deformation in place (same counts, new vertex data) is caught by the content hash.
-    return sameSize && sourceHashOf(shape) == geometry.sourceHash;
+    return sameSize && sourceHash == geometry.sourceHash;
 }
 
 btScalar triangleMarginOf(const btCollisionShape* shape) {

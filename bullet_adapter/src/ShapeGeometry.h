@@ -36,11 +36,15 @@ struct ShapeTriangles {
     btScalar margin = 0;               ///< largest collision margin Bullet uses for these triangles
 };
 
-/// Builds the local triangle geometry of `shape`, or nullptr when it has none (or an empty one).
-std::shared_ptr<ShapeTriangles> buildShapeTriangles(const btCollisionShape* shape);
+/// Content hash of the data a shape's triangles are built from (vertex/index data, hull points): detects in-place
+/// deformation. About 50 us per 20K vertices; callers compute it once per shape and step.
+std::uint64_t sourceHashOf(const btCollisionShape* shape);
 
-/// True while `geometry` still describes `shape` (same pointer, kind, scaling and source size).
-bool stillMatches(const ShapeTriangles& geometry, const btCollisionShape* shape);
+/// Builds the local triangle geometry of `shape` (whose content hash is `sourceHash`), or nullptr when it has none.
+std::shared_ptr<ShapeTriangles> buildShapeTriangles(const btCollisionShape* shape, std::uint64_t sourceHash);
+
+/// True while `geometry` still describes `shape`: same pointer, kind, scaling, source size and content hash.
+bool stillMatches(const ShapeTriangles& geometry, const btCollisionShape* shape, std::uint64_t sourceHash);
 
 /// The collision margin Bullet applies to the shape's triangles (GImpact: the parts' margins).
 btScalar triangleMarginOf(const btCollisionShape* shape);

@@ -303,8 +303,7 @@ private:
     void runAutoPipeline(Stats& stats) {
         std::vector<std::uint32_t> proxies = activeProxies();
         std::vector<Group> groups = m_groups;
-        const bool gpu = m_gpuLevels;
-        if (gpu && triangleCount(groups) > m_settings.exactThreshold) {
+        if (m_gpuLevels && triangleCount(groups) > m_settings.exactThreshold) {
             beginLevel(stats);
             for (std::size_t g = 0; g < groups.size(); ++g)
                 addBoxItem(groups[g].object, m_groupBox[g], groups[g].box);
@@ -313,7 +312,7 @@ private:
             keepSurvivingGroups(groups, proxies);
         }
         collectTriangles(groups, true);
-        if (gpu && m_tris.size() > m_settings.exactThreshold)
+        if (m_gpuLevels && m_tris.size() > m_settings.exactThreshold)
             runTriangleLevel(proxies, stats);
         else
             finishFromTriangles({});
