@@ -90,6 +90,7 @@ public:
         stats.exactMs = exact.ms();
         stats.pcsObjects = result.pcs.size();
         stats.candidateObjectPairs = result.pairs.size();
+        result.pcsTriangles.swap(m_survivingTriangles);  // reassigned at the start of the next frame
         stats.totalMs = total.ms();
         m_objects = nullptr;
     }

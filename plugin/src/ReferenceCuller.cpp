@@ -5,6 +5,7 @@
 #include "cullide/Culler.h"
 #include "cullide/TriangleTest.h"
 
+#include <algorithm>
 #include <stdexcept>
 
 namespace cullide {
@@ -62,15 +63,24 @@ public:
             }
         });
         std::vector<std::uint8_t> inPcs(objects.size(), 0);
+        result.pcsTriangles.assign(objects.size(), {});
         for (std::size_t p = 0; p < out.size(); ++p) {
             ObjectPair& pair = out[p];
             if (!keep[p]) continue;
             stats.intersectingTrianglePairs += pair.triangles.size();
             inPcs[pair.a] = inPcs[pair.b] = 1;
+            for (const TrianglePair& t : pair.triangles) {
+                result.pcsTriangles[pair.a].push_back(t.a);
+                result.pcsTriangles[pair.b].push_back(t.b);
+            }
             result.pairs.push_back(std::move(pair));
         }
         for (std::uint32_t o = 0; o < inPcs.size(); ++o)
             if (inPcs[o]) result.pcs.push_back(o);
+        for (auto& list : result.pcsTriangles) {
+            std::sort(list.begin(), list.end());
+            list.erase(std::unique(list.begin(), list.end()), list.end());
+        }
         stats.pcsObjects = result.pcs.size();
         stats.candidateObjectPairs = result.pairs.size();
         stats.totalMs = total.ms();

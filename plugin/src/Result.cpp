@@ -5,6 +5,7 @@ namespace cullide {
 void Result::clear() {
     pcs.clear();
     pairs.clear();
+    pcsTriangles.clear();
     rejected.clear();
     stats = Stats{};
 }

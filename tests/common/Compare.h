@@ -17,7 +17,7 @@ std::set<FlatPair> trianglePairs(const Result& result);
 
 struct Comparison {
     std::size_t expected = 0;
-    std::size_t missed = 0;      ///< in the reference, not in the result
+    std::size_t missed = 0;      ///< in the reference, not in the result (or not in its pcsTriangles)
     std::size_t spurious = 0;    ///< in the result, not in the reference
     std::string firstMissed;
     bool objectPairsEqual = false;  ///< same object pairs (a, b, hasTriangles) and the same PCS

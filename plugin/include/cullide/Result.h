@@ -40,6 +40,12 @@ struct Result {
     std::vector<std::uint32_t> pcs;
     /// Potentially colliding object pairs (sorted by (a, b)).
     std::vector<ObjectPair> pairs;
+    /// Triangle-level PCS, indexed by object: the triangles that survived culling (sorted; empty for box proxies,
+    /// rejected objects and objects culled whole). A superset of the triangles named in `pairs`. Unlike `pairs`,
+    /// which is a function of the input alone in reliable mode, its size shows how much the culling levels removed
+    /// and so depends on the pipeline and device (GPU levels or the CPU pre-pass). The reference culler reports the
+    /// triangles of its pairs (the smallest possible PCS).
+    std::vector<std::vector<std::uint32_t>> pcsTriangles;
     std::vector<ObjectDiagnostic> rejected;
     Stats stats;
 
