@@ -186,9 +186,12 @@ struct CullideBroadphase::Impl {
         margin = culler->settings().margin;
     }
 
-    /// Keeps the culler's margin at least `required` (recreates it with some headroom when it must grow).
+    /// Keeps the culler's margin at least `required`, and not much more: a margin twice what the scene needs
+    /// multiplies the within-margin triangle pairs the exact stage must test (the culler is recreated, with some
+    /// headroom after the first frame so a changing scene does not recreate it every frame).
     void ensureMargin(double required) {
-        if (required <= margin) return;
+        if (required <= margin && required >= 0.5 * margin) return;
+        if (required <= margin && margin <= settings.margin) return;  // the application asked for this margin
         // Before the first frame: exactly what the scene needs; later with headroom, so a growing scene does not
         // recreate the culler every frame.
         makeCuller(std::max(settings.margin, (frame > 1 ? 1.25 : 1.0) * required));
@@ -409,6 +412,7 @@ struct CullideBroadphase::Impl {
                               (collisionDispatcher->getDispatcherFlags() &
                                btCollisionDispatcher::CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD) != 0;
         double gimpact = -1.0, hull = -1.0, mesh = -1.0;  // largest margin per kind (-1: none in the frame)
+        bool boxes = false;  // objects culled as their AABB (primitives, compounds, soft bodies)
         double largest = 0.0, second = 0.0, largestDynamic = 0.0;
         for (const Proxy* p : proxies) {
             if (p->role != Role::Dynamic && p->role != Role::Static) continue;
@@ -436,17 +440,24 @@ struct CullideBroadphase::Impl {
                     mesh = std::max(mesh, double(shape->getMargin()));
                     break;
                 case bullet::GeometryKind::None:
+                    boxes = true;
                     break;
             }
         }
         double t = double(gContactBreakingThreshold);
         if (relative) t *= std::max(1.0, std::min(second, largestDynamic));
-        const double g = std::max(gimpact, 0.0), h = std::max(hull, 0.0), m = std::max(mesh, 0.0);
-        double d = 1.5 * t;  // box proxies against each other and against meshes (plus the triangle margins below)
-        if (gimpact >= 0) d = std::max({d, 2 * g + t, g + h + t, g + m + t});
-        if (hull >= 0) d = std::max({d, 2 * h + 1.5 * t, h + m + 1.5 * t});
-        if (mesh >= 0) d = std::max(d, m + 1.5 * t);
-        return d;
+        // Box proxies against each other and against meshes (Bullet pads their AABBs by the shapes' margins).
+        double d = boxes ? 1.5 * t : 0.0;
+        // GImpact-GImpact: Bullet's triangle routine (btPrimitiveTriangle's clip method) reports a point only where
+        // the triangles come within the sum of their margins, and GImpact rebuilds its manifold every frame: 2 g,
+        // with 10% for Bullet's single-precision arithmetic.
+        if (gimpact >= 0) d = std::max(d, 2.2 * gimpact);
+        // GImpact against a hull or a static mesh goes through convex algorithms that keep points within t.
+        if (gimpact >= 0 && hull >= 0) d = std::max(d, gimpact + hull + t);
+        if (gimpact >= 0 && mesh >= 0) d = std::max(d, gimpact + mesh + t);
+        if (hull >= 0) d = std::max({d, 2 * hull + 1.5 * t, hull + std::max(mesh, 0.0) + 1.5 * t});
+        if (mesh >= 0) d = std::max(d, mesh + 1.5 * t);
+        return std::max(d, 1e-9);
     }
 
     /// Static objects are handed to the culler only where a moving object's box comes within the margin.
@@ -732,6 +743,7 @@ struct CullideBroadphase::Impl {
             boxPairsFallback();
         stats.cullMs = cull.ms();
         stats.culler = result.stats;
+        for (const auto& list : result.pcsTriangles) stats.pcsTriangles += list.size();
 
         cullide::Timer sync;
         collectCullerPairs();

@@ -45,14 +45,18 @@ public:
                 }
                 const TriangleMesh& ma = *objects[a].mesh;
                 const TriangleMesh& mb = *objects[b].mesh;
-                std::vector<Aabb> boxesB(mb.triangles.size());
-                for (std::uint32_t tb = 0; tb < mb.triangles.size(); ++tb)
-                    boxesB[tb] = triangleBounds(mb, tb).inflated(0.5 * margin);
+                // All pairs of triangles, except those that cannot reach the other object's (inflated) box.
+                std::vector<std::pair<std::uint32_t, Aabb>> boxesB;
+                for (std::uint32_t tb = 0; tb < mb.triangles.size(); ++tb) {
+                    const Aabb box = triangleBounds(mb, tb).inflated(0.5 * margin);
+                    if (box.overlaps(valid[a].box)) boxesB.emplace_back(tb, box);
+                }
                 for (std::uint32_t ta = 0; ta < ma.triangles.size(); ++ta) {
                     const Aabb boxA = triangleBounds(ma, ta).inflated(0.5 * margin);
+                    if (!boxA.overlaps(valid[b].box)) continue;
                     const auto& A = ma.triangles[ta];
-                    for (std::uint32_t tb = 0; tb < mb.triangles.size(); ++tb) {
-                        if (!boxA.overlaps(boxesB[tb])) continue;
+                    for (const auto& [tb, boxB] : boxesB) {
+                        if (!boxA.overlaps(boxB)) continue;
                         const auto& B = mb.triangles[tb];
                         if (trianglesWithin(ma.vertices[A[0]], ma.vertices[A[1]], ma.vertices[A[2]],
                                             mb.vertices[B[0]], mb.vertices[B[1]], mb.vertices[B[2]], margin))

@@ -348,15 +348,10 @@ bool tryRead(const std::string& dir, const char* file, TriangleMesh& out) {
 class Env3 final : public Environment {
 public:
     Env3(const std::string& dataDir, bool deformBunny, bool* usedStandIns) : m_deform(deformBunny) {
-        bool standIns = false;
-        if (!tryRead(dataDir, "bunny00.off", m_bunny)) {
-            m_bunny = makeLumpySphere();
-            standIns = true;
-        }
-        if (!tryRead(dataDir, "ChineseDragon-10kv.off", m_dragon)) {
-            m_dragon = makeBumpyKnot();
-            standIns = true;
-        }
+        bool bunnyStandIn = false, dragonStandIn = false;
+        m_bunny = paperModel(dataDir, PaperModel::Bunny, &bunnyStandIn);
+        m_dragon = paperModel(dataDir, PaperModel::Dragon, &dragonStandIn);
+        const bool standIns = bunnyStandIn || dragonStandIn;
         normalize(m_bunny, kBunnySize);
         normalize(m_dragon, kDragonSize);
         if (usedStandIns != nullptr) *usedStandIns = standIns;
@@ -484,6 +479,24 @@ std::unique_ptr<Environment> makeEnv1(std::uint64_t seed, int count, int triangl
 
 std::unique_ptr<Environment> makeEnv2(std::uint64_t seed, int count, int trianglesPerObject) {
     return std::make_unique<Env2>(seed, count, trianglesPerObject);
+}
+
+TriangleMesh paperModel(const std::string& dataDir, PaperModel model, bool* usedStandIn) {
+    TriangleMesh mesh;
+    bool standIn = false;
+    switch (model) {
+    case PaperModel::Bunny:
+        if (!tryRead(dataDir, "bunny00.off", mesh)) mesh = makeLumpySphere(), standIn = true;
+        break;
+    case PaperModel::Dragon:
+        if (!tryRead(dataDir, "ChineseDragon-10kv.off", mesh)) mesh = makeBumpyKnot(), standIn = true;
+        break;
+    case PaperModel::Armadillo:
+        if (!tryRead(dataDir, "armadillo.off", mesh)) mesh = makeLumpySphere(), standIn = true;
+        break;
+    }
+    if (usedStandIn != nullptr) *usedStandIn = standIn;
+    return mesh;
 }
 
 std::unique_ptr<Environment> makeEnv3(const std::string& dataDir, bool deformBunny, bool* usedStandIns) {

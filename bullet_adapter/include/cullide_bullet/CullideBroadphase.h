@@ -88,6 +88,7 @@ struct CullideFrameStats {
     std::size_t pairs = 0;               ///< pairs in the cache after the update
     std::size_t pairsAdded = 0;
     std::size_t pairsRemoved = 0;
+    std::size_t pcsTriangles = 0;        ///< triangles that survived culling (the triangle-level PCS), all objects
     std::size_t trianglePairs = 0;       ///< surviving triangle pairs kept for the dispatcher
     double margin = 0.0;                 ///< the culler's distance margin d this frame
     double buildMs = 0.0;                ///< building the culling frame (world-space triangles, boxes)

@@ -29,6 +29,13 @@ std::unique_ptr<Environment> makeEnv2(std::uint64_t seed, int count = 6, int tri
 /// `usedStandIns` is set. With `deformBunny` the bunny deforms every frame.
 std::unique_ptr<Environment> makeEnv3(const std::string& dataDir, bool deformBunny, bool* usedStandIns = nullptr);
 
+enum class PaperModel { Bunny, Dragon, Armadillo };
+/// One of the paper's models as read from `dataDir` (bunny00.off 75K, ChineseDragon-10kv.off 20K, armadillo.off
+/// 52K triangles; in the file's own frame and units), or, when the file is missing, a procedural stand-in of about
+/// the same triangle count (a lumpy sphere, a bumpy torus-knot tube) and `usedStandIn` is set. A present but
+/// malformed file throws io::ParseError.
+TriangleMesh paperModel(const std::string& dataDir, PaperModel model, bool* usedStandIn = nullptr);
+
 struct RandomSceneOptions {
     int objects = 10;
     int minTriangles = 20;

@@ -1,0 +1,208 @@
+// The breakable-object demo: the scene fractures, is deterministic, misses no pair against the exact reference;
+// cullide-demo writes its CSV, summary and PNGs for every scene and reports bad flags and meshes.
+#include "GlTestSupport.h"
+
+#include "cullide/demo/BreakableScene.h"
+#include "cullide/io/Image.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <sys/wait.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+namespace cullide::demo {
+namespace {
+
+namespace fs = std::filesystem;
+
+/// Runs cullide-demo with `args`; returns its exit status. Output goes to `log`.
+int runDemo(const std::string& args, const fs::path& log) {
+    const std::string cmd = std::string(CULLIDE_DEMO_EXE) + " " + args + " > " + log.string() + " 2>&1";
+    const int status = std::system(cmd.c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+std::string slurp(const fs::path& p) {
+    std::ifstream in(p);
+    std::stringstream s;
+    s << in.rdbuf();
+    return s.str();
+}
+
+fs::path freshDir(const std::string& name) {
+    const fs::path dir = fs::path(::testing::TempDir()) / ("cullide_demo_" + name);
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    return dir;
+}
+
+/// Skips outside CI / fails in CI when the demo reports "no GL" (exit 3), per the project's GL test policy.
+#define SKIP_IF_NO_GL(status, log)                                                          \
+    do {                                                                                    \
+        if ((status) == 3) {                                                                \
+            if (::cullide::test::runningInCi()) FAIL() << "CI=true but no GL: " << slurp(log); \
+            GTEST_SKIP() << "no EGL/GL device here (outside CI): " << slurp(log);           \
+        }                                                                                   \
+    } while (false)
+
+/// Fraction of pixels that differ from the top-left pixel (the background).
+double nonBackground(const Image& image) {
+    std::size_t differ = 0;
+    const std::size_t n = std::size_t(image.width) * std::size_t(image.height);
+    for (std::size_t i = 0; i < n; ++i)
+        for (int c = 0; c < 3; ++c)
+            if (image.rgba[4 * i + c] != image.rgba[c]) {
+                ++differ;
+                break;
+            }
+    return n ? double(differ) / double(n) : 0.0;
+}
+
+TEST(BreakableScene, FracturesOnImpactAndIsDeterministic) {
+    CULLIDE_GPU_CULLER_OR_SKIP(probe, Settings{});
+    BreakableOptions options;
+    options.seed = 5;
+    BreakableScene a(options), b(options);
+    const std::size_t initial = a.worldMeshes().size();
+    EXPECT_EQ(initial, 2u);
+    int frame = 0;
+    for (; frame < 60 && a.fractures() == 0; ++frame) {
+        a.step();
+        b.step();
+    }
+    ASSERT_GT(a.fractures(), 0) << "the dragon did not break within 60 frames";
+    for (int k = 0; k < 5; ++k) a.step(), b.step();
+    const auto ma = a.worldMeshes(), mb = b.worldMeshes();
+    EXPECT_GT(ma.size(), initial) << "fracture must add bodies";
+    EXPECT_EQ(a.bodyNames(), b.bodyNames());
+    ASSERT_EQ(ma.size(), mb.size());
+    for (std::size_t i = 0; i < ma.size(); ++i) EXPECT_EQ(ma[i].vertices, mb[i].vertices) << a.bodyNames()[i];
+    // Triangle counts change: the dragon's triangles are cut into the pieces' triangles.
+    EXPECT_NE(a.lastFrame().triangles, 0u);
+}
+
+TEST(BreakableScene, BulletPipelinesRunTheSameScene) {
+    CULLIDE_GPU_CULLER_OR_SKIP(probe, Settings{});
+    for (CollisionPipeline p : {CollisionPipeline::BulletDbvt, CollisionPipeline::BulletAxisSweep}) {
+        BreakableOptions options;
+        options.pipeline = p;
+        BreakableScene scene(options);
+        EXPECT_EQ(scene.cullideBroadphase(), nullptr);
+        for (int f = 0; f < 60 && scene.fractures() == 0; ++f) scene.step();
+        EXPECT_GT(scene.fractures(), 0);
+        EXPECT_GT(scene.lastFrame().broadphaseMs + scene.lastFrame().narrowphaseMs, 0.0);
+    }
+}
+
+TEST(BreakableScene, UnreadableMeshIsAClearError) {
+    BreakableOptions options;
+    options.fallingMesh = "/nonexistent/bunny.off";
+    try {
+        BreakableScene scene(options);
+        FAIL() << "expected an exception";
+    } catch (const std::exception& e) {
+        EXPECT_NE(std::string(e.what()).find("/nonexistent/bunny.off"), std::string::npos) << e.what();
+    }
+}
+
+struct SceneCase {
+    const char* scene;
+    int frames;
+    int snapshotEvery;
+};
+
+class DemoScenes : public ::testing::TestWithParam<SceneCase> {};
+
+TEST_P(DemoScenes, WritesCsvSummaryAndPngsAndMissesNothing) {
+    const SceneCase c = GetParam();
+    const fs::path out = freshDir(c.scene);
+    const fs::path log = out / "log.txt";
+    const std::string args = std::string("--scene ") + c.scene + " --frames " + std::to_string(c.frames) +
+                             " --snapshot-every " + std::to_string(c.snapshotEvery) + " --check-every 4 --out " +
+                             out.string() + (std::string(c.scene) == "env1" ? " --objects 40" : "");
+    const int status = runDemo(args, log);
+    SKIP_IF_NO_GL(status, log);
+    ASSERT_EQ(status, 0) << slurp(log);
+
+    // frames.csv: a header and one row per frame; the missed column is 0 on checked frames.
+    std::ifstream csv(out / "frames.csv");
+    std::string line;
+    ASSERT_TRUE(std::getline(csv, line));
+    EXPECT_EQ(line.rfind("frame,objects,triangles,", 0), 0u) << line;
+    int rows = 0;
+    std::size_t firstObjects = 0, lastObjects = 0;
+    while (std::getline(csv, line)) {
+        std::vector<std::string> cells;
+        std::stringstream s(line);
+        for (std::string cell; std::getline(s, cell, ',');) cells.push_back(cell);
+        if (line.back() == ',') cells.push_back("");
+        ASSERT_EQ(cells.size(), 21u) << line;
+        EXPECT_EQ(std::stoi(cells[0]), rows);
+        if (rows % 4 == 0) EXPECT_EQ(cells[20], "0") << "frame " << rows << " missed pairs";
+        else EXPECT_EQ(cells[20], "");
+        if (rows == 0) firstObjects = std::stoul(cells[1]);
+        lastObjects = std::stoul(cells[1]);
+        ++rows;
+    }
+    EXPECT_EQ(rows, c.frames);
+
+    const auto summary = nlohmann::json::parse(slurp(out / "summary.json"));
+    EXPECT_EQ(summary["scene"], c.scene);
+    EXPECT_EQ(summary["frames"], c.frames);
+    EXPECT_FALSE(summary["renderer"].get<std::string>().empty());
+    EXPECT_EQ(summary["check"]["missed"], 0);
+    EXPECT_GT(summary["check"]["frames_checked"].get<int>(), 0);
+    EXPECT_GT(summary["ms"]["frame"]["median"].get<double>(), 0.0);
+    if (std::string(c.scene) == "breakable") {
+        EXPECT_GT(summary["fractures"].get<int>(), 0) << "the breakable scene must fracture";
+        EXPECT_GT(lastObjects, firstObjects) << "fracture must add bodies";
+    }
+
+    // Snapshots every K frames plus the last one, and a contact sheet; all decode to non-trivial images.
+    const auto snapshots = summary["snapshots"];
+    EXPECT_EQ(int(snapshots.size()), (c.frames - 1) / c.snapshotEvery + 1 + ((c.frames - 1) % c.snapshotEvery ? 1 : 0));
+    for (const auto& name : snapshots) {
+        const Image image = io::readPng((out / name.get<std::string>()).string());
+        EXPECT_EQ(image.width, 640);
+        EXPECT_EQ(image.height, 480);
+        EXPECT_GT(nonBackground(image), 0.02) << name;
+    }
+    const Image sheet = io::readPng((out / "contact_sheet.png").string());
+    EXPECT_GT(sheet.width, 320);
+    EXPECT_GT(nonBackground(sheet), 0.02);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, DemoScenes,
+                         ::testing::Values(SceneCase{"breakable", 28, 9}, SceneCase{"env1", 6, 5},
+                                           SceneCase{"env2", 3, 2}, SceneCase{"env3", 3, 2}),
+                         [](const auto& param) { return std::string(param.param.scene); });
+
+TEST(DemoCli, BadFlagsAndMeshesGiveClearErrors) {
+    const fs::path out = freshDir("cli");
+    const fs::path log = out / "log.txt";
+    EXPECT_EQ(runDemo("--help", log), 0);
+    EXPECT_NE(slurp(log).find("usage: cullide-demo"), std::string::npos);
+    EXPECT_EQ(runDemo("--scene nosuch", log), 2);
+    EXPECT_NE(slurp(log).find("--scene expects"), std::string::npos) << slurp(log);
+    EXPECT_EQ(runDemo("--frames 0", log), 2);
+    EXPECT_EQ(runDemo("--resolution 5", log), 2);
+    EXPECT_EQ(runDemo("--mode fast", log), 2);
+    EXPECT_EQ(runDemo("--bogus", log), 2);
+    EXPECT_EQ(runDemo("--frames", log), 2);
+
+    std::ofstream(out / "bad.off") << "OFF\n3 1 0\n0 0 0\n1 0 0\n";  // truncated
+    const int status = runDemo("--mesh " + (out / "bad.off").string() + " --frames 1 --out " + out.string(), log);
+    SKIP_IF_NO_GL(status, log);
+    EXPECT_EQ(status, 4) << slurp(log);
+    EXPECT_NE(slurp(log).find("bad.off"), std::string::npos) << slurp(log);
+    EXPECT_EQ(runDemo("--mesh /nonexistent.obj --frames 1 --out " + out.string(), log), 4) << slurp(log);
+}
+
+}  // namespace
+}  // namespace cullide::demo
