@@ -50,4 +50,13 @@
 /* Flag bits: bit (2 * axis) = not fully visible from the -axis side (near test), bit (2 * axis + 1) = from the
  * +axis side (far test). An item survives an iteration when both bits of every enabled axis are set. */
 
+/* Snapshot renderer (snapshot.vert / snapshot.frag, plugin/src/gl/SnapshotRenderer.cpp): a separate program, so its
+ * locations may reuse the numbers above. One interleaved vertex per triangle corner (non-indexed draw): */
+#define CULLIDE_SNAPSHOT_ATTR_POSITION 0    /* vec3: position relative to the frame centre (float) */
+#define CULLIDE_SNAPSHOT_ATTR_COLOR 1       /* vec4 from RGBA8 unorm: rgb = colour, a = 1 - fade toward background */
+#define CULLIDE_SNAPSHOT_LOC_VIEW_PROJ 0    /* mat4 (locations 0-3): frame-centre-relative world -> clip */
+#define CULLIDE_SNAPSHOT_LOC_LIGHT 4        /* vec3: unit light direction (toward the light), world axes */
+#define CULLIDE_SNAPSHOT_LOC_BACKGROUND 5   /* vec3: background colour (faded triangles blend toward it) */
+#define CULLIDE_SNAPSHOT_LOC_EDGES 6        /* float: darkening of triangle edges, 0 = none */
+
 #endif

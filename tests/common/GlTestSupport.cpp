@@ -19,4 +19,13 @@ std::unique_ptr<Culler> makeGpuCuller(const Settings& settings, std::string& why
     }
 }
 
+std::unique_ptr<SnapshotRenderer> makeSnapshotRenderer(std::string& whyNot) {
+    try {
+        return SnapshotRenderer::create();
+    } catch (const GlUnavailableError& e) {
+        whyNot = e.what();
+        return nullptr;
+    }
+}
+
 }  // namespace cullide::test
