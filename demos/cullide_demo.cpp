@@ -149,9 +149,12 @@ Options parse(int argc, char** argv, bool& help) {
     return o;
 }
 
-/// Distinct, muted object colours (golden-angle hues).
-std::array<float, 3> colourOf(std::size_t i) {
-    const double h = std::fmod(0.08 + 0.618033988749895 * double(i), 1.0) * 6.0;
+/// Distinct, muted object colours (golden-angle hues), keyed by the object's name so that an object keeps its
+/// colour when others appear or disappear.
+std::array<float, 3> colourOf(const std::string& name) {
+    std::uint32_t i = 2166136261u;  // FNV-1a
+    for (unsigned char ch : name) i = (i ^ ch) * 16777619u;
+    const double h = std::fmod(0.08 + 0.618033988749895 * double(i % 1000u), 1.0) * 6.0;
     const double s = 0.35, v = 0.80;
     const double c = v * s, x = c * (1 - std::fabs(std::fmod(h, 2.0) - 1)), m = v - c;
     double r = 0, g = 0, b = 0;
@@ -182,11 +185,12 @@ cullide::Image snapshot(cullide::SnapshotRenderer& renderer, cullide::demo::Scen
     std::optional<cullide::TriangleMesh> ground = runner.ground();
     if (ground) items.push_back({&*ground, {0.55f, 0.55f, 0.52f}, nullptr, nullptr});
     static const std::vector<std::uint32_t> kNone;
+    const std::vector<std::string> names = runner.names();
     for (std::size_t i = 0; i < meshes.size(); ++i) {
         std::sort(marked[i].begin(), marked[i].end());
         marked[i].erase(std::unique(marked[i].begin(), marked[i].end()), marked[i].end());
         const auto* pcs = i < result.pcsTriangles.size() ? &result.pcsTriangles[i] : &kNone;
-        items.push_back({&meshes[i], colourOf(i), pcs, &marked[i]});
+        items.push_back({&meshes[i], colourOf(i < names.size() ? names[i] : std::to_string(i)), pcs, &marked[i]});
     }
     cullide::SnapshotView view;
     view.frame = frameBox;

@@ -261,7 +261,8 @@ struct BreakableScene::Impl {
                     const double impulse = double(p.getAppliedImpulse());
                     if (!(impulse > 0)) continue;
                     const btVector3& w = o == o0 ? p.getPositionWorldOnA() : p.getPositionWorldOnB();
-                    auto& entry = load[b];
+                    // Not load[b]: a default-constructed Eigen vector is uninitialised.
+                    auto& entry = load.try_emplace(b, 0.0, Vec3::Zero()).first->second;
                     entry.first += impulse;
                     entry.second += impulse * Vec3(double(w.x()), double(w.y()), double(w.z()));
                 }

@@ -170,14 +170,21 @@ MassProperties hullMassProperties(const std::vector<Vec3>& points, double densit
     Eigen::Matrix3d canonical;
     canonical << 2, 1, 1, 1, 2, 1, 1, 1, 2;
     canonical /= 120.0;
+    // The hull's topology comes from Bullet; its vertex positions are Bullet's rounded ones, so the integrals
+    // use the original double-precision input points they came from.
+    std::vector<Vec3> hullPoints(static_cast<std::size_t>(hull.vertices.size()));
+    for (int i = 0; i < hull.vertices.size(); ++i) {
+        const int o = i < hull.original_vertex_index.size() ? hull.original_vertex_index[i] : -1;
+        const btVector3& p = hull.vertices[i];
+        hullPoints[std::size_t(i)] = o >= 0 && 3 * std::size_t(o) + 2 < coords.size()
+                                         ? Vec3(coords[3 * std::size_t(o)], coords[3 * std::size_t(o) + 1],
+                                                coords[3 * std::size_t(o) + 2])
+                                         : Vec3(double(p.x()), double(p.y()), double(p.z()));
+    }
     Vec3 apex = Vec3::Zero();
-    for (int i = 0; i < hull.vertices.size(); ++i)
-        apex += Vec3(double(hull.vertices[i].x()), double(hull.vertices[i].y()), double(hull.vertices[i].z()));
-    if (hull.vertices.size() > 0) apex /= double(hull.vertices.size());
-    auto vertex = [&](int v) -> Vec3 {  // explicit: an Eigen expression would dangle
-        const btVector3& p = hull.vertices[v];
-        return Vec3(double(p.x()), double(p.y()), double(p.z())) - apex;
-    };
+    for (const Vec3& p : hullPoints) apex += p;
+    if (!hullPoints.empty()) apex /= double(hullPoints.size());
+    auto vertex = [&](int v) -> Vec3 { return hullPoints[std::size_t(v)] - apex; };  // not auto: would dangle
     for (int f = 0; f < hull.faces.size(); ++f) {
         const btConvexHullComputer::Edge* start = &hull.edges[hull.faces[f]];
         const Vec3 v0 = vertex(start->getSourceVertex());
