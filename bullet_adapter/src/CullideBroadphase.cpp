@@ -181,6 +181,8 @@ struct CullideBroadphase::Impl {
     void makeCuller(double d) {
         Settings s = settings;
         s.margin = d;
+        // Bullet's triangle routines are the exact stage here: the culler hands over its surviving candidates.
+        s.exactTriangles = false;
         culler = factory(s);
         if (!culler) throw std::runtime_error("cullide::CullideBroadphase: the culler factory returned nothing");
         margin = culler->settings().margin;

@@ -165,7 +165,7 @@ struct JobGrid {
 
 }  // namespace
 
-void ExactStage::run(const std::vector<Object>& objects, const std::vector<ExactJob>& jobs, double margin,
+void ExactStage::run(const std::vector<Object>& objects, const std::vector<ExactJob>& jobs, double margin, bool exact,
                      std::vector<ExactJobResult>& results, Stats& stats) {
     results.assign(jobs.size(), ExactJobResult{});
     m_candidates.resize(jobs.size());
@@ -228,8 +228,8 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
     std::vector<std::size_t> offsets(jobs.size() + 1, 0);
     for (std::size_t j = 0; j < jobs.size(); ++j) offsets[j + 1] = offsets[j] + m_candidates[j].size();
     const std::size_t total = offsets.back();
-    std::vector<std::uint8_t> hit(total, 0);
-    m_pool.parallelFor(total, 2048, [&](std::size_t begin, std::size_t end) {
+    std::vector<std::uint8_t> hit(total, exact ? 0 : 1);
+    if (exact) m_pool.parallelFor(total, 2048, [&](std::size_t begin, std::size_t end) {
         std::size_t j = static_cast<std::size_t>(std::upper_bound(offsets.begin(), offsets.end(), begin) -
                                                  offsets.begin()) - 1;
         for (std::size_t k = begin; k < end; ++k) {
@@ -249,10 +249,10 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
         for (std::size_t k = 0; k < m_candidates[j].size(); ++k)
             if (hit[offsets[j] + k]) out.push_back(m_candidates[j][k]);
         std::sort(out.begin(), out.end());
-        stats.intersectingTrianglePairs += out.size();
+        if (exact) stats.intersectingTrianglePairs += out.size();
     }
     stats.candidateTrianglePairs += total;
-    stats.exactTests += total;
+    if (exact) stats.exactTests += total;
 }
 
 }  // namespace cullide

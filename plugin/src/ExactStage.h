@@ -20,14 +20,15 @@ struct ExactJob {
 
 struct ExactJobResult {
     std::size_t candidates = 0;          ///< triangle pairs whose boxes (inflated by margin / 2) overlap
-    std::vector<TrianglePair> triangles;  ///< intersecting / within-margin pairs, sorted
+    std::vector<TrianglePair> triangles;  ///< intersecting / within-margin pairs (or all candidates), sorted
 };
 
 class ExactStage {
 public:
     explicit ExactStage(unsigned threads) : m_pool(threads) {}
 
-    void run(const std::vector<Object>& objects, const std::vector<ExactJob>& jobs, double margin,
+    /// With `exact` false, every candidate is reported (no triangle test).
+    void run(const std::vector<Object>& objects, const std::vector<ExactJob>& jobs, double margin, bool exact,
              std::vector<ExactJobResult>& results, Stats& stats);
 
 private:

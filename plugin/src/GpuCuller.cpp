@@ -384,7 +384,7 @@ private:
             }
             result.pairs.push_back(std::move(pair));
         }
-        m_exact.run(*m_objects, jobs, m_settings.margin, m_jobResults, result.stats);
+        m_exact.run(*m_objects, jobs, m_settings.margin, m_settings.exactTriangles, m_jobResults, result.stats);
         std::vector<std::uint8_t> keep(result.pairs.size(), 1);
         for (std::size_t j = 0; j < jobs.size(); ++j) {
             result.pairs[jobPair[j]].triangles = std::move(m_jobResults[j].triangles);

@@ -57,6 +57,11 @@ struct Settings {
     int maxIterations = 4;
     /// Distance margin d >= 0: triangle pairs closer than d are reported as well.
     double margin = 0.0;
+    /// true: ObjectPair::triangles are the exactly intersecting (within-margin) pairs. false: the exact test is left
+    /// to the caller's own narrow phase and ObjectPair::triangles lists every surviving candidate pair (triangle
+    /// boxes grown by margin / 2 overlap) — a superset, cheaper to produce; the Bullet adapter uses this, since
+    /// Bullet's triangle routines decide the contacts anyway. The reference culler is always exact.
+    bool exactTriangles = true;
     /// Worker threads for the exact stage; 0 = hardware concurrency.
     unsigned threads = 0;
     /// Auto pipeline: a level whose input has at most this many triangles goes straight to the exact stage.

@@ -33,7 +33,7 @@ struct Stats {
     std::size_t candidateObjectPairs = 0;
     std::size_t candidateTrianglePairs = 0;  ///< pairs whose inflated boxes overlap (handed to the exact test)
     std::size_t exactTests = 0;
-    std::size_t intersectingTrianglePairs = 0;
+    std::size_t intersectingTrianglePairs = 0;  ///< exact pairs found (0 with Settings::exactTriangles false)
     std::size_t draws = 0;
     std::size_t bytesUploaded = 0;
     std::size_t bytesReadBack = 0;
