@@ -79,10 +79,20 @@ public:
 
         m_uploaded = false;
         Timer levels;
-        if (paper)
-            runPaperPipeline(stats);
-        else
-            runAutoPipeline(stats);
+        try {
+            if (paper)
+                runPaperPipeline(stats);
+            else
+                runAutoPipeline(stats);
+        } catch (const gl::GlError& e) {
+            // A GL error mid-frame costs this frame its GPU pruning, never a contact: every triangle that the CPU
+            // pre-pass keeps goes to the exact stage.
+            ++stats.gpuFallbacks;
+            stats.gpuError = e.what();
+            m_survivingTriangles.assign(m_valid.size(), {});
+            collectTriangles(m_groups, !paper);
+            finishFromTriangles({});
+        }
         stats.gpuLevelsMs = levels.ms() - stats.uploadMs;
 
         Timer exact;

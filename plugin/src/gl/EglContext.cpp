@@ -63,11 +63,15 @@ void releaseDisplay(EGLDisplay d) {
 }  // namespace
 
 void checkGlError(const char* what) {
-    const GLenum error = glGetError();
+    GLenum error = glGetError();
+    if (error == GL_NO_ERROR) {
+        const char* inject = std::getenv("CULLIDE_INJECT_GL_ERROR");
+        if (inject != nullptr && *inject != '\0' && std::strstr(what, inject) != nullptr) error = GL_INVALID_OPERATION;
+    }
     if (error != GL_NO_ERROR) {
         char buffer[160];
         std::snprintf(buffer, sizeof buffer, "OpenGL error 0x%04x after %s", error, what);
-        throw std::runtime_error(buffer);
+        throw GlError(buffer);
     }
 }
 

@@ -5,12 +5,21 @@
 #include <epoxy/egl.h>
 #include <epoxy/gl.h>
 
+#include <stdexcept>
 #include <string>
 
 namespace cullide::gl {
 
-/// Throws std::runtime_error naming `what` when a GL error is pending (all builds: the checks are cheap, once per
-/// pass). In debug builds a KHR_debug callback also reports messages as they happen.
+/// A GL error raised while the culler was working (the GL context may still be usable).
+class GlError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+/// Throws GlError naming `what` when a GL error is pending (all builds: the checks are cheap, once per pass). In
+/// debug builds a KHR_debug callback also reports messages as they happen.
+/// Fault injection for tests: while the environment variable CULLIDE_INJECT_GL_ERROR holds a non-empty substring
+/// of `what`, the check reports GL_INVALID_OPERATION, as a driver error in the middle of a frame would.
 void checkGlError(const char* what);
 
 /// Embedded shader sources (generated from shaders/ at build time); nullptr for an unknown name.
