@@ -42,15 +42,13 @@ long missedPairs(const Result& reference, const Result& result) {
     return missed;
 }
 
-void fillFromStats(FrameRecord& r, const Result& result) {
-    const Stats& s = result.stats;
-    r.triangles = s.triangles;
+/// The culler's set sizes and stage times (the caller sets the triangle pairs and frame times it knows better).
+void fillFromStats(FrameRecord& r, const Stats& s, std::size_t pcsTriangles) {
     r.prepassObjects = s.prepassObjectsOut;
     r.prepassGroups = s.prepassGroupsOut;
     r.pcsObjects = s.pcsObjects;
-    for (const auto& list : result.pcsTriangles) r.pcsTriangles += list.size();
+    r.pcsTriangles = pcsTriangles;
     r.candidatePairs = s.candidateTrianglePairs;
-    r.trianglePairs = s.intersectingTrianglePairs;
     r.prepassMs = s.prepassMs;
     r.gpuLevelsMs = s.gpuLevelsMs + s.uploadMs;
     r.exactMs = s.exactMs;
@@ -80,7 +78,11 @@ public:
         m_meshes = m_env->frame(m_frame++);
         const std::vector<Object> objects = asObjects(m_meshes);
         m_culler->run(objects, m_result);
-        fillFromStats(r, m_result);
+        std::size_t pcsTriangles = 0;
+        for (const auto& list : m_result.pcsTriangles) pcsTriangles += list.size();
+        fillFromStats(r, m_result.stats, pcsTriangles);
+        r.triangles = m_result.stats.triangles;
+        r.trianglePairs = m_result.stats.intersectingTrianglePairs;
         r.objects = m_meshes.size();
         r.frameMs = m_result.stats.totalMs;
         if (check) {
@@ -143,20 +145,12 @@ public:
         r.frame = f.frame;
         r.objects = f.bodies;
         r.triangles = f.triangles;
-        const Stats& s = f.cullide.culler;
-        r.prepassObjects = s.prepassObjectsOut;
-        r.prepassGroups = s.prepassGroupsOut;
-        r.pcsObjects = s.pcsObjects;
-        r.pcsTriangles = f.cullide.pcsTriangles;
-        r.candidatePairs = s.candidateTrianglePairs;
+        fillFromStats(r, f.cullide.culler, f.cullide.pcsTriangles);
         r.trianglePairs = f.trianglePairs;
         r.broadphasePairs = f.broadphasePairs;
         r.contacts = f.contacts;
         r.newPieces = f.brokenPieces;
-        r.prepassMs = s.prepassMs;
-        r.gpuLevelsMs = s.gpuLevelsMs + s.uploadMs;
-        r.exactMs = s.exactMs;
-        r.cullMs = f.broadphaseMs;
+        r.cullMs = f.broadphaseMs;  // the whole broadphase step (frame building, culler, pair cache)
         r.narrowphaseMs = f.narrowphaseMs;
         r.solverMs = f.solverMs;
         r.fractureMs = f.fractureMs;

@@ -17,26 +17,37 @@
 namespace cullide::test {
 namespace {
 
-std::vector<btVector3> runCloth(PipelineKind kind) {
+/// A btSoftRigidDynamicsWorld with either pipeline (gravity -10 y).
+struct SoftWorld {
     btSoftBodyRigidBodyCollisionConfiguration config;
     std::unique_ptr<btBroadphaseInterface> broadphase;
     std::unique_ptr<btCollisionDispatcher> dispatcher;
-    if (kind == PipelineKind::Default) {
-        broadphase = std::make_unique<btDbvtBroadphase>();
-        dispatcher = std::make_unique<btCollisionDispatcher>(&config);
-    } else {
-        auto bp = std::make_unique<CullideBroadphase>(Settings{}, nullptr, gpuFactory());
-        dispatcher = std::make_unique<CullideCollisionDispatcher>(&config, bp.get());
-        broadphase = std::move(bp);
-    }
     btSequentialImpulseConstraintSolver solver;
-    btSoftRigidDynamicsWorld world(dispatcher.get(), broadphase.get(), &solver, &config);
-    world.setGravity(btVector3(0, -10, 0));
+    std::unique_ptr<btSoftRigidDynamicsWorld> world;
+
+    explicit SoftWorld(PipelineKind kind) {
+        if (kind == PipelineKind::Default) {
+            broadphase = std::make_unique<btDbvtBroadphase>();
+            dispatcher = std::make_unique<btCollisionDispatcher>(&config);
+        } else {
+            auto bp = std::make_unique<CullideBroadphase>(Settings{}, nullptr, gpuFactory());
+            dispatcher = std::make_unique<CullideCollisionDispatcher>(&config, bp.get());
+            broadphase = std::move(bp);
+        }
+        world = std::make_unique<btSoftRigidDynamicsWorld>(dispatcher.get(), broadphase.get(), &solver, &config);
+        world->setGravity(btVector3(0, -10, 0));
+        btSoftBodyWorldInfo& info = world->getWorldInfo();
+        info.m_broadphase = broadphase.get();
+        info.m_dispatcher = dispatcher.get();
+        info.m_gravity = world->getGravity();
+        info.m_sparsesdf.Initialize();
+    }
+};
+
+std::vector<btVector3> runCloth(PipelineKind kind) {
+    SoftWorld soft(kind);
+    btSoftRigidDynamicsWorld& world = *soft.world;
     btSoftBodyWorldInfo& info = world.getWorldInfo();
-    info.m_broadphase = broadphase.get();
-    info.m_dispatcher = dispatcher.get();
-    info.m_gravity = world.getGravity();
-    info.m_sparsesdf.Initialize();
 
     btBoxShape groundShape(btVector3(10, 1, 10));
     btBoxShape boxShape(btVector3(btScalar(0.6), btScalar(0.6), btScalar(0.6)));
@@ -86,25 +97,9 @@ TEST(BulletSoftBody, ClothSettlesExactlyAsWithDefaultPipeline) {
 /// Two soft tori (VF_SS: soft-soft collisions through faces, SDF_RS against rigid bodies) dropped on each other and
 /// on a box floor. Returns the nodes of both tori after `steps` steps.
 std::vector<btVector3> runSoftTori(PipelineKind kind, int steps) {
-    btSoftBodyRigidBodyCollisionConfiguration config;
-    std::unique_ptr<btBroadphaseInterface> broadphase;
-    std::unique_ptr<btCollisionDispatcher> dispatcher;
-    if (kind == PipelineKind::Default) {
-        broadphase = std::make_unique<btDbvtBroadphase>();
-        dispatcher = std::make_unique<btCollisionDispatcher>(&config);
-    } else {
-        auto bp = std::make_unique<CullideBroadphase>(Settings{}, nullptr, gpuFactory());
-        dispatcher = std::make_unique<CullideCollisionDispatcher>(&config, bp.get());
-        broadphase = std::move(bp);
-    }
-    btSequentialImpulseConstraintSolver solver;
-    btSoftRigidDynamicsWorld world(dispatcher.get(), broadphase.get(), &solver, &config);
-    world.setGravity(btVector3(0, -10, 0));
+    SoftWorld soft(kind);
+    btSoftRigidDynamicsWorld& world = *soft.world;
     btSoftBodyWorldInfo& info = world.getWorldInfo();
-    info.m_broadphase = broadphase.get();
-    info.m_dispatcher = dispatcher.get();
-    info.m_gravity = world.getGravity();
-    info.m_sparsesdf.Initialize();
 
     btBoxShape groundShape(btVector3(10, 1, 10));
     btRigidBody ground(0, nullptr, &groundShape);
