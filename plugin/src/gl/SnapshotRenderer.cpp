@@ -9,13 +9,11 @@
 #include "bindings.h"
 #include "gl/EglContext.h"
 #include "gl/GlApi.h"
+#include "gl/GlProgram.h"
 
 #include <Eigen/Geometry>
 
 #include <algorithm>
-#if defined(__SANITIZE_ADDRESS__)
-#include <sanitizer/lsan_interface.h>
-#endif
 #include <cmath>
 #include <cstddef>
 #include <cstring>
@@ -51,19 +49,6 @@ constexpr std::uint8_t kBase = 0;
 constexpr std::uint8_t kHighlighted = 1;
 constexpr std::uint8_t kMarked = 2;
 
-#if defined(__SANITIZE_ADDRESS__)
-/// Mesa 22.3's llvmpipe draw path loses 112 bytes (two 56-byte callocs from JIT-compiled code) on the first raster
-/// draw of a process, in frames LeakSanitizer cannot attribute (see VisibilityPass.cpp); only allocations inside
-/// this scope are ignored, and it wraps nothing but GL draw calls.
-struct ThirdPartyLeakScope {
-    ThirdPartyLeakScope() { __lsan_disable(); }
-    ~ThirdPartyLeakScope() { __lsan_enable(); }
-};
-#else
-struct ThirdPartyLeakScope {
-    ThirdPartyLeakScope() {}  // user-provided: no unused-variable warning at the use site
-};
-#endif
 
 void requireColour(const std::array<float, 3>& c, const std::string& what) {
     for (float v : c) {
@@ -156,48 +141,16 @@ Camera fitCamera(const SnapshotView& view, const Aabb& frame) {
     return cam;
 }
 
-GLuint compileShader(GLenum type, const char* name) {
-    const char* text = shaderSource(name);
-    if (text == nullptr) throw std::logic_error(std::string("missing embedded shader ") + name);
-    const char* sources[] = {"#version 450 core\n", shaderSource("bindings.h"), "\n", text};
-    GLuint shader = glCreateShader(type);
-    glShaderSource(shader, 4, sources, nullptr);
-    glCompileShader(shader);
-    GLint ok = 0;
-    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char log[4096] = {};
-        glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-        glDeleteShader(shader);
-        throw std::runtime_error(std::string("cullide: compiling ") + name + " failed: " + log);
-    }
-    return shader;
-}
-
 GLuint linkSnapshotProgram() {
-    const GLuint vs = compileShader(GL_VERTEX_SHADER, "snapshot.vert");
+    const GLuint vs = compileShader(GL_VERTEX_SHADER, {"snapshot.vert"});
     GLuint fs = 0;
     try {
-        fs = compileShader(GL_FRAGMENT_SHADER, "snapshot.frag");
+        fs = compileShader(GL_FRAGMENT_SHADER, {"snapshot.frag"});
     } catch (...) {
         glDeleteShader(vs);
         throw;
     }
-    const GLuint program = glCreateProgram();
-    glAttachShader(program, vs);
-    glAttachShader(program, fs);
-    glLinkProgram(program);
-    glDeleteShader(vs);
-    glDeleteShader(fs);
-    GLint ok = 0;
-    glGetProgramiv(program, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        char log[4096] = {};
-        glGetProgramInfoLog(program, sizeof log, nullptr, log);
-        glDeleteProgram(program);
-        throw std::runtime_error(std::string("cullide: linking the snapshot program failed: ") + log);
-    }
-    return program;
+    return linkProgram({vs, fs}, "the snapshot program");
 }
 
 class GlSnapshotRenderer final : public SnapshotRenderer {

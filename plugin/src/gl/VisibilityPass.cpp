@@ -3,11 +3,9 @@
 #include "bindings.h"
 #include "gl/EglContext.h"
 #include "gl/GlApi.h"
+#include "gl/GlProgram.h"
 
 #include <algorithm>
-#if defined(__SANITIZE_ADDRESS__)
-#include <sanitizer/lsan_interface.h>
-#endif
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -20,45 +18,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-/// Compiles "#version" + bindings.h + the given embedded sources, in order.
-GLuint compileShader(GLenum type, std::initializer_list<const char*> names) {
-    std::vector<const char*> sources = {"#version 450 core\n", shaderSource("bindings.h")};
-    for (const char* name : names) {
-        const char* text = shaderSource(name);
-        if (text == nullptr) throw std::logic_error(std::string("missing embedded shader ") + name);
-        sources.push_back("\n");
-        sources.push_back(text);
-    }
-    GLuint shader = glCreateShader(type);
-    glShaderSource(shader, static_cast<GLsizei>(sources.size()), sources.data(), nullptr);
-    glCompileShader(shader);
-    GLint ok = 0;
-    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char log[4096] = {};
-        glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-        glDeleteShader(shader);
-        throw std::runtime_error(std::string("cullide: compiling ") + *(names.end() - 1) + " failed: " + log);
-    }
-    return shader;
-}
-
-GLuint linkProgram(std::initializer_list<GLuint> shaders) {
-    GLuint program = glCreateProgram();
-    for (GLuint shader : shaders) glAttachShader(program, shader);
-    glLinkProgram(program);
-    for (GLuint shader : shaders) glDeleteShader(shader);
-    GLint ok = 0;
-    glGetProgramiv(program, GL_LINK_STATUS, &ok);
-    if (!ok) {
-        char log[4096] = {};
-        glGetProgramInfoLog(program, sizeof log, nullptr, log);
-        glDeleteProgram(program);
-        throw std::runtime_error(std::string("cullide: linking a visibility program failed: ") + log);
-    }
-    return program;
 }
 
 /// Grows a buffer to hold at least `bytes`.
@@ -81,19 +40,6 @@ std::uint32_t bitsFor(std::uint32_t maxValue) {
     return bits;
 }
 
-#if defined(__SANITIZE_ADDRESS__)
-/// Mesa 22.3's llvmpipe draw path loses 112 bytes (two 56-byte callocs inside swrast_dri) on the first raster draw
-/// of a process (seen with valgrind: "definitely lost ... by glDrawArrays"). Mesa is built without frame pointers, so
-/// LeakSanitizer cannot attribute it and no suppression matches; allocations inside this scope only are ignored.
-struct ThirdPartyLeakScope {
-    ThirdPartyLeakScope() { __lsan_disable(); }
-    ~ThirdPartyLeakScope() { __lsan_enable(); }
-};
-#else
-struct ThirdPartyLeakScope {
-    ThirdPartyLeakScope() {}  // user-provided: no unused-variable warning at the use site
-};
-#endif
 
 enum Buffer { kPositions, kIndices, kBoxes, kPrims, kOwners, kFlags, kRecords, kCounters, kBufferCount };
 constexpr std::size_t kRecordBytes = 7 * 16;  // PrimRecord in common.glsl
@@ -135,10 +81,12 @@ struct VisibilityPass::Impl {
     Impl(EglContext& c, const Settings& s) : context(c), settings(s) {
         context.makeCurrent();
         if (settings.backend == Backend::Compute) {
-            program = linkProgram({compileShader(GL_COMPUTE_SHADER, {"common.glsl", "visit.glsl", "cull.comp"})});
+            program = linkProgram({compileShader(GL_COMPUTE_SHADER, {"common.glsl", "visit.glsl", "cull.comp"})},
+                                  "the visibility program");
         } else {
             setupProgram = linkProgram(
-                {compileShader(GL_COMPUTE_SHADER, {"common.glsl", "records.glsl", "cull_setup.comp"})});
+                {compileShader(GL_COMPUTE_SHADER, {"common.glsl", "records.glsl", "cull_setup.comp"})},
+                "the visibility setup program");
             GLuint vs = compileShader(GL_VERTEX_SHADER, {"common.glsl", "records.glsl", "cull.vert"});
             GLuint fs = 0;
             try {
@@ -147,7 +95,7 @@ struct VisibilityPass::Impl {
                 glDeleteShader(vs);
                 throw;
             }
-            program = linkProgram({vs, fs});
+            program = linkProgram({vs, fs}, "the visibility raster program");
         }
         glCreateVertexArrays(1, &vao);
         glCreateBuffers(kBufferCount, buffers);
