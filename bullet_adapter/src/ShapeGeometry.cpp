@@ -75,10 +75,17 @@ std::uint64_t hashSubpart(std::uint64_t h, const btStridingMeshInterface& mesh, 
     const std::size_t vertexBytes = v.type == PHY_DOUBLE ? 3 * sizeof(double) : 3 * sizeof(float);
     const std::size_t indexBytes = v.indexType == PHY_SHORT ? 3 * sizeof(unsigned short)
                                    : v.indexType == PHY_UCHAR ? 3 : 3 * sizeof(unsigned int);
-    for (int i = 0; i < v.numVerts; ++i)
-        h = hashBytes(h, v.vertexBase + static_cast<std::ptrdiff_t>(i) * v.stride, vertexBytes);
-    for (int f = 0; f < v.numFaces; ++f)
-        h = hashBytes(h, v.indexBase + static_cast<std::ptrdiff_t>(f) * v.indexStride, indexBytes);
+    // Tightly packed arrays (the common case) in one pass, 8 bytes at a time.
+    if (static_cast<std::size_t>(v.stride) == vertexBytes)
+        h = hashBytes(h, v.vertexBase, static_cast<std::size_t>(v.numVerts) * vertexBytes);
+    else
+        for (int i = 0; i < v.numVerts; ++i)
+            h = hashBytes(h, v.vertexBase + static_cast<std::ptrdiff_t>(i) * v.stride, vertexBytes);
+    if (static_cast<std::size_t>(v.indexStride) == indexBytes)
+        h = hashBytes(h, v.indexBase, static_cast<std::size_t>(v.numFaces) * indexBytes);
+    else
+        for (int f = 0; f < v.numFaces; ++f)
+            h = hashBytes(h, v.indexBase + static_cast<std::ptrdiff_t>(f) * v.indexStride, indexBytes);
     return h;
 }
 
