@@ -192,8 +192,9 @@ struct CullideBroadphase::Impl {
     /// multiplies the within-margin triangle pairs the exact stage must test (the culler is recreated, with some
     /// headroom after the first frame so a changing scene does not recreate it every frame).
     void ensureMargin(double required) {
-        if (required <= margin && required >= 0.5 * margin) return;
         if (required <= margin && margin <= settings.margin) return;  // the application asked for this margin
+        // The first frame sets it to exactly what the scene needs (the constructor's culler has a generic one).
+        if (required <= margin && required >= 0.5 * margin && !(frame <= 1 && required < margin)) return;
         // Before the first frame: exactly what the scene needs; later with headroom, so a growing scene does not
         // recreate the culler every frame.
         makeCuller(std::max(settings.margin, (frame > 1 ? 1.25 : 1.0) * required));
