@@ -13,6 +13,7 @@
 #include <BulletCollision/NarrowPhaseCollision/btPersistentManifold.h>
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <cstdio>
 #include <new>
@@ -30,8 +31,8 @@ namespace {
 constexpr double kInfiniteCoordinate = 1e15;
 /// Fattening of the query tree's leaves (like btDbvtBroadphase's gDbvtMargin): fewer tree updates.
 constexpr btScalar kTreeMargin = btScalar(0.05);
-/// Used for the first culler when Settings::margin is 0: 2 * Bullet's default convex margin + 1.5 * breaking
-/// threshold (see requiredMargin); the culler is recreated with a larger margin when the scene needs one.
+/// Used for the constructor's culler when Settings::margin is 0 (it must exist to report a missing GL device at
+/// construction); the first frame recreates it with exactly the margin the scene needs (see requiredMargin).
 constexpr double kDefaultMargin = 0.12;
 
 
@@ -112,6 +113,7 @@ struct CullideBroadphase::Impl {
     CullerFactory factory;
     std::unique_ptr<Culler> culler;
     double margin = 0.0;
+    bool shrinkFailed = false;  ///< recreating the culler with a smaller margin failed once: not tried again
 
     btOverlappingPairCache* cache = nullptr;
     bool ownsCache = false;
@@ -178,13 +180,15 @@ struct CullideBroadphase::Impl {
         cache = nullptr;
     }
 
+    /// Replaces the culler by one with margin d; on failure (throws) the current culler stays as it was.
     void makeCuller(double d) {
         Settings s = settings;
         s.margin = d;
         // Bullet's triangle routines are the exact stage here: the culler hands over its surviving candidates.
         s.exactTriangles = false;
-        culler = factory(s);
-        if (!culler) throw std::runtime_error("cullide::CullideBroadphase: the culler factory returned nothing");
+        std::unique_ptr<Culler> made = factory(s);
+        if (!made) throw std::runtime_error("cullide::CullideBroadphase: the culler factory returned nothing");
+        culler = std::move(made);
         margin = culler->settings().margin;
     }
 
@@ -193,6 +197,7 @@ struct CullideBroadphase::Impl {
     /// headroom after the first frame so a changing scene does not recreate it every frame).
     void ensureMargin(double required) {
         if (required <= margin && margin <= settings.margin) return;  // the application asked for this margin
+        if (required <= margin && shrinkFailed) return;  // a smaller culler could not be made: keep the sound one
         // The first frame sets it to exactly what the scene needs (the constructor's culler has a generic one).
         if (required <= margin && required >= 0.5 * margin && !(frame <= 1 && required < margin)) return;
         // Before the first frame: exactly what the scene needs; later with headroom, so a growing scene does not
@@ -415,6 +420,7 @@ struct CullideBroadphase::Impl {
                               (collisionDispatcher->getDispatcherFlags() &
                                btCollisionDispatcher::CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD) != 0;
         double gimpact = -1.0, hull = -1.0, mesh = -1.0;  // largest margin per kind (-1: none in the frame)
+        double coordinate = 0.0;  // largest finite |AABB coordinate| of a triangle-geometry object
         bool boxes = false;  // objects culled as their AABB (primitives, compounds, soft bodies)
         double largest = 0.0, second = 0.0, largestDynamic = 0.0;
         for (const Proxy* p : proxies) {
@@ -432,7 +438,12 @@ struct CullideBroadphase::Impl {
                 }
                 if (p->role == Role::Dynamic) largestDynamic = std::max(largestDynamic, disc);
             }
-            switch (bullet::geometryKindOf(shape)) {
+            const bullet::GeometryKind kind = bullet::geometryKindOf(shape);
+            if (kind != bullet::GeometryKind::None && p->role == Role::Dynamic)
+                for (int k = 0; k < 3; ++k)
+                    coordinate = std::max({coordinate, std::fabs(double(p->m_aabbMin[k])),
+                                           std::fabs(double(p->m_aabbMax[k]))});
+            switch (kind) {
                 case bullet::GeometryKind::GImpactMesh:
                     gimpact = std::max(gimpact, double(bullet::triangleMarginOf(shape)));
                     break;
@@ -453,8 +464,13 @@ struct CullideBroadphase::Impl {
         double d = boxes ? 1.5 * t : 0.0;
         // GImpact-GImpact: Bullet's triangle routine (btPrimitiveTriangle's clip method) reports a point only where
         // the triangles come within the sum of their margins, and GImpact rebuilds its manifold every frame: 2 g,
-        // with 10% for Bullet's single-precision arithmetic.
-        if (gimpact >= 0) d = std::max(d, 2.2 * gimpact);
+        // plus slack for Bullet's arithmetic in btScalar at these coordinates (and 10% of the margin).
+        // (A Bullet built with BULLET_TRIANGLE_COLLISION uses GJK on triangle pairs instead, within 2 g + t: not
+        // Debian's build; such an application sets Settings::margin to 2 g + t.)
+        const double slack = 8.0 * double(std::numeric_limits<btScalar>::epsilon()) * coordinate;
+        if (gimpact >= 0) d = std::max(d, 2.2 * gimpact + slack);
+        // GImpact against box proxies (primitives, compounds): Bullet's convex algorithms keep points within t.
+        if (gimpact >= 0 && boxes) d = std::max(d, gimpact + t);
         // GImpact against a hull or a static mesh goes through convex algorithms that keep points within t.
         if (gimpact >= 0 && hull >= 0) d = std::max(d, gimpact + hull + t);
         if (gimpact >= 0 && mesh >= 0) d = std::max(d, gimpact + mesh + t);
@@ -727,12 +743,15 @@ struct CullideBroadphase::Impl {
         for (const Proxy* p : proxies)
             if (p->role == Role::Invalid) ++stats.rejectedObjects;
         bool cullerUsable = true;
+        const double required = requiredMargin(dispatcher);
         try {
-            ensureMargin(requiredMargin(dispatcher));
+            ensureMargin(required);
         } catch (const std::exception& e) {
-            // The old culler's margin is too small for this scene: conservative AABB pairs instead.
             reportCullerFailure(e);
-            cullerUsable = false;
+            // A culler that could not be made smaller is still sound; one whose margin is too small for this scene
+            // is not: conservative AABB pairs instead.
+            cullerUsable = culler != nullptr && required <= margin;
+            if (cullerUsable) shrinkFailed = true;
         }
         stats.margin = margin;
         markStaticsNearDynamics();

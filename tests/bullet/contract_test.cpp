@@ -245,6 +245,47 @@ TEST(BulletContract, CullerRecreationFailureFallsBackToAabbPairs) {
     EXPECT_GT(run.fallbackPairs, 0u);
 }
 
+/// The constructor's culler has a generic margin; the first frame shrinks it to what the scene needs. When that
+/// recreation fails (the factory throws or returns nothing), the larger culler is still sound and stays in use:
+/// no AABB fallback, no crash on later frames, contacts right.
+TEST(BulletContract, CullerShrinkFailureKeepsTheSoundCuller) {
+    for (bool returnNothing : {false, true}) {
+        ShapeStore shapes;
+        btCollisionShape* plane = shapes.plane(btVector3(0, 1, 0), 0);
+        btCollisionShape* torus = shapes.gimpactTorus(1, btScalar(0.3), 16, 8, btScalar(0.01));  // needs d 0.022
+        int calls = 0;
+        const CullideBroadphase::CullerFactory onlyOnce = [&](const Settings& s) -> std::unique_ptr<Culler> {
+            if (++calls == 1) return createReferenceCuller(s);
+            if (returnNothing) return nullptr;
+            throw GlUnavailableError("EGL context lost (test)");
+        };
+        auto populate = [&](TestWorld& w) {
+            btGImpactCollisionAlgorithm::registerAlgorithm(&w.dispatcher());
+            w.addBody(plane, 0, btTransform::getIdentity());
+            for (int k = 0; k < 3; ++k)
+                w.addBody(torus, 1, btTransform(btQuaternion(btVector3(1, 0, 0), btScalar(0.4 * k)),
+                                                btVector3(btScalar(0.3 * k), btScalar(1 + 1.2 * k), 0)));
+        };
+        TestWorld reference(PipelineKind::Default);
+        TestWorld cullide(PipelineKind::Cullide, onlyOnce);
+        populate(reference);
+        populate(cullide);
+        testing::internal::CaptureStderr();
+        MirrorOptions options;
+        options.steps = 90;
+        options.deepContactDistance = 2 * 0.01;
+        options.tolerance = [](const std::pair<int, int>& pair) {
+            return pair.first == 0 ? 1e-6 : 2.0 * double(gContactBreakingThreshold);
+        };
+        const MirrorRun run = runMirrored(reference, cullide, options);
+        testing::internal::GetCapturedStderr();
+        EXPECT_EQ(calls, 2) << "one failed attempt to shrink, not one per frame";
+        EXPECT_GT(cullide.cullideBroadphase()->getCullingMargin(), 0.022);
+        expectAgreement(run, 40);
+        EXPECT_GT(run.cullidePairsFromTriangles, 0u) << "the culler's triangle lists must still be used";
+    }
+}
+
 /// The landscape scene with the CPU reference culler: the adapter's logic without GL.
 TEST(BulletContract, LandscapeWithReferenceCuller) {
     ShapeStore shapes;

@@ -17,10 +17,14 @@
 //   (grown by getGhostPairMargin()) and filters only, eagerly in createProxy/setAabb like btDbvtBroadphase.
 // - A proxy with a non-finite AABB is rejected: one line on stderr per object, a counter, no pairs; nothing else
 //   is affected.
-// - The culler's distance margin d is kept >= 2 * (largest triangle-shape collision margin) + 1.5 * the contact
-//   breaking threshold (size-relative, as Bullet's dispatcher computes it by default), so every triangle pair
-//   that Bullet's narrow phase could turn into a contact point, or keep a persistent one alive, survives. The surviving triangle pairs of GImpact-GImpact and
-//   convex-hull-mesh pairs are kept for CullideCollisionDispatcher (trianglePairsFor).
+// - The culler's distance margin d is what the frame's narrow phase needs, recomputed every step: for GImpact
+//   pairs 2.2 * the largest GImpact margin (plus float slack at large coordinates; GImpact's triangle routine
+//   reports points within the sum of the two margins and rebuilds its manifold every frame), for pairs with
+//   persistent convex manifolds the margins plus 1.5 * the contact breaking threshold (size-relative, as Bullet's
+//   dispatcher computes it by default). Every triangle pair that Bullet's narrow phase could turn into a contact
+//   point, or keep a persistent one alive, survives. The surviving candidate triangle pairs of GImpact-GImpact and
+//   convex-hull-mesh pairs are kept for CullideCollisionDispatcher (trianglePairsFor); Bullet's own triangle
+//   routines are the exact test (the culler runs with Settings::exactTriangles = false).
 #pragma once
 
 #include "cullide/Culler.h"
@@ -63,7 +67,8 @@ struct BulletTrianglePair {
 
 /// What CULLIDE kept for one object pair in the last calculateOverlappingPairs().
 struct PairTriangles {
-    /// GImpact-GImpact: surviving triangle pairs (within the margin, boxes grown by the shapes' margins overlap),
+    /// GImpact-GImpact: surviving candidate triangle pairs (culled at margin d, and their boxes grown by the shapes'
+    /// margins overlap, Bullet's own candidate criterion),
     /// sorted by (a.part, b.part, a.index, b.index).
     std::vector<BulletTrianglePair> pairs;
     /// Convex-hull-mesh: the mesh's surviving triangles, sorted, and their vertices in the mesh's local frame
