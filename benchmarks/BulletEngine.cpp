@@ -1,0 +1,184 @@
+#include "BulletEngine.h"
+
+#include "cullide/Timer.h"
+
+#include <BulletCollision/CollisionDispatch/btManifoldResult.h>
+#include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
+#include <BulletCollision/Gimpact/btGImpactShape.h>
+#include <btBulletCollisionCommon.h>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace cullide::bench {
+
+namespace {
+
+/// Contact points recorded by the callback: (object, triangle, object, triangle).
+std::vector<TriangleKey>* g_contactSink = nullptr;
+
+bool recordContact(btManifoldPoint&, const btCollisionObjectWrapper* w0, int, int index0,
+                   const btCollisionObjectWrapper* w1, int, int index1) {
+    if (g_contactSink != nullptr)
+        g_contactSink->push_back({static_cast<std::uint32_t>(w0->getCollisionObject()->getUserIndex()),
+                                  static_cast<std::uint32_t>(index0),
+                                  static_cast<std::uint32_t>(w1->getCollisionObject()->getUserIndex()),
+                                  static_cast<std::uint32_t>(index1)});
+    return false;
+}
+
+btTransform toBullet(const Eigen::Isometry3d& pose) {
+    const Eigen::Matrix3d r = pose.rotation();
+    const Eigen::Vector3d t = pose.translation();
+    btMatrix3x3 basis(static_cast<btScalar>(r(0, 0)), static_cast<btScalar>(r(0, 1)), static_cast<btScalar>(r(0, 2)),
+                      static_cast<btScalar>(r(1, 0)), static_cast<btScalar>(r(1, 1)), static_cast<btScalar>(r(1, 2)),
+                      static_cast<btScalar>(r(2, 0)), static_cast<btScalar>(r(2, 1)), static_cast<btScalar>(r(2, 2)));
+    return btTransform(basis, btVector3(static_cast<btScalar>(t.x()), static_cast<btScalar>(t.y()),
+                                        static_cast<btScalar>(t.z())));
+}
+
+}  // namespace
+
+struct BulletEngine::Impl {
+    struct Body {
+        std::vector<btScalar> vertices;
+        std::vector<int> indices;
+        std::unique_ptr<btTriangleIndexVertexArray> array;
+        std::unique_ptr<btGImpactMeshShape> shape;
+        std::unique_ptr<btCollisionObject> object;
+        Motion motion = Motion::Deforming;
+    };
+
+    Broadphase kind;
+    std::unique_ptr<btDefaultCollisionConfiguration> config;
+    std::unique_ptr<btCollisionDispatcher> dispatcher;
+    std::unique_ptr<btBroadphaseInterface> broadphase;
+    std::unique_ptr<btCollisionWorld> world;
+    std::vector<Body> bodies;
+    std::vector<TriangleKey> contacts;
+
+    ~Impl() {
+        if (world)
+            for (Body& b : bodies)
+                if (b.object) world->removeCollisionObject(b.object.get());
+        if (g_contactSink == &contacts) g_contactSink = nullptr;
+    }
+
+    static void copyVertices(const TriangleMesh& mesh, std::vector<btScalar>& out) {
+        out.resize(3 * mesh.vertices.size());
+        for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+            for (int k = 0; k < 3; ++k) out[3 * i + static_cast<std::size_t>(k)] = static_cast<btScalar>(mesh.vertices[i][k]);
+    }
+};
+
+BulletEngine::BulletEngine(Broadphase broadphase) : m_impl(std::make_unique<Impl>()) { m_impl->kind = broadphase; }
+
+BulletEngine::~BulletEngine() = default;
+
+void BulletEngine::setup(const BenchFrame& first) {
+    Impl& m = *m_impl;
+    m.config = std::make_unique<btDefaultCollisionConfiguration>();
+    m.dispatcher = std::make_unique<btCollisionDispatcher>(m.config.get());
+    btGImpactCollisionAlgorithm::registerAlgorithm(m.dispatcher.get());
+    if (m.kind == Broadphase::Dbvt) {
+        m.broadphase = std::make_unique<btDbvtBroadphase>();
+    } else {
+        // World bounds for the sweep: the first frame's bounds, grown to three times their size (the environments
+        // keep their objects inside a fixed box).
+        Aabb box;
+        for (const auto& mesh : *first.world)
+            for (const Vec3& p : mesh.vertices) box.grow(p);
+        const Vec3 centre = 0.5 * (box.min + box.max);
+        const double half = 1.5 * box.extent().maxCoeff() + 1.0;
+        const auto v = [](const Vec3& p) {
+            return btVector3(static_cast<btScalar>(p.x()), static_cast<btScalar>(p.y()), static_cast<btScalar>(p.z()));
+        };
+        m.broadphase = std::make_unique<btAxisSweep3>(v(centre - Vec3::Constant(half)), v(centre + Vec3::Constant(half)),
+                                                      static_cast<unsigned short>(16384));
+    }
+    m.world = std::make_unique<btCollisionWorld>(m.dispatcher.get(), m.broadphase.get(), m.config.get());
+    gContactAddedCallback = recordContact;
+    g_contactSink = &m.contacts;
+
+    const auto& meshes = *first.local;
+    m.bodies.resize(meshes.size());
+    for (std::size_t i = 0; i < meshes.size(); ++i) {
+        Impl::Body& b = m.bodies[i];
+        b.motion = (*first.motion)[i];
+        const TriangleMesh& mesh = b.motion == Motion::Deforming ? (*first.world)[i] : meshes[i];
+        Impl::copyVertices(mesh, b.vertices);
+        b.indices.resize(3 * mesh.triangles.size());
+        for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+            for (int k = 0; k < 3; ++k) b.indices[3 * t + static_cast<std::size_t>(k)] = static_cast<int>(mesh.triangles[t][static_cast<std::size_t>(k)]);
+        btIndexedMesh part;
+        part.m_numTriangles = static_cast<int>(mesh.triangles.size());
+        part.m_triangleIndexBase = reinterpret_cast<const unsigned char*>(b.indices.data());
+        part.m_triangleIndexStride = 3 * static_cast<int>(sizeof(int));
+        part.m_numVertices = static_cast<int>(mesh.vertices.size());
+        part.m_vertexBase = reinterpret_cast<const unsigned char*>(b.vertices.data());
+        part.m_vertexStride = 3 * static_cast<int>(sizeof(btScalar));
+        part.m_indexType = PHY_INTEGER;
+        part.m_vertexType = sizeof(btScalar) == sizeof(float) ? PHY_FLOAT : PHY_DOUBLE;
+        b.array = std::make_unique<btTriangleIndexVertexArray>();
+        b.array->addIndexedMesh(part, PHY_INTEGER);
+        b.shape = std::make_unique<btGImpactMeshShape>(b.array.get());
+        // No collision margin: the task is the intersecting triangle pairs, the same as the other engines'.
+        b.shape->setMargin(0);
+        b.shape->updateBound();
+        b.object = std::make_unique<btCollisionObject>();
+        b.object->setCollisionShape(b.shape.get());
+        b.object->setUserIndex(static_cast<int>(i));
+        int flags = b.object->getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK;
+        if (b.motion == Motion::Static) flags |= btCollisionObject::CF_STATIC_OBJECT;
+        b.object->setCollisionFlags(flags);
+        b.object->setWorldTransform(b.motion == Motion::Deforming ? btTransform::getIdentity()
+                                                                  : toBullet(first.poses[i]));
+        m.world->addCollisionObject(b.object.get());
+    }
+}
+
+void BulletEngine::run(const BenchFrame& frame, FrameOutput& out) {
+    Impl& m = *m_impl;
+    out.clear();
+    m.contacts.clear();
+    const Timer total;
+    Timer stage;
+    for (std::size_t i = 0; i < m.bodies.size(); ++i) {
+        Impl::Body& b = m.bodies[i];
+        if (b.motion == Motion::Deforming) {
+            Impl::copyVertices((*frame.world)[i], b.vertices);
+            b.shape->postUpdate();
+            b.shape->updateBound();
+        } else if (b.motion == Motion::Rigid) {
+            b.object->setWorldTransform(toBullet(frame.poses[i]));
+        }
+    }
+    out.stages.push_back({"refit", stage.ms()});
+    stage = Timer();
+    m.world->updateAabbs();
+    out.stages.push_back({"aabbs", stage.ms()});
+    stage = Timer();
+    m.world->computeOverlappingPairs();
+    out.stages.push_back({"broadphase", stage.ms()});
+    stage = Timer();
+    m.dispatcher->dispatchAllCollisionPairs(m.broadphase->getOverlappingPairCache(), m.world->getDispatchInfo(),
+                                            m.dispatcher.get());
+    out.stages.push_back({"narrow phase", stage.ms()});
+    out.totalMs = total.ms();
+    for (int k = 0; k < m.dispatcher->getNumManifolds(); ++k)
+        out.contacts += static_cast<std::size_t>(m.dispatcher->getManifoldByIndexInternal(k)->getNumContacts());
+    for (const TriangleKey& c : m.contacts) out.pairs.addTriangle(c[0], c[1], c[2], c[3]);
+    out.pairs.finish();
+}
+
+nlohmann::json BulletEngine::describe() const {
+    nlohmann::json j;
+    j["mode"] = "gimpact";
+    j["broadphase"] = m_impl->kind == Broadphase::Dbvt ? "btDbvtBroadphase" : "btAxisSweep3";
+    j["threads"] = 1;
+    j["btScalar_bytes"] = sizeof(btScalar);
+    return j;
+}
+
+}  // namespace cullide::bench

@@ -1,0 +1,78 @@
+#include "CullideEngine.h"
+
+#include "cullide/Timer.h"
+
+namespace cullide::bench {
+
+namespace {
+
+const char* gpuLevelsName(GpuLevels g) {
+    switch (g) {
+        case GpuLevels::Always: return "always";
+        case GpuLevels::Never: return "never";
+        case GpuLevels::Auto: break;
+    }
+    return "auto";
+}
+
+}  // namespace
+
+CullideEngine::CullideEngine(const Settings& settings, bool reference)
+    : m_settings(settings), m_reference(reference) {}
+
+void CullideEngine::setup(const BenchFrame& first) {
+    m_culler = m_reference ? createReferenceCuller(m_settings) : createGpuCuller(m_settings);
+    m_objects.assign(first.world->size(), Object{});
+    for (std::size_t i = 0; i < m_objects.size(); ++i) {
+        // Geometry that never changes in world space is declared static (the API's staticKey): the GPU culler keeps
+        // it on the device instead of uploading it every frame.
+        if ((*first.motion)[i] == Motion::Static) m_objects[i].staticKey = i + 1;
+    }
+}
+
+void CullideEngine::run(const BenchFrame& frame, FrameOutput& out) {
+    out.clear();
+    for (std::size_t i = 0; i < m_objects.size(); ++i) m_objects[i].mesh = &(*frame.world)[i];
+    const Timer timer;
+    m_culler->run(m_objects, m_result);
+    out.totalMs = timer.ms();
+    const Stats& s = m_result.stats;
+    if (m_reference) {
+        out.stages = {{"brute force", out.totalMs}};
+    } else {
+        const double other = out.totalMs - s.prepassMs - s.uploadMs - s.gpuLevelsMs - s.exactMs;
+        out.stages = {{"pre-pass", s.prepassMs},
+                      {"upload", s.uploadMs},
+                      {"gpu levels", s.gpuLevelsMs},
+                      {"exact", s.exactMs},
+                      {"other", other > 0.0 ? other : 0.0}};
+        out.candidates = s.candidateTrianglePairs;
+    }
+    out.bytesUploaded = s.bytesUploaded;
+    out.bytesReadBack = s.bytesReadBack;
+    for (const ObjectPair& p : m_result.pairs) {
+        if (!p.hasTriangles) continue;
+        for (const TrianglePair& t : p.triangles) out.pairs.addTriangle(p.a, t.a, p.b, t.b);
+    }
+    out.pairs.finish();
+}
+
+nlohmann::json CullideEngine::describe() const {
+    nlohmann::json j;
+    if (m_reference) {
+        j["mode"] = "exact";
+        j["threads"] = m_settings.threads;
+        j["renderer"] = "cpu-reference";
+        return j;
+    }
+    j["mode"] = m_settings.mode == Mode::Reliable ? "reliable" : "sampled";
+    j["resolution"] = m_settings.resolution;
+    j["gpu_levels"] = gpuLevelsName(m_settings.gpuLevels);
+    j["group_size"] = m_settings.groupSize;
+    j["threads"] = m_settings.threads;
+    j["renderer"] = m_result.stats.renderer;
+    j["device"] = m_result.stats.device;
+    return j;
+}
+
+}  // namespace cullide::bench

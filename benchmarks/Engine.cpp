@@ -1,0 +1,47 @@
+#include "Engine.h"
+
+#include "BulletEngine.h"
+#include "CullideEngine.h"
+#ifdef CULLIDE_BENCH_FCL
+#include "FclEngine.h"
+#endif
+
+#include <stdexcept>
+
+namespace cullide::bench {
+
+std::vector<std::string> engineNames() {
+    std::vector<std::string> names = {"exact",           "cullide",     "cullide-1t", "cullide-gpu",
+                                      "cullide-sampled", "bullet-dbvt", "bullet-sap"};
+#ifdef CULLIDE_BENCH_FCL
+    names.push_back("fcl");
+    names.push_back("fcl-aabb");
+#endif
+    return names;
+}
+
+std::unique_ptr<Engine> makeEngine(const std::string& name, const EngineOptions& options) {
+    Settings s;
+    s.resolution = options.resolution;
+    s.groupSize = options.groupSize;
+    if (name == "exact") return std::make_unique<CullideEngine>(s, true);
+    if (name == "cullide") return std::make_unique<CullideEngine>(s, false);
+    if (name == "cullide-1t") {
+        s.threads = 1;
+        return std::make_unique<CullideEngine>(s, false);
+    }
+    if (name == "cullide-gpu" || name == "cullide-sampled") {
+        s.gpuLevels = GpuLevels::Always;
+        if (name == "cullide-sampled") s.mode = Mode::Sampled;
+        return std::make_unique<CullideEngine>(s, false);
+    }
+    if (name == "bullet-dbvt") return std::make_unique<BulletEngine>(BulletEngine::Broadphase::Dbvt);
+    if (name == "bullet-sap") return std::make_unique<BulletEngine>(BulletEngine::Broadphase::AxisSweep);
+#ifdef CULLIDE_BENCH_FCL
+    if (name == "fcl") return std::make_unique<FclEngine>(FclEngine::Volume::Obbrss);
+    if (name == "fcl-aabb") return std::make_unique<FclEngine>(FclEngine::Volume::Aabb);
+#endif
+    throw std::invalid_argument("unknown or not built engine '" + name + "'");
+}
+
+}  // namespace cullide::bench

@@ -1,0 +1,71 @@
+#include "RunRecord.h"
+
+#include <algorithm>
+
+namespace cullide::bench {
+
+double median(std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    const std::size_t n = v.size();
+    return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+void RunRecord::add(const FrameOutput& out, const PairSet* exact) {
+    m_total.push_back(out.totalMs);
+    for (const StageTime& s : out.stages) {
+        if (!m_stages.count(s.name)) m_stageOrder.push_back(s.name);
+        m_stages[s.name].push_back(s.ms);
+    }
+    m_trianglesKnown = m_trianglesKnown && out.trianglePairsKnown;
+    m_reportedTriangles += out.pairs.triangles().size();
+    m_reportedObjects += out.pairs.objects().size();
+    if (out.candidates) {
+        m_hasCandidates = true;
+        m_candidates += *out.candidates;
+    }
+    m_contacts += out.contacts;
+    m_maxUploaded = std::max(m_maxUploaded, out.bytesUploaded);
+    m_maxReadBack = std::max(m_maxReadBack, out.bytesReadBack);
+    m_sumUploaded += out.bytesUploaded;
+    if (exact != nullptr) {
+        m_compared = true;
+        m_triangles += compareTriangles(exact->triangles(), out.pairs.triangles());
+        m_objects += compareObjects(exact->objects(), out.pairs.objects());
+    }
+}
+
+void RunRecord::write(nlohmann::json& r) const {
+    r["frames"] = m_total.size();
+    if (!m_total.empty()) {
+        r["ms"] = {{"median", median(m_total)},
+                   {"min", *std::min_element(m_total.begin(), m_total.end())},
+                   {"max", *std::max_element(m_total.begin(), m_total.end())}};
+    }
+    nlohmann::json stages = nlohmann::json::array();
+    for (const std::string& name : m_stageOrder) stages.push_back({name, median(m_stages.at(name))});
+    r["stages"] = stages;  // [[name, median ms], ...] in pipeline order
+    r["reported_object_pairs"] = m_reportedObjects;
+    r["reported_triangle_pairs"] = m_trianglesKnown ? nlohmann::json(m_reportedTriangles) : nlohmann::json();
+    r["contacts"] = m_contacts;
+    if (m_compared) {
+        r["exact_object_pairs"] = m_objects.expected;
+        r["exact_triangle_pairs"] = m_triangles.expected;
+        r["missed_object_pairs"] = m_objects.missed;
+        r["extra_object_pairs"] = m_objects.extra;
+        if (m_trianglesKnown) {
+            r["missed_triangle_pairs"] = m_triangles.missed;
+            r["extra_triangle_pairs"] = m_triangles.extra;
+        }
+    }
+    if (m_hasCandidates) {
+        r["candidate_triangle_pairs"] = m_candidates;
+        if (m_compared && m_triangles.expected > 0)
+            r["false_positive_ratio"] = static_cast<double>(m_candidates) / static_cast<double>(m_triangles.expected);
+    }
+    r["bytes_uploaded_max"] = m_maxUploaded;
+    r["bytes_uploaded_mean"] = m_total.empty() ? 0.0 : static_cast<double>(m_sumUploaded) / static_cast<double>(m_total.size());
+    r["bytes_read_back_max"] = m_maxReadBack;
+}
+
+}  // namespace cullide::bench

@@ -1,0 +1,39 @@
+// Accumulates per-frame outputs of one (scene, engine) run into the JSON record of results.json.
+#pragma once
+
+#include "Engine.h"
+#include "PairSet.h"
+
+#include <nlohmann/json.hpp>
+
+#include <map>
+#include <string>
+#include <vector>
+
+namespace cullide::bench {
+
+class RunRecord {
+public:
+    /// Adds a timed frame; `exact` (may be null) is the exact answer of that frame.
+    void add(const FrameOutput& out, const PairSet* exact);
+    /// Fills ms, stages, pair counts, errors, costs and bytes into `record`.
+    void write(nlohmann::json& record) const;
+    std::size_t frames() const { return m_total.size(); }
+
+private:
+    std::vector<double> m_total;
+    std::vector<std::string> m_stageOrder;
+    std::map<std::string, std::vector<double>> m_stages;
+    Comparison m_triangles, m_objects;
+    bool m_compared = false;
+    bool m_trianglesKnown = true;
+    std::size_t m_reportedTriangles = 0, m_reportedObjects = 0;
+    std::size_t m_candidates = 0;
+    bool m_hasCandidates = false;
+    std::size_t m_contacts = 0;
+    std::size_t m_maxUploaded = 0, m_maxReadBack = 0, m_sumUploaded = 0;
+};
+
+double median(std::vector<double> v);
+
+}  // namespace cullide::bench
