@@ -74,6 +74,20 @@ public:
     using std::runtime_error::runtime_error;
 };
 
+/// An output file could not be written (exit 4).
+class OutputError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+void writeOutputPng(const std::string& path, const cullide::Image& image) {
+    try {
+        cullide::io::writePng(path, image);
+    } catch (const std::exception& e) {
+        throw OutputError(e.what());
+    }
+}
+
 struct Options {
     cullide::demo::RunnerOptions runner;
     int frames = -1;
@@ -146,6 +160,12 @@ Options parse(int argc, char** argv, bool& help) {
     }
     const std::string error = o.runner.culler.validate();
     if (!error.empty()) throw UsageError(error);
+    // Flags that the chosen scene would silently ignore are mistakes.
+    const bool breakable = o.runner.scene == "breakable";
+    if (!breakable && (!o.runner.mesh.empty() || !o.runner.breakableMesh.empty() || o.runner.pipeline != "cullide"))
+        throw UsageError("--mesh, --breakable-mesh and --pipeline apply to --scene breakable only");
+    if (o.runner.objects > 0 && o.runner.scene != "env1" && o.runner.scene != "env2")
+        throw UsageError("--objects applies to --scene env1 and env2 only");
     return o;
 }
 
@@ -233,7 +253,15 @@ int run(const Options& o) {
     cullide::demo::writeCsvHeader(csv);
     std::vector<cullide::demo::FrameRecord> records;
     std::vector<std::string> snapshotFiles;
+    // The contact sheet: at most 12 evenly spaced snapshots of the run (the fracture sequence for the breakable
+    // scene); only their thumbnails are kept.
     std::vector<cullide::Image> thumbnails;
+    std::vector<std::size_t> sheetPicks;
+    if (o.snapshotEvery > 0) {
+        const std::size_t snapshots = std::size_t((frames - 1) / o.snapshotEvery + 1 + ((frames - 1) % o.snapshotEvery ? 1 : 0));
+        const std::size_t n = std::min<std::size_t>(12, snapshots);
+        for (std::size_t k = 0; k < n; ++k) sheetPicks.push_back(n == 1 ? 0 : k * (snapshots - 1) / (n - 1));
+    }
     std::optional<cullide::Aabb> frameBox;
     long missedTotal = 0;
     int checked = 0;
@@ -254,15 +282,17 @@ int run(const Options& o) {
                 cullide::Aabb box;
                 for (const auto& m : runner->meshes())
                     for (const auto& v : m.vertices) box.grow(v);
-                if (auto g = runner->ground()) box.grow(cullide::Aabb{g->vertices[0], g->vertices[0]});
+                if (auto g = runner->ground())
+                    for (const auto& v : g->vertices) box.grow(v);
                 frameBox = box.inflated(0.05 * box.extent().maxCoeff());
             }
             const cullide::Image image = snapshot(*renderer, *runner, *frameBox);
             char name[64];
             std::snprintf(name, sizeof name, "snapshots/frame_%04d.png", f);
-            cullide::io::writePng((fs::path(o.out) / name).string(), image);
+            writeOutputPng((fs::path(o.out) / name).string(), image);
+            if (std::binary_search(sheetPicks.begin(), sheetPicks.end(), snapshotFiles.size()))
+                thumbnails.push_back(cullide::io::downscale(image, 2));
             snapshotFiles.push_back(name);
-            thumbnails.push_back(cullide::io::downscale(image, 2));
             renderMs += t.ms();
         }
         if (progress) {
@@ -273,16 +303,12 @@ int run(const Options& o) {
     }
     if (progress) std::fprintf(stderr, "\n");
     csv.close();
+    if (!csv) throw OutputError("cannot write " + (fs::path(o.out) / "frames.csv").string());
 
     std::string sheet;
     if (!thumbnails.empty()) {
-        // At most 12 evenly spaced snapshots of the run (the fracture sequence for the breakable scene).
-        std::vector<cullide::Image> picked;
-        const std::size_t n = std::min<std::size_t>(12, thumbnails.size());
-        for (std::size_t k = 0; k < n; ++k)
-            picked.push_back(thumbnails[n == 1 ? 0 : k * (thumbnails.size() - 1) / (n - 1)]);
         sheet = "contact_sheet.png";
-        cullide::io::writePng((fs::path(o.out) / sheet).string(), cullide::io::makeContactSheet(picked, 4));
+        writeOutputPng((fs::path(o.out) / sheet).string(), cullide::io::makeContactSheet(thumbnails, 4));
     }
 
     using cullide::demo::FrameRecord;
@@ -319,7 +345,11 @@ int run(const Options& o) {
         {"contact_sheet", sheet},
         {"wall_s", wall.ms() / 1000.0},
     };
-    std::ofstream(fs::path(o.out) / "summary.json") << summary.dump(2) << '\n';
+    {
+        std::ofstream out(fs::path(o.out) / "summary.json");
+        out << summary.dump(2) << '\n';
+        if (!out) throw OutputError("cannot write " + (fs::path(o.out) / "summary.json").string());
+    }
     const auto frame = cullide::demo::figuresOf(records, &FrameRecord::frameMs);
     std::printf("cullide-demo: %s, %d frames, %zu -> %zu objects, %d fracture(s); ms/frame median %.2f, worst %.2f; "
                 "renderer %s; output in %s\n",
@@ -359,9 +389,9 @@ int main(int argc, char** argv) {
     } catch (const cullide::io::ParseError& e) {
         std::fprintf(stderr, "cullide-demo: %s\n", e.what());
         return kExitInput;
-    } catch (const std::invalid_argument& e) {
+    } catch (const OutputError& e) {
         std::fprintf(stderr, "cullide-demo: %s\n", e.what());
-        return kExitUsage;
+        return kExitInput;
     } catch (const std::exception& e) {
         std::fprintf(stderr, "cullide-demo: %s\n", e.what());
         return kExitFailure;

@@ -17,7 +17,9 @@ struct FrameRecord {
     std::size_t pcsObjects = 0;         ///< object-level PCS
     std::size_t pcsTriangles = 0;       ///< triangle-level PCS (all objects)
     std::size_t candidatePairs = 0;     ///< triangle pairs handed to the exact test
-    std::size_t trianglePairs = 0;      ///< intersecting (within-margin) triangle pairs
+    /// Environments: exactly intersecting triangle pairs. Breakable: the candidate triangle pairs handed to
+    /// Bullet's narrow phase (Bullet's triangle routines are the exact test there).
+    std::size_t trianglePairs = 0;
     std::size_t broadphasePairs = 0;    ///< Bullet overlapping pairs (breakable)
     std::size_t contacts = 0;           ///< Bullet contact points (breakable)
     std::size_t newPieces = 0;          ///< bodies created by fracture this frame

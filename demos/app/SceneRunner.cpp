@@ -119,8 +119,7 @@ private:
 /// and checks use a culler with the same settings on the bodies' world-space meshes.
 class BreakableRunner final : public SceneRunner {
 public:
-    explicit BreakableRunner(const RunnerOptions& o)
-        : m_scene(makeOptions(o)), m_culler(createGpuCuller(o.culler)), m_reference(createReferenceCuller(o.culler)) {}
+    explicit BreakableRunner(const RunnerOptions& o) : m_scene(makeOptions(o)), m_settings(o.culler) {}
 
     FrameRecord advance(bool check) override {
         FrameRecord r;
@@ -133,8 +132,8 @@ public:
             const std::vector<std::string> names = m_scene.bodyNames();
             const std::vector<Object> objects = asObjects(before);
             Result reference, result;
-            m_reference->run(objects, reference);
-            m_culler->run(objects, result);
+            referenceCuller().run(objects, reference);
+            culler().run(objects, result);
             missed += missedPairs(reference, result);
             for (const ObjectPair& p : reference.pairs)
                 if (!p.triangles.empty())
@@ -202,11 +201,22 @@ private:
     void refresh() {
         if (m_fresh) return;
         m_meshes = m_scene.worldMeshes();
-        m_culler->run(asObjects(m_meshes), m_result);
+        culler().run(asObjects(m_meshes), m_result);
         m_fresh = true;
     }
 
+    /// Made on first use: with --pipeline bullet-* and neither checks nor snapshots the demo needs no GL.
+    Culler& culler() {
+        if (!m_culler) m_culler = createGpuCuller(m_settings);
+        return *m_culler;
+    }
+    Culler& referenceCuller() {
+        if (!m_reference) m_reference = createReferenceCuller(m_settings);
+        return *m_reference;
+    }
+
     BreakableScene m_scene;
+    Settings m_settings;
     std::unique_ptr<Culler> m_culler;
     std::unique_ptr<Culler> m_reference;
     std::vector<TriangleMesh> m_meshes;

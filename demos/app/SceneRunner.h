@@ -20,7 +20,7 @@ struct RunnerOptions {
     std::string scene = "breakable";  ///< breakable | env1 | env2 | env3
     std::uint64_t seed = 1;
     Settings culler;
-    std::string mesh;                 ///< --mesh: the falling object (breakable) or the bunny (env3)
+    std::string mesh;                 ///< --mesh: the falling object (breakable)
     std::string breakableMesh;        ///< --breakable-mesh
     int objects = 0;                  ///< env1/env2 object count (0 = the paper's)
     std::string pipeline = "cullide"; ///< breakable: cullide | bullet-dbvt | bullet-axis-sweep

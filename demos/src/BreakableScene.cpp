@@ -54,9 +54,28 @@ public:
     double ms = 0.0;
 };
 
-/// Scales `mesh` so its largest extent is `size` and centres its box at the origin.
+/// The vertices some triangle uses (an OBJ may carry others, which must not count for bounds or mass).
+std::vector<Vec3> referencedVertices(const TriangleMesh& mesh) {
+    std::vector<std::uint8_t> used(mesh.vertices.size(), 0);
+    for (const TriangleIndices& t : mesh.triangles)
+        for (std::uint32_t v : t)
+            if (v < used.size()) used[v] = 1;
+    std::vector<Vec3> out;
+    for (std::size_t v = 0; v < used.size(); ++v)
+        if (used[v] && mesh.vertices[v].allFinite()) out.push_back(mesh.vertices[v]);
+    return out;
+}
+
+Aabb boundsOf(const std::vector<Vec3>& points) {
+    Aabb box;
+    for (const Vec3& p : points) box.grow(p);
+    return box;
+}
+
+/// Scales `mesh` so the largest extent of its triangles is `size` and centres their box at the origin.
 void normalize(TriangleMesh& mesh, double size) {
-    const Aabb box = scenes::boundsOf(mesh);
+    const Aabb box = boundsOf(referencedVertices(mesh));
+    if (box.isEmpty()) throw std::runtime_error("the mesh has no finite triangle");
     const double scale = size / std::max(box.extent().maxCoeff(), 1e-300);
     const Vec3 centre = 0.5 * (box.min + box.max);
     for (Vec3& v : mesh.vertices) v = (v - centre) * scale;
@@ -65,7 +84,7 @@ void normalize(TriangleMesh& mesh, double size) {
 TriangleMesh loadMesh(const std::string& path, const std::string& dataDir, scenes::PaperModel model, bool& standIn) {
     if (!path.empty()) {
         TriangleMesh mesh = io::readMesh(path);  // throws io::ParseError with file and line
-        if (mesh.triangles.empty()) throw std::runtime_error(path + ": the mesh has no triangles");
+        if (mesh.triangles.empty()) throw io::ParseError(path, 0, "the mesh has no triangles");
         return mesh;
     }
     bool s = false;
@@ -181,18 +200,21 @@ struct BreakableScene::Impl {
         breakImpulse = options.breakImpulse >= 0 ? options.breakImpulse : 1.5 * double(bunny.body->getMass());
     }
 
-    ~Impl() {
-        if (world) {
-            for (auto& b : bodies) world->removeRigidBody(b->body.get());
-            world->removeCollisionObject(ground.get());
+    /// Declared after everything the world refers to, so it runs first, also when the constructor throws.
+    struct WorldCleanup {
+        Impl& impl;
+        ~WorldCleanup() {
+            if (!impl.world) return;
+            for (auto& b : impl.bodies) impl.world->removeRigidBody(b->body.get());
+            if (impl.ground) impl.world->removeCollisionObject(impl.ground.get());
         }
-    }
+    } cleanup{*this};
 
     /// Adds a body whose triangles are `mesh` in world space, placed at `offset`. mass density 0: static.
     Body& addBody(const std::string& name, const TriangleMesh& mesh, const Vec3& offset, double density) {
         auto b = std::make_unique<Body>();
         b->name = name;
-        const MassProperties mp = hullMassProperties(mesh.vertices, density > 0 ? density : 1.0,
+        const MassProperties mp = hullMassProperties(referencedVertices(mesh), density > 0 ? density : 1.0,
                                                      1e-3 * kDragonSize);
         // Body frame: centre of mass + principal axes; the mesh is stored in it.
         const Eigen::Matrix3d R = mp.axes;
@@ -226,8 +248,8 @@ struct BreakableScene::Impl {
         b->body = std::make_unique<btRigidBody>(info);
         b->body->setUserPointer(b.get());
         if (density > 0) b->body->setCcdMotionThreshold(0);  // discrete, like the regression scenes
-        world->addRigidBody(b->body.get());
-        bodies.push_back(std::move(b));
+        bodies.push_back(std::move(b));  // owned first: the world never holds a body nobody owns
+        world->addRigidBody(bodies.back()->body.get());
         return *bodies.back();
     }
 

@@ -147,6 +147,8 @@ std::vector<TriangleMesh> voronoiCut(const TriangleMesh& mesh, const std::vector
 
 MassProperties hullMassProperties(const std::vector<Vec3>& points, double density, double minThickness) {
     if (!(density > 0) || !std::isfinite(density)) throw std::invalid_argument("hullMassProperties: density must be > 0");
+    if (!(minThickness > 0) || !std::isfinite(minThickness))
+        throw std::invalid_argument("hullMassProperties: minThickness must be > 0");
     std::vector<double> coords;
     Aabb box;
     for (const Vec3& p : points) {

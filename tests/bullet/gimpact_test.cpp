@@ -193,7 +193,7 @@ std::vector<std::array<double, 10>> contactsOf(TestWorld& w) {
 
 TEST(BulletDeterminism, SameContactsAcrossRunsAndThreadCounts) {
     // Issue #6: the same input gives the same Bullet contacts, run after run and whatever the culler's thread
-    // count (the exact stage runs on a worker pool; its output order must not depend on scheduling).
+    // count (the candidate search runs on a worker pool; its output order must not depend on scheduling).
     CULLIDE_BULLET_REQUIRE_GL();
     TorusScene scene;
     std::vector<std::vector<std::array<double, 10>>> runs[3];

@@ -111,6 +111,29 @@ TEST(MassProperties, BoxIsExact) {
     EXPECT_NEAR(std::fabs(m.axes.col(0).dot(longAxis)), 1.0, 1e-6);
 }
 
+TEST(MassProperties, OffCentreTetrahedronIsExact) {
+    // Tetrahedron (0, a e1, a e2, a e3) moved by t: volume a^3/6, centre t + a/4 (1,1,1), inertia about the centre
+    // from the known second moments (a^5/60 on the diagonal of the covariance, a^5/120 off it, about the origin).
+    const double a = 2.0, density = 3.0;
+    const Vec3 t(10, -4, 7);
+    const std::vector<Vec3> points = {t, t + Vec3(a, 0, 0), t + Vec3(0, a, 0), t + Vec3(0, 0, a)};
+    const MassProperties m = hullMassProperties(points, density, 1e-3);
+    ASSERT_TRUE(m.fromHull);
+    const double volume = a * a * a / 6.0;
+    EXPECT_NEAR(m.volume, volume, 1e-12);
+    EXPECT_NEAR(m.mass, density * volume, 1e-12);
+    EXPECT_LT((m.centre - (t + Vec3::Constant(a / 4))).norm(), 1e-12);
+    Eigen::Matrix3d cov = Eigen::Matrix3d::Constant(std::pow(a, 5) / 120.0);
+    cov.diagonal().setConstant(std::pow(a, 5) / 60.0);
+    const Vec3 c = Vec3::Constant(a / 4);
+    const Eigen::Matrix3d central = density * (cov - volume * c * c.transpose());
+    const Eigen::Matrix3d inertia = central.trace() * Eigen::Matrix3d::Identity() - central;
+    const Eigen::Matrix3d got = m.axes * m.inertia.asDiagonal() * m.axes.transpose();
+    EXPECT_LT((got - inertia).norm(), 1e-9 * inertia.norm());
+    EXPECT_THROW(hullMassProperties(points, density, 0.0), std::invalid_argument);
+    EXPECT_THROW(hullMassProperties(points, density, std::nan("")), std::invalid_argument);
+}
+
 TEST(MassProperties, FlatPointSetsFallBackToAThinBox) {
     const std::vector<Vec3> flat = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(1, 1, 0)};
     const MassProperties m = hullMassProperties(flat, 1.0, 0.01);

@@ -71,7 +71,35 @@ TEST(GlFailure, InjectionOnlyMatchesTheNamedCheck) {
     Result result;
     ScopedEnv inject("CULLIDE_INJECT_GL_ERROR", "no check has this name");
     culler->run(asObjects(meshes), result);
+    EXPECT_FALSE(result.stats.levels.empty()) << "the GPU levels must run for this test to mean anything";
     EXPECT_EQ(result.stats.gpuFallbacks, 0u);
+}
+
+TEST(ExactTriangles, OffGivesTheCandidatesASupersetWithoutExactTests) {
+    // Settings::exactTriangles = false (the Bullet adapter's setting): the surviving candidate pairs, a superset
+    // of the exact pairs, and no exact test run; object pairs may be more (candidates without an exact pair).
+    for (GpuLevels levels : {GpuLevels::Never, GpuLevels::Always}) {
+        Settings settings;
+        settings.gpuLevels = levels;
+        settings.exactThreshold = 0;
+        settings.exactTriangles = false;
+        settings.margin = 0.01;
+        CULLIDE_GPU_CULLER_OR_SKIP(culler, settings);
+        const auto meshes = randomSoups(21, 40, 100, 0.08);
+        const auto objects = asObjects(meshes);
+        Result reference, candidates;
+        createReferenceCuller(settings)->run(objects, reference);
+        culler->run(objects, candidates);
+        const Comparison c = compare(reference, candidates);
+        ASSERT_GT(c.expected, 0u);
+        EXPECT_EQ(c.missed, 0u) << c.firstMissed;
+        EXPECT_GT(c.spurious, 0u) << "candidates should include pairs whose boxes overlap but triangles do not";
+        EXPECT_EQ(candidates.stats.exactTests, 0u);
+        EXPECT_EQ(candidates.stats.intersectingTrianglePairs, 0u);
+        std::size_t listed = 0;
+        for (const ObjectPair& p : candidates.pairs) listed += p.triangles.size();
+        EXPECT_EQ(listed, candidates.stats.candidateTrianglePairs);
+    }
 }
 
 }  // namespace

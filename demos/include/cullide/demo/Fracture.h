@@ -19,7 +19,7 @@ std::vector<Vec3> fractureSites(const Aabb& bounds, const Vec3& impact, int coun
 /// Cuts `mesh` into the Voronoi cells of `sites` (result i = cell of site i; may be empty). Triangles inside one cell
 /// go to it whole; triangles crossing cells are clipped exactly (in double) and fanned. Every cell is shrunk by
 /// gap / 2 on each face it shares with a neighbour, so pieces start `gap` apart and never touch at rest; triangles
-/// of near-zero area (relative 1e-12 of the mesh's size squared) produced by clipping are dropped.
+/// of near-zero area (relative 1e-12 of the mesh's size squared; original or produced by clipping) are dropped.
 /// Non-finite vertices and out-of-range indices are skipped.
 std::vector<TriangleMesh> voronoiCut(const TriangleMesh& mesh, const std::vector<Vec3>& sites, double gap);
 
@@ -32,8 +32,9 @@ struct MassProperties {
     Vec3 inertia = Vec3::Zero();                          ///< principal moments about `centre`
     bool fromHull = true;  ///< false: the hull was (nearly) flat; a box around the points was used instead
 };
-/// Needs at least one finite point. Flat or tiny point sets fall back to their bounding box grown to at least
-/// `minThickness` per side, so every piece has a positive mass and inertia.
+/// Needs at least one finite point, density > 0 and minThickness > 0 (else std::invalid_argument). Flat or tiny
+/// point sets fall back to their bounding box grown to at least `minThickness` per side, so every piece has a
+/// positive mass and inertia.
 MassProperties hullMassProperties(const std::vector<Vec3>& points, double density, double minThickness);
 
 }  // namespace cullide::demo
