@@ -35,8 +35,9 @@ struct Stats {
     std::size_t exactTests = 0;
     std::size_t intersectingTrianglePairs = 0;  ///< exact pairs found (0 with Settings::exactTriangles false)
     std::size_t draws = 0;
-    /// GPU levels abandoned this frame because of a GL error: the frame was finished on the CPU path instead
-    /// (same pairs: the GPU levels only prune), and gpuError says why. The next frame tries the GPU again.
+    /// GPU levels abandoned this frame because of a GL error: the frame was finished on the CPU path instead (the
+    /// same exact pairs: the GPU levels only prune; with exactTriangles false, more candidates), and gpuError says
+    /// why. The next frame tries the GPU again.
     std::size_t gpuFallbacks = 0;
     std::string gpuError;
     std::size_t bytesUploaded = 0;

@@ -64,6 +64,9 @@ void releaseDisplay(EGLDisplay d) {
 
 void checkGlError(const char* what) {
     GLenum error = glGetError();
+    // Drain every pending flag (GL keeps one per kind): a stale one must not fail the next frame's check too.
+    for (int k = 0; k < 16 && error != GL_NO_ERROR && glGetError() != GL_NO_ERROR; ++k) {
+    }
     if (error == GL_NO_ERROR) {
         const char* inject = std::getenv("CULLIDE_INJECT_GL_ERROR");
         if (inject != nullptr && *inject != '\0' && std::strstr(what, inject) != nullptr) error = GL_INVALID_OPERATION;
