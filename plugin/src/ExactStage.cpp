@@ -165,13 +165,23 @@ struct JobGrid {
 
 }  // namespace
 
+struct ExactStage::Scratch {
+    std::vector<JobGrid> grids;
+    std::vector<ObjectBoxes> boxes;
+    std::vector<std::vector<TrianglePair>> taskOut;
+};
+
+ExactStage::ExactStage(unsigned threads) : m_pool(threads), m_scratch(std::make_unique<Scratch>()) {}
+ExactStage::~ExactStage() = default;
+
 void ExactStage::run(const std::vector<Object>& objects, const std::vector<ExactJob>& jobs, double margin, bool exact,
                      std::vector<ExactJobResult>& results, Stats& stats) {
     results.assign(jobs.size(), ExactJobResult{});
     m_candidates.resize(jobs.size());
     // Phase 1: per job, the region where the two objects' surviving triangles overlap, their boxes in it, and a
     // grid over the second object's boxes; then queries of the first object's boxes, in chunks on every worker.
-    std::vector<JobGrid> grids(jobs.size());
+    std::vector<JobGrid>& grids = m_scratch->grids;
+    if (grids.size() < jobs.size()) grids.resize(jobs.size());
     const double inflate = 0.5 * margin;
     // Each object's surviving triangle boxes once, however many pairs it is in (a landscape under many bodies).
     std::vector<const std::vector<std::uint32_t>*> lists;
@@ -190,7 +200,8 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
         jobListA[j] = listIndex(jobs[j].a, jobs[j].trianglesA);
         jobListB[j] = listIndex(jobs[j].b, jobs[j].trianglesB);
     }
-    std::vector<ObjectBoxes> boxes(lists.size());
+    std::vector<ObjectBoxes>& boxes = m_scratch->boxes;
+    if (boxes.size() < lists.size()) boxes.resize(lists.size());
     m_pool.parallelFor(lists.size(), 1, [&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin; i < end; ++i) boxes[i].build(*objects[listObject[i]].mesh, *lists[i], inflate);
     });
@@ -198,9 +209,11 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
         for (std::size_t j = begin; j < end; ++j) {
             const ObjectBoxes& a = boxes[jobListA[j]];
             const ObjectBoxes& b = boxes[jobListB[j]];
+            JobGrid& g = grids[j];
+            g.a.clear();  // reused from an earlier frame: nothing of it may survive a skipped job
+            g.b.clear();
             if (!a.bounds.overlaps(b.bounds)) continue;
             const Aabb region{a.bounds.min.cwiseMax(b.bounds.min), a.bounds.max.cwiseMin(b.bounds.max)};
-            JobGrid& g = grids[j];
             a.inRegion(region, g.a);
             b.inRegion(region, g.b);
             g.grid.build(g.a, g.b, region);
@@ -210,11 +223,13 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
     std::vector<std::pair<std::size_t, std::size_t>> tasks;  // (job, first box of a)
     for (std::size_t j = 0; j < jobs.size(); ++j)
         for (std::size_t i = 0; i < grids[j].a.size(); i += kChunk) tasks.emplace_back(j, i);
-    std::vector<std::vector<TrianglePair>> taskOut(tasks.size());
+    std::vector<std::vector<TrianglePair>>& taskOut = m_scratch->taskOut;
+    if (taskOut.size() < tasks.size()) taskOut.resize(tasks.size());
     m_pool.parallelFor(tasks.size(), 1, [&](std::size_t begin, std::size_t end) {
         for (std::size_t t = begin; t < end; ++t) {
             const JobGrid& g = grids[tasks[t].first];
             const std::size_t first = tasks[t].second;
+            taskOut[t].clear();
             g.grid.query(g.a, first, std::min(g.a.size(), first + kChunk), taskOut[t]);
         }
     });

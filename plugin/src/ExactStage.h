@@ -7,6 +7,7 @@
 #include "cullide/Result.h"
 
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace cullide {
@@ -25,15 +26,20 @@ struct ExactJobResult {
 
 class ExactStage {
 public:
-    explicit ExactStage(unsigned threads) : m_pool(threads) {}
+    explicit ExactStage(unsigned threads);
+    ~ExactStage();
+    ExactStage(const ExactStage&) = delete;
+    ExactStage& operator=(const ExactStage&) = delete;
 
     /// With `exact` false, every candidate is reported (no triangle test).
     void run(const std::vector<Object>& objects, const std::vector<ExactJob>& jobs, double margin, bool exact,
              std::vector<ExactJobResult>& results, Stats& stats);
 
 private:
+    struct Scratch;  ///< per-frame working memory, kept between frames: no allocation churn on large scenes
     TaskPool m_pool;
     std::vector<std::vector<TrianglePair>> m_candidates;
+    std::unique_ptr<Scratch> m_scratch;
 };
 
 }  // namespace cullide
