@@ -93,7 +93,11 @@ public:
             collectTriangles(m_groups, !paper);
             finishFromTriangles({});
         }
-        stats.gpuLevelsMs = levels.ms() - stats.uploadMs;
+        // Without GPU levels this stage is the CPU collection of the pre-pass's triangles: count it there.
+        if (m_gpuLevels)
+            stats.gpuLevelsMs = levels.ms() - stats.uploadMs;
+        else
+            stats.prepassMs += levels.ms() - stats.uploadMs;
 
         Timer exact;
         assemblePairs(result);

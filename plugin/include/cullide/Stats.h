@@ -44,7 +44,7 @@ struct Stats {
     std::size_t bytesReadBack = 0;
     double prepassMs = 0.0;
     double uploadMs = 0.0;
-    double gpuLevelsMs = 0.0;  ///< wall time of all GPU levels
+    double gpuLevelsMs = 0.0;  ///< wall time of all GPU levels (0 when none ran: that CPU work is in prepassMs)
     double gpuMs = 0.0;        ///< GPU time from timer queries, all levels
     double exactMs = 0.0;
     double totalMs = 0.0;
