@@ -212,28 +212,29 @@ TEST(BulletContract, CullerFactoryErrorsPropagate) {
     EXPECT_THROW(CullideBroadphase(invalid, nullptr, referenceFactory()), std::invalid_argument);
 }
 
+/// Three GImpact tori (margin `margin`) falling on a plane, for the culler-recreation tests.
+void populateTori(TestWorld& w, ShapeStore& shapes, btScalar margin) {
+    btGImpactCollisionAlgorithm::registerAlgorithm(&w.dispatcher());
+    w.addBody(shapes.plane(btVector3(0, 1, 0), 0), 0, btTransform::getIdentity());
+    btCollisionShape* torus = shapes.gimpactTorus(1, btScalar(0.3), 16, 8, margin);
+    for (int k = 0; k < 3; ++k)
+        w.addBody(torus, 1, btTransform(btQuaternion(btVector3(1, 0, 0), btScalar(0.4 * k)),
+                                        btVector3(btScalar(0.3 * k), btScalar(1 + 1.2 * k), 0)));
+}
+
 /// When the culler cannot be recreated with the margin a new shape needs, frames fall back to AABB pairs (and the
 /// dispatcher to Bullet's full algorithms): contacts stay right.
 TEST(BulletContract, CullerRecreationFailureFallsBackToAabbPairs) {
     ShapeStore shapes;
-    btCollisionShape* plane = shapes.plane(btVector3(0, 1, 0), 0);
-    btCollisionShape* torus = shapes.gimpactTorus(1, btScalar(0.3), 16, 8, btScalar(0.2));  // needs d > 0.4
     int calls = 0;
     const CullideBroadphase::CullerFactory onlyOnce = [&calls](const Settings& s) {
         if (++calls > 1) throw GlUnavailableError("EGL context lost (test)");
         return createReferenceCuller(s);
     };
-    auto populate = [&](TestWorld& w) {
-        btGImpactCollisionAlgorithm::registerAlgorithm(&w.dispatcher());
-        w.addBody(plane, 0, btTransform::getIdentity());
-        for (int k = 0; k < 3; ++k)
-            w.addBody(torus, 1, btTransform(btQuaternion(btVector3(1, 0, 0), btScalar(0.4 * k)),
-                                            btVector3(btScalar(0.3 * k), btScalar(1 + 1.2 * k), 0)));
-    };
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide, onlyOnce);
-    populate(reference);
-    populate(cullide);
+    populateTori(reference, shapes, btScalar(0.2));  // needs d > 0.4
+    populateTori(cullide, shapes, btScalar(0.2));
     testing::internal::CaptureStderr();
     MirrorOptions options;
     options.steps = 60;
@@ -251,25 +252,16 @@ TEST(BulletContract, CullerRecreationFailureFallsBackToAabbPairs) {
 TEST(BulletContract, CullerShrinkFailureKeepsTheSoundCuller) {
     for (bool returnNothing : {false, true}) {
         ShapeStore shapes;
-        btCollisionShape* plane = shapes.plane(btVector3(0, 1, 0), 0);
-        btCollisionShape* torus = shapes.gimpactTorus(1, btScalar(0.3), 16, 8, btScalar(0.01));  // needs d 0.022
         int calls = 0;
         const CullideBroadphase::CullerFactory onlyOnce = [&](const Settings& s) -> std::unique_ptr<Culler> {
             if (++calls == 1) return createReferenceCuller(s);
             if (returnNothing) return nullptr;
             throw GlUnavailableError("EGL context lost (test)");
         };
-        auto populate = [&](TestWorld& w) {
-            btGImpactCollisionAlgorithm::registerAlgorithm(&w.dispatcher());
-            w.addBody(plane, 0, btTransform::getIdentity());
-            for (int k = 0; k < 3; ++k)
-                w.addBody(torus, 1, btTransform(btQuaternion(btVector3(1, 0, 0), btScalar(0.4 * k)),
-                                                btVector3(btScalar(0.3 * k), btScalar(1 + 1.2 * k), 0)));
-        };
         TestWorld reference(PipelineKind::Default);
         TestWorld cullide(PipelineKind::Cullide, onlyOnce);
-        populate(reference);
-        populate(cullide);
+        populateTori(reference, shapes, btScalar(0.01));  // needs d 0.022
+        populateTori(cullide, shapes, btScalar(0.01));
         testing::internal::CaptureStderr();
         MirrorOptions options;
         options.steps = 90;
