@@ -1,5 +1,5 @@
-// The exact stage: for each potentially colliding mesh pair, candidate triangle pairs by sweep and prune over
-// their surviving triangles' boxes, then the robust triangle test, on worker threads.
+// The exact stage: for each potentially colliding mesh pair, candidate triangle pairs by descending box trees over
+// the two objects' surviving triangles together, then the robust triangle test, on worker threads.
 #pragma once
 
 #include "TaskPool.h"
@@ -17,6 +17,8 @@ struct ExactJob {
     std::uint32_t b = 0;
     const std::vector<std::uint32_t>* trianglesA = nullptr;  ///< surviving triangles of object a
     const std::vector<std::uint32_t>* trianglesB = nullptr;
+    const std::vector<Aabb>* boxesA = nullptr;  ///< box of every triangle of object a (inflated by margin / 2)
+    const std::vector<Aabb>* boxesB = nullptr;
 };
 
 struct ExactJobResult {
@@ -26,7 +28,8 @@ struct ExactJobResult {
 
 class ExactStage {
 public:
-    explicit ExactStage(unsigned threads);
+    /// Runs on `pool`, which must outlive the stage.
+    explicit ExactStage(TaskPool& pool);
     ~ExactStage();
     ExactStage(const ExactStage&) = delete;
     ExactStage& operator=(const ExactStage&) = delete;
@@ -37,7 +40,7 @@ public:
 
 private:
     struct Scratch;  ///< per-frame working memory, kept between frames: no allocation churn on large scenes
-    TaskPool m_pool;
+    TaskPool& m_pool;
     std::vector<std::vector<TrianglePair>> m_candidates;
     std::unique_ptr<Scratch> m_scratch;
 };

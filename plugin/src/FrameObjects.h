@@ -1,9 +1,11 @@
 // Validation of a frame's objects and the CPU box pre-pass shared by the GPU and the reference culler.
 #pragma once
 
+#include "TaskPool.h"
 #include "cullide/Object.h"
 #include "cullide/Result.h"
 
+#include <algorithm>
 #include <cstdint>
 #include <utility>
 #include <vector>
@@ -17,10 +19,11 @@ struct ValidatedObject {
 };
 
 /// Checks every object (finite coordinates, indices in range, finite non-empty proxy boxes); invalid ones go to
-/// `rejected` with a message. Boxes are inflated by margin / 2, so two boxes overlap iff their L-infinity
-/// distance is at most the margin.
+/// `rejected` with a message (the first defect of the mesh, in triangle order). Boxes are inflated by margin / 2,
+/// so two boxes overlap iff their L-infinity distance is at most the margin. With a pool, meshes are checked on
+/// every worker; the result is the same.
 std::vector<ValidatedObject> validateObjects(const std::vector<Object>& objects, double margin,
-                                             std::vector<ObjectDiagnostic>& rejected);
+                                             std::vector<ObjectDiagnostic>& rejected, TaskPool* pool = nullptr);
 
 /// All pairs (a < b) of valid objects whose boxes overlap, sorted: sweep and prune along the widest axis.
 std::vector<std::pair<std::uint32_t, std::uint32_t>> overlappingPairs(const std::vector<ValidatedObject>& objects);
@@ -29,10 +32,17 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> overlappingPairs(const std:
 /// deterministic test for pairs with a box-only proxy (their narrow phase is the caller's).
 bool meshTouchesBox(const TriangleMesh& mesh, const Aabb& box, double margin);
 
-/// Box of triangle t of `mesh`.
-inline Aabb triangleBounds(const TriangleMesh& mesh, std::uint32_t t) {
+/// Box of triangle t of `mesh`, inflated by `inflate`.
+inline Aabb triangleBounds(const TriangleMesh& mesh, std::uint32_t t, double inflate = 0.0) {
+    const TriangleIndices& tri = mesh.triangles[t];
+    const Vec3& p = mesh.vertices[tri[0]];
+    const Vec3& q = mesh.vertices[tri[1]];
+    const Vec3& r = mesh.vertices[tri[2]];
     Aabb b;
-    for (std::uint32_t v : mesh.triangles[t]) b.grow(mesh.vertices[v]);
+    for (int k = 0; k < 3; ++k) {
+        b.min[k] = std::min(std::min(p[k], q[k]), r[k]) - inflate;
+        b.max[k] = std::max(std::max(p[k], q[k]), r[k]) + inflate;
+    }
     return b;
 }
 

@@ -1,5 +1,6 @@
 // CULLIDE: object, sub-object (group) and triangle levels of image-space visibility pruning, then the exact stage.
 #include "ExactStage.h"
+#include "FloatRounding.h"
 #include "FrameObjects.h"
 #include "cullide/Timer.h"
 #include "bindings.h"
@@ -16,16 +17,6 @@
 namespace cullide {
 namespace {
 
-/// Outward rounding of a double to float.
-float floatDown(double v) {
-    float f = static_cast<float>(v);
-    return static_cast<double>(f) > v ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
-}
-float floatUp(double v) {
-    float f = static_cast<float>(v);
-    return static_cast<double>(f) < v ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
-}
-
 struct Group {
     std::uint32_t object;
     std::uint32_t first;  ///< into the object's spatial triangle order
@@ -36,7 +27,8 @@ struct Group {
 class GpuCuller final : public Culler {
 public:
     explicit GpuCuller(const Settings& settings)
-        : m_settings(settings), m_context(settings.device), m_pass(m_context, settings), m_exact(settings.threads) {}
+        : m_settings(settings), m_pool(settings.threads), m_context(settings.device), m_pass(m_context, settings),
+          m_exact(m_pool) {}
 
     const Settings& settings() const override { return m_settings; }
 
@@ -51,7 +43,7 @@ public:
 
         // CPU box pre-pass over objects.
         Timer prepass;
-        m_valid = validateObjects(objects, margin, result.rejected);
+        m_valid = validateObjects(objects, margin, result.rejected, &m_pool);
         stats.objects = objects.size();
         stats.rejectedObjects = result.rejected.size();
         for (std::size_t i = 0; i < objects.size(); ++i) {
@@ -142,6 +134,7 @@ private:
     void buildGroups(bool prepass, Stats& stats) {
         m_groups.clear();
         m_order.resize(m_valid.size());
+        m_triangleBoxes.resize(m_valid.size());
         const auto k = static_cast<std::uint32_t>(m_settings.groupSize);
         for (std::uint32_t o = 0; o < m_valid.size(); ++o) {
             if (!m_active[o] || !isMesh(o)) continue;
@@ -152,16 +145,44 @@ private:
                 m_order[o].resize(mesh.triangles.size());
                 std::iota(m_order[o].begin(), m_order[o].end(), 0u);
             }
-            const auto n = static_cast<std::uint32_t>(mesh.triangles.size());
-            for (std::uint32_t first = 0; first < n; first += k) {
-                Group g{o, first, std::min(k, n - first), {}};
-                for (std::uint32_t i = first; i < first + g.count; ++i) g.box.grow(triangleBounds(mesh, m_order[o][i]));
-                g.box = g.box.inflated(0.5 * m_settings.margin);
-                ++stats.prepassGroupsIn;
-                if (prepass && !overlapsPartner(o, g.box)) continue;
-                m_groups.push_back(g);
-            }
+            m_triangleBoxes[o].resize(mesh.triangles.size());
         }
+        // Every active mesh's triangle boxes, then its group boxes, in ranges on every worker.
+        constexpr std::uint32_t kRange = 8192;
+        m_ranges.clear();
+        for (std::uint32_t o = 0; o < m_valid.size(); ++o) {
+            if (!m_active[o] || !isMesh(o)) continue;
+            const auto n = static_cast<std::uint32_t>(meshOf(o).triangles.size());
+            for (std::uint32_t first = 0; first < n; first += kRange) m_ranges.push_back({o, first, std::min(n, first + kRange)});
+        }
+        const double inflate = 0.5 * m_settings.margin;
+        m_pool.parallelFor(m_ranges.size(), 1, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t r = begin; r < end; ++r) {
+                const Range& range = m_ranges[r];
+                const TriangleMesh& mesh = meshOf(range.object);
+                std::vector<Aabb>& boxes = m_triangleBoxes[range.object];
+                for (std::uint32_t t = range.begin; t < range.end; ++t) boxes[t] = triangleBounds(mesh, t, inflate);
+            }
+        });
+        m_groupCandidates.clear();
+        for (std::uint32_t o = 0; o < m_valid.size(); ++o) {
+            if (!m_active[o] || !isMesh(o)) continue;
+            const auto n = static_cast<std::uint32_t>(meshOf(o).triangles.size());
+            for (std::uint32_t first = 0; first < n; first += k) m_groupCandidates.push_back({o, first, std::min(k, n - first), {}});
+        }
+        m_groupKept.resize(m_groupCandidates.size());
+        m_pool.parallelFor(m_groupCandidates.size(), 256, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t i = begin; i < end; ++i) {
+                Group& g = m_groupCandidates[i];
+                const std::vector<Aabb>& boxes = m_triangleBoxes[g.object];
+                const std::vector<std::uint32_t>& order = m_order[g.object];
+                for (std::uint32_t t = g.first; t < g.first + g.count; ++t) g.box.grow(boxes[order[t]]);
+                m_groupKept[i] = !prepass || overlapsPartner(g.object, g.box);
+            }
+        });
+        stats.prepassGroupsIn += m_groupCandidates.size();
+        for (std::size_t i = 0; i < m_groupCandidates.size(); ++i)
+            if (m_groupKept[i]) m_groups.push_back(m_groupCandidates[i]);
         stats.prepassGroupsOut = m_groups.size();
     }
 
@@ -254,27 +275,38 @@ private:
     struct Tri {
         std::uint32_t object;
         std::uint32_t triangle;
-        Aabb box;
     };
 
     /// Triangles of the given groups; with `prepass`, only those whose box overlaps a partner object's box.
     void collectTriangles(const std::vector<Group>& groups, bool prepass) {
-        m_tris.clear();
-        for (const Group& g : groups) {
-            const TriangleMesh& mesh = meshOf(g.object);
-            const bool test = prepass && m_partners[g.object].size() <= 16;
-            for (std::uint32_t i = g.first; i < g.first + g.count; ++i) {
-                const std::uint32_t t = m_order[g.object][i];
-                const Aabb box = triangleBounds(mesh, t).inflated(0.5 * m_settings.margin);
-                if (test && !overlapsPartner(g.object, box)) continue;
-                m_tris.push_back({g.object, t, box});
+        constexpr std::size_t kGroupsPerTask = 256;
+        const std::size_t tasks = (groups.size() + kGroupsPerTask - 1) / kGroupsPerTask;
+        if (m_taskTris.size() < tasks) m_taskTris.resize(tasks);
+        m_pool.parallelFor(tasks, 1, [&](std::size_t begin, std::size_t end) {
+            thread_local std::vector<Tri> kept;  // per thread: neighbouring tasks' vectors share cache lines
+            for (std::size_t task = begin; task < end; ++task) {
+                kept.clear();
+                for (std::size_t i = task * kGroupsPerTask; i < std::min(groups.size(), (task + 1) * kGroupsPerTask); ++i) {
+                    const Group& g = groups[i];
+                    const std::vector<Aabb>& boxes = m_triangleBoxes[g.object];
+                    const bool test = prepass && m_partners[g.object].size() <= 16;
+                    for (std::uint32_t k = g.first; k < g.first + g.count; ++k) {
+                        const std::uint32_t t = m_order[g.object][k];
+                        if (test && !overlapsPartner(g.object, boxes[t])) continue;
+                        kept.push_back({g.object, t});
+                    }
+                }
+                m_taskTris[task].assign(kept.begin(), kept.end());
             }
-        }
+        });
+        m_tris.clear();
+        for (std::size_t task = 0; task < tasks; ++task)
+            m_tris.insert(m_tris.end(), m_taskTris[task].begin(), m_taskTris[task].end());
     }
 
     void runTriangleLevel(const std::vector<std::uint32_t>& proxies, Stats& stats) {
         beginLevel(stats);
-        for (const Tri& t : m_tris) addTriangleItem(t.object, &t.triangle, 1, t.box);
+        for (const Tri& t : m_tris) addTriangleItem(t.object, &t.triangle, 1, m_triangleBoxes[t.object][t.triangle]);
         for (std::uint32_t o : proxies) addBoxItem(o, m_objectBox[o], m_valid[o].box);
         pruneLevel("triangles", stats);
         finishFromTriangles(m_survivors);
@@ -284,7 +316,8 @@ private:
     void finishFromTriangles(const std::vector<std::uint8_t>& alive) {
         for (std::size_t i = 0; i < m_tris.size(); ++i)
             if (alive.empty() || alive[i]) m_survivingTriangles[m_tris[i].object].push_back(m_tris[i].triangle);
-        for (auto& list : m_survivingTriangles) std::sort(list.begin(), list.end());
+        for (auto& list : m_survivingTriangles)
+            if (!std::is_sorted(list.begin(), list.end())) std::sort(list.begin(), list.end());
     }
 
     std::vector<std::uint32_t> activeProxies() const {
@@ -390,7 +423,8 @@ private:
             if (isMesh(a) && isMesh(b)) {
                 if (m_survivingTriangles[a].empty() || m_survivingTriangles[b].empty()) continue;
                 pair.hasTriangles = true;
-                jobs.push_back({a, b, &m_survivingTriangles[a], &m_survivingTriangles[b]});
+                jobs.push_back({a, b, &m_survivingTriangles[a], &m_survivingTriangles[b], &m_triangleBoxes[a],
+                                &m_triangleBoxes[b]});
                 jobPair.push_back(result.pairs.size());
             } else if (isMesh(a) || isMesh(b)) {
                 if (!meshTouchesBox(meshOf(isMesh(a) ? a : b), m_valid[isMesh(a) ? b : a].box, m_settings.margin))
@@ -420,6 +454,7 @@ private:
     static constexpr std::uint32_t kNoOwner = 0xFFFFFFFFu;
 
     Settings m_settings;
+    TaskPool m_pool;  ///< before m_exact, which runs on it
     gl::EglContext m_context;
     gl::VisibilityPass m_pass;
     ExactStage m_exact;
@@ -431,7 +466,16 @@ private:
     std::vector<std::vector<std::uint32_t>> m_partners;
     std::vector<std::uint8_t> m_active;
     std::vector<Group> m_groups;
+    struct Range {
+        std::uint32_t object;
+        std::uint32_t begin;
+        std::uint32_t end;
+    };
+    std::vector<Range> m_ranges;             ///< triangle ranges of the active meshes, for the workers
+    std::vector<Group> m_groupCandidates;    ///< every group of the active meshes, before the pre-pass
+    std::vector<std::uint8_t> m_groupKept;
     std::vector<std::vector<std::uint32_t>> m_order;  ///< per active mesh: triangles in Morton order
+    std::vector<std::vector<Aabb>> m_triangleBoxes;   ///< per active mesh: every triangle's box, inflated by margin / 2
     mutable std::vector<std::uint64_t> m_mortonScratch;
     std::vector<std::uint32_t> m_groupBox;
     std::vector<std::uint32_t> m_objectBox;
@@ -445,6 +489,7 @@ private:
     std::vector<std::uint32_t> m_ownerId;
     std::uint32_t m_ownerCount = 0;
     std::vector<Tri> m_tris;
+    std::vector<std::vector<Tri>> m_taskTris;
     std::vector<std::vector<std::uint32_t>> m_survivingTriangles;
     std::vector<ExactJobResult> m_jobResults;
 };

@@ -98,6 +98,37 @@ TEST(ReferenceCuller, InvalidObjectsAreRejectedWithoutHarmingOthers) {
     EXPECT_EQ(r.pairs[0].b, 1u);
 }
 
+TEST(ReferenceCuller, LargeMeshesAreCheckedWholeAndReportTheirFirstDefect) {
+    // Meshes are validated in ranges of triangles (on workers in the GPU culler): the box must still span every
+    // range and the message name the first defect in triangle order, whichever range finds one first.
+    constexpr std::uint32_t kTriangles = 50000;
+    TriangleMesh strip;
+    for (std::uint32_t i = 0; i <= kTriangles; ++i) {
+        strip.vertices.emplace_back(0.001 * i, 0.0, 0.0);
+        strip.vertices.emplace_back(0.001 * i, 1.0, 0.0);
+    }
+    for (std::uint32_t i = 0; i < kTriangles; ++i) strip.triangles.push_back({2 * i, 2 * i + 1, 2 * i + 2});
+    TriangleMesh broken = strip;
+    broken.triangles[45000][1] = 9999999;                                         // out of range, later
+    broken.vertices[broken.triangles[20000][2]].y() = std::nan("");              // non-finite, first
+    broken.triangles[30000][0] = 9999999;                                         // out of range, between
+    // A triangle crossing the strip's last triangles only: found only if the last range counts in the box.
+    const double x = 0.001 * (kTriangles - 1);
+    const TriangleMesh probe = singleTriangle({x, 0.5, -0.5}, {x, 0.5, 0.5}, {x + 0.01, 0.5, 0.0});
+    const std::vector<TriangleMesh> meshes = {strip, broken, probe};
+    auto culler = createReferenceCuller(Settings{});
+    Result r;
+    culler->run(asObjects(meshes), r);
+    ASSERT_EQ(r.rejected.size(), 1u);
+    EXPECT_EQ(r.rejected[0].object, 1u);
+    EXPECT_NE(r.rejected[0].message.find("(triangle 20000) has a non-finite coordinate"), std::string::npos)
+        << r.rejected[0].message;
+    ASSERT_EQ(r.pairs.size(), 1u);
+    EXPECT_EQ(r.pairs[0].a, 0u);
+    EXPECT_EQ(r.pairs[0].b, 2u);
+    EXPECT_FALSE(r.pairs[0].triangles.empty());
+}
+
 TEST(ReferenceCuller, BoxProxiesPairWithoutTriangles) {
     std::vector<TriangleMesh> meshes = {singleTriangle({0, 0, 0}, {1, 0, 0}, {0, 1, 0})};
     auto objects = asObjects(meshes);

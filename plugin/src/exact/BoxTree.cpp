@@ -1,0 +1,265 @@
+#include "BoxTree.h"
+
+#include "FloatRounding.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+#if defined(__SSE__) || defined(_M_X64)
+#include <xmmintrin.h>
+#define CULLIDE_BOXTREE_SSE 1
+#endif
+
+namespace cullide {
+namespace {
+
+constexpr float kInf = std::numeric_limits<float>::infinity();
+
+/// Spreads the low 10 bits of v to every third bit.
+std::uint32_t spreadBits(std::uint32_t v) {
+    v &= 0x3FFu;
+    v = (v | (v << 16)) & 0x030000FFu;
+    v = (v | (v << 8)) & 0x0300F00Fu;
+    v = (v | (v << 4)) & 0x030C30C3u;
+    v = (v | (v << 2)) & 0x09249249u;
+    return v;
+}
+
+/// Stable LSD radix sort of keys by bits 32..61 (the Morton code; the low 32 bits are the position, already
+/// ascending, so equal codes keep their input order).
+void radixSortByCode(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& tmp) {
+    constexpr int kBits = 10;
+    constexpr std::size_t kBuckets = std::size_t{1} << kBits;
+    tmp.resize(keys.size());
+    std::array<std::uint32_t, kBuckets> count{};
+    for (int shift = 32; shift < 62; shift += kBits) {
+        count.fill(0);
+        for (std::uint64_t k : keys) ++count[(k >> shift) & (kBuckets - 1)];
+        std::uint32_t sum = 0;
+        for (std::uint32_t& c : count) {
+            const std::uint32_t n = c;
+            c = sum;
+            sum += n;
+        }
+        for (std::uint64_t k : keys) tmp[count[(k >> shift) & (kBuckets - 1)]++] = k;
+        keys.swap(tmp);
+    }
+}
+
+void clearSlot(BoxTree::Block& block, std::uint32_t slot) {
+    for (int k = 0; k < 3; ++k) {
+        block.lo[k][slot] = kInf;
+        block.hi[k][slot] = -kInf;
+    }
+}
+
+std::uint32_t blocksFor(std::size_t nodes) {
+    return static_cast<std::uint32_t>((nodes + BoxTree::kFanout - 1) / BoxTree::kFanout);
+}
+
+}  // namespace
+
+void BoxTree::build(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles) {
+    const std::size_t n = triangles.size();
+    m_boxes = &boxes;
+    m_leafTriangle.resize(n);
+    m_levelCount = 0;
+    if (n == 0) return;
+
+    // Morton order of the box centres (10 bits per axis) over their common bounds.
+    Aabb all;
+    for (std::uint32_t t : triangles) all.grow(boxes[t]);
+    double scale[3];
+    for (int k = 0; k < 3; ++k) {
+        const double extent = all.max[k] - all.min[k];
+        scale[k] = extent > 0.0 && std::isfinite(extent) ? 1023.0 / extent : 0.0;
+    }
+    m_keys.resize(n);
+    m_floatBoxes.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const Aabb& b = boxes[triangles[i]];
+        std::uint32_t code = 0;
+        FloatBox& f = m_floatBoxes[i];
+        for (int k = 0; k < 3; ++k) {
+            const double c = (0.5 * (b.min[k] + b.max[k]) - all.min[k]) * scale[k];
+            code |= spreadBits(static_cast<std::uint32_t>(std::clamp(c, 0.0, 1023.0))) << k;
+            f.lo[k] = floatBelow(b.min[k]);
+            f.hi[k] = floatAbove(b.max[k]);
+        }
+        m_keys[i] = (static_cast<std::uint64_t>(code) << 32) | i;
+    }
+    radixSortByCode(m_keys, m_keysTmp);
+
+    // Leaves, then each level the union of eight nodes below, until a single root.
+    if (m_levels.empty()) m_levels.emplace_back();
+    std::vector<Block>& leaves = m_levels[0];
+    leaves.resize(blocksFor(n));
+    for (std::size_t i = 0; i < n; ++i) {
+        const auto at = static_cast<std::uint32_t>(m_keys[i]);
+        m_leafTriangle[i] = triangles[at];
+        const FloatBox& f = m_floatBoxes[at];
+        Block& block = leaves[i / kFanout];
+        const auto slot = static_cast<std::uint32_t>(i % kFanout);
+        for (int k = 0; k < 3; ++k) {
+            block.lo[k][slot] = f.lo[k];
+            block.hi[k][slot] = f.hi[k];
+        }
+    }
+    for (auto slot = static_cast<std::uint32_t>(n % kFanout); slot != 0 && slot < kFanout; ++slot)
+        clearSlot(leaves.back(), slot);
+    m_levelCount = 1;
+    m_nodeCount.assign(1, n);
+    std::size_t nodes = n;
+    while (nodes > 1) {
+        const std::size_t parents = blocksFor(nodes);
+        if (m_levels.size() == m_levelCount) m_levels.emplace_back();
+        const std::vector<Block>& below = m_levels[m_levelCount - 1];
+        std::vector<Block>& level = m_levels[m_levelCount];
+        level.resize(blocksFor(parents));
+        for (std::size_t p = 0; p < parents; ++p) {
+            const Block& c = below[p];
+            Block& block = level[p / kFanout];
+            const auto slot = static_cast<std::uint32_t>(p % kFanout);
+            for (int k = 0; k < 3; ++k) {
+                float lo = c.lo[k][0];
+                float hi = c.hi[k][0];
+                for (std::uint32_t i = 1; i < kFanout; ++i) {
+                    lo = std::min(lo, c.lo[k][i]);
+                    hi = std::max(hi, c.hi[k][i]);
+                }
+                block.lo[k][slot] = lo;
+                block.hi[k][slot] = hi;
+            }
+        }
+        for (auto slot = static_cast<std::uint32_t>(parents % kFanout); slot != 0 && slot < kFanout; ++slot)
+            clearSlot(level.back(), slot);
+        ++m_levelCount;
+        m_nodeCount.push_back(parents);
+        nodes = parents;
+    }
+}
+
+BoxTree::FloatBox BoxTree::box(std::uint32_t level, std::uint32_t node) const {
+    const Block& block = m_levels[level][node / kFanout];
+    const std::uint32_t slot = node % kFanout;
+    return {{block.lo[0][slot], block.lo[1][slot], block.lo[2][slot]},
+            {block.hi[0][slot], block.hi[1][slot], block.hi[2][slot]}};
+}
+
+unsigned BoxTree::childMask(std::uint32_t level, std::uint32_t node, const FloatBox& q) const {
+    const Block& c = m_levels[level - 1][node];
+    unsigned mask = 0;
+#ifdef CULLIDE_BOXTREE_SSE
+    for (std::uint32_t h = 0; h < kFanout; h += 4) {
+        __m128 ok = _mm_and_ps(_mm_cmple_ps(_mm_load_ps(&c.lo[0][h]), _mm_set1_ps(q.hi[0])),
+                               _mm_cmple_ps(_mm_set1_ps(q.lo[0]), _mm_load_ps(&c.hi[0][h])));
+        for (int k = 1; k < 3; ++k)
+            ok = _mm_and_ps(ok, _mm_and_ps(_mm_cmple_ps(_mm_load_ps(&c.lo[k][h]), _mm_set1_ps(q.hi[k])),
+                                           _mm_cmple_ps(_mm_set1_ps(q.lo[k]), _mm_load_ps(&c.hi[k][h]))));
+        mask |= static_cast<unsigned>(_mm_movemask_ps(ok)) << h;
+    }
+#else
+    for (std::uint32_t i = 0; i < kFanout; ++i) {
+        bool ok = true;
+        for (int k = 0; k < 3; ++k) ok = ok && c.lo[k][i] <= q.hi[k] && q.lo[k] <= c.hi[k][i];
+        mask |= static_cast<unsigned>(ok) << i;
+    }
+#endif
+    // Padding slots are empty boxes, but an unbounded query (coordinates beyond float range) would still meet them.
+    const std::size_t children = std::min<std::size_t>(kFanout, m_nodeCount[level - 1] - std::size_t{node} * kFanout);
+    return mask & ((1u << children) - 1u);
+}
+
+bool BoxTree::leavesOverlap(std::uint32_t leaf, const BoxTree& other, std::uint32_t otherLeaf) const {
+    return (*m_boxes)[m_leafTriangle[leaf]].overlaps((*other.m_boxes)[other.m_leafTriangle[otherLeaf]]);
+}
+
+void BoxTree::descend(const BoxTree& a, const BoxTree& b, const NodePair& p, std::vector<NodePair>& pending,
+                      std::vector<TrianglePair>* out) {
+    auto emit = [&](std::uint32_t levelA, std::uint32_t nodeA, std::uint32_t levelB, std::uint32_t nodeB) {
+        if (levelA == 0 && levelB == 0 && out != nullptr) {
+            if (a.leavesOverlap(nodeA, b, nodeB)) out->push_back({a.m_leafTriangle[nodeA], b.m_leafTriangle[nodeB]});
+        } else {
+            pending.push_back({levelA, nodeA, levelB, nodeB});
+        }
+    };
+    // Descend the higher node; at equal levels both: each child of a against the children of b.
+    const bool descendA = p.levelA >= p.levelB && p.levelA > 0;
+    const bool descendB = p.levelB >= p.levelA && p.levelB > 0;
+    if (descendA && descendB) {
+        unsigned maskA = a.childMask(p.levelA, p.nodeA, b.box(p.levelB, p.nodeB));
+        const std::uint32_t levelA = p.levelA - 1;
+        const std::uint32_t levelB = p.levelB - 1;
+        while (maskA != 0) {
+            const auto i = static_cast<std::uint32_t>(__builtin_ctz(maskA));
+            maskA &= maskA - 1;
+            const std::uint32_t childA = p.nodeA * kFanout + i;
+            unsigned maskB = b.childMask(p.levelB, p.nodeB, a.box(levelA, childA));
+            while (maskB != 0) {
+                const auto j = static_cast<std::uint32_t>(__builtin_ctz(maskB));
+                maskB &= maskB - 1;
+                emit(levelA, childA, levelB, p.nodeB * kFanout + j);
+            }
+        }
+    } else if (descendA) {
+        unsigned mask = a.childMask(p.levelA, p.nodeA, b.box(p.levelB, p.nodeB));
+        while (mask != 0) {
+            const auto i = static_cast<std::uint32_t>(__builtin_ctz(mask));
+            mask &= mask - 1;
+            emit(p.levelA - 1, p.nodeA * kFanout + i, p.levelB, p.nodeB);
+        }
+    } else {
+        unsigned mask = b.childMask(p.levelB, p.nodeB, a.box(p.levelA, p.nodeA));
+        while (mask != 0) {
+            const auto j = static_cast<std::uint32_t>(__builtin_ctz(mask));
+            mask &= mask - 1;
+            emit(p.levelA, p.nodeA, p.levelB - 1, p.nodeB * kFanout + j);
+        }
+    }
+}
+
+void BoxTree::split(const BoxTree& a, const BoxTree& b, std::size_t target, std::vector<NodePair>& out) {
+    out.clear();
+    if (a.empty() || b.empty()) return;
+    const NodePair root{a.m_levelCount - 1, 0, b.m_levelCount - 1, 0};
+    const FloatBox boxA = a.box(root.levelA, 0);
+    const FloatBox boxB = b.box(root.levelB, 0);
+    for (int k = 0; k < 3; ++k)
+        if (boxA.lo[k] > boxB.hi[k] || boxB.lo[k] > boxA.hi[k]) return;
+    out.push_back(root);
+    std::vector<NodePair> next;
+    bool expanded = true;
+    while (out.size() < target && expanded) {
+        next.clear();
+        expanded = false;
+        for (const NodePair& p : out) {
+            if (p.levelA == 0 && p.levelB == 0) {
+                next.push_back(p);
+            } else {
+                descend(a, b, p, next, nullptr);
+                expanded = true;
+            }
+        }
+        out.swap(next);
+    }
+}
+
+void BoxTree::leafPairs(const BoxTree& a, const BoxTree& b, const NodePair& start, std::vector<NodePair>& stack,
+                        std::vector<TrianglePair>& out) {
+    if (start.levelA == 0 && start.levelB == 0) {
+        if (a.leavesOverlap(start.nodeA, b, start.nodeB))
+            out.push_back({a.m_leafTriangle[start.nodeA], b.m_leafTriangle[start.nodeB]});
+        return;
+    }
+    stack.clear();
+    stack.push_back(start);
+    while (!stack.empty()) {
+        const NodePair p = stack.back();
+        stack.pop_back();
+        descend(a, b, p, stack, &out);
+    }
+}
+
+}  // namespace cullide

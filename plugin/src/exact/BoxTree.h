@@ -1,0 +1,77 @@
+// A flat box tree over a subset of one mesh's triangles, rebuilt every frame in O(n), and the simultaneous descent
+// of two such trees that yields every triangle pair whose boxes overlap, exactly once.
+#pragma once
+
+#include "cullide/Result.h"
+#include "cullide/Types.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace cullide {
+
+class BoxTree {
+public:
+    /// Children per node. Node i of level l + 1 is the union of nodes [8i, 8i + 8) of level l; those eight are
+    /// stored together as one Block, so no child pointers are stored and one node's children are tested against a
+    /// box in a few SIMD instructions.
+    static constexpr std::uint32_t kFanout = 8;
+
+    /// Eight boxes, structure of arrays, in float rounded outward by a few ulps (each contains the double box it
+    /// stands for).
+    /// Unused slots are empty (min +inf, max -inf) and overlap nothing.
+    struct alignas(32) Block {
+        float lo[3][kFanout];
+        float hi[3][kFanout];
+    };
+    struct FloatBox {
+        float lo[3];
+        float hi[3];
+    };
+
+    /// A pair of nodes (level, index) of two trees whose boxes overlap.
+    struct NodePair {
+        std::uint32_t levelA;
+        std::uint32_t nodeA;
+        std::uint32_t levelB;
+        std::uint32_t nodeB;
+    };
+
+    /// Leaves: `boxes[t]` for each t of `triangles`, in Morton order of their centres (the order only affects
+    /// speed, never the result). `boxes` must stay alive and unchanged until the last query. Boxes must be finite.
+    void build(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles);
+
+    bool empty() const { return m_leafTriangle.empty(); }
+    std::size_t size() const { return m_leafTriangle.size(); }
+
+    /// The overlapping node pairs of `a` and `b` after descending breadth first until there are at least `target`
+    /// of them or only leaf pairs are left; together they cover every overlapping leaf pair exactly once. Empty
+    /// when either tree is empty or the roots do not overlap.
+    static void split(const BoxTree& a, const BoxTree& b, std::size_t target, std::vector<NodePair>& out);
+
+    /// Every (triangle of a, triangle of b) below `start` whose double boxes overlap (closed intervals, as
+    /// Aabb::overlaps), each once, appended to `out`; `stack` is working memory. Float node boxes only prune:
+    /// they contain the double boxes, so no overlapping pair is lost, and each leaf pair is decided in double.
+    static void leafPairs(const BoxTree& a, const BoxTree& b, const NodePair& start, std::vector<NodePair>& stack,
+                          std::vector<TrianglePair>& out);
+
+private:
+    FloatBox box(std::uint32_t level, std::uint32_t node) const;
+    /// Bit i set when child i of `node` (at `level` > 0) overlaps `q`.
+    unsigned childMask(std::uint32_t level, std::uint32_t node, const FloatBox& q) const;
+    /// Expands `p` (not a leaf pair): overlapping leaf pairs go to `out`, other overlapping node pairs to `pending`.
+    static void descend(const BoxTree& a, const BoxTree& b, const NodePair& p, std::vector<NodePair>& pending,
+                        std::vector<TrianglePair>* out);
+    bool leavesOverlap(std::uint32_t leaf, const BoxTree& other, std::uint32_t otherLeaf) const;
+
+    std::vector<std::vector<Block>> m_levels;  ///< [l] holds the nodes of level l (0 = leaves) in blocks of eight
+    std::uint32_t m_levelCount = 0;           ///< levels in use; the top one holds the root alone; more are spare
+    std::vector<std::size_t> m_nodeCount;      ///< nodes per level in use
+    std::vector<std::uint32_t> m_leafTriangle;  ///< mesh triangle of each leaf
+    const std::vector<Aabb>* m_boxes = nullptr;  ///< the double boxes, by triangle
+    std::vector<std::uint64_t> m_keys;           ///< build scratch: Morton code << 32 | position
+    std::vector<std::uint64_t> m_keysTmp;
+    std::vector<FloatBox> m_floatBoxes;          ///< build scratch: leaf boxes in input order
+};
+
+}  // namespace cullide

@@ -1,0 +1,174 @@
+// The exact stage's box tree against brute force: every overlapping (closed-interval) box pair exactly once,
+// whatever the split of the descent, for soups, duplicates, degenerate and huge boxes; and the outward float
+// rounding it relies on.
+#include "../../plugin/src/FloatRounding.h"
+#include "../../plugin/src/exact/BoxTree.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+namespace cullide {
+namespace {
+
+std::vector<TrianglePair> bruteForce(const std::vector<Aabb>& a, const std::vector<std::uint32_t>& listA,
+                                     const std::vector<Aabb>& b, const std::vector<std::uint32_t>& listB) {
+    std::vector<TrianglePair> out;
+    for (std::uint32_t i : listA)
+        for (std::uint32_t j : listB)
+            if (a[i].overlaps(b[j])) out.push_back({i, j});
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+std::vector<TrianglePair> viaTree(const std::vector<Aabb>& a, const std::vector<std::uint32_t>& listA,
+                                  const std::vector<Aabb>& b, const std::vector<std::uint32_t>& listB,
+                                  std::size_t target) {
+    BoxTree ta;
+    BoxTree tb;
+    ta.build(a, listA);
+    tb.build(b, listB);
+    std::vector<BoxTree::NodePair> frontier;
+    std::vector<BoxTree::NodePair> stack;
+    BoxTree::split(ta, tb, target, frontier);
+    std::vector<TrianglePair> out;
+    for (const BoxTree::NodePair& p : frontier) BoxTree::leafPairs(ta, tb, p, stack, out);
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+std::vector<Aabb> randomBoxes(std::mt19937& rng, std::size_t n, double spread, double size, double offset) {
+    std::uniform_real_distribution<double> pos(-spread, spread);
+    std::uniform_real_distribution<double> ext(0.0, size);
+    std::vector<Aabb> boxes(n);
+    for (Aabb& box : boxes) {
+        for (int k = 0; k < 3; ++k) {
+            box.min[k] = offset + pos(rng);
+            box.max[k] = box.min[k] + ext(rng);
+        }
+    }
+    return boxes;
+}
+
+std::vector<std::uint32_t> everyOther(std::size_t n, std::uint32_t step) {
+    std::vector<std::uint32_t> list;
+    for (std::uint32_t i = 0; i < n; i += step) list.push_back(i);
+    return list;
+}
+
+TEST(BoxTree, EveryOverlappingPairExactlyOnceForAnySplit) {
+    std::mt19937 rng(7);
+    for (const std::size_t n : {1u, 2u, 7u, 8u, 9u, 63u, 64u, 65u, 700u, 3000u}) {
+        const auto a = randomBoxes(rng, n, 10.0, 1.5, 0.0);
+        const auto b = randomBoxes(rng, n / 2 + 1, 10.0, 2.5, 0.5);
+        const auto listA = everyOther(a.size(), 1);
+        const auto listB = everyOther(b.size(), n > 8 ? 2 : 1);  // a subset: only listed boxes take part
+        const auto expected = bruteForce(a, listA, b, listB);
+        for (const std::size_t target : {1u, 2u, 16u, 1000u, 100000u}) {
+            const auto got = viaTree(a, listA, b, listB, target);
+            ASSERT_EQ(got, expected) << "n " << n << " target " << target;  // sorted: a duplicate would show
+        }
+    }
+}
+
+TEST(BoxTree, TouchingDegenerateAndDuplicateBoxes) {
+    // Boxes that only touch (closed intervals), points, flat boxes and exact duplicates: the float pruning must
+    // not lose a pair that the double test accepts.
+    std::vector<Aabb> a;
+    std::vector<Aabb> b;
+    for (int i = 0; i < 50; ++i) {
+        const double x = 0.1 * i;
+        a.push_back({Vec3(x, 0, 0), Vec3(x + 0.1, 1, 1)});
+        a.push_back({Vec3(x, 0.3, 0.3), Vec3(x, 0.3, 0.3)});  // a point
+        b.push_back({Vec3(x + 0.1, 1, 1), Vec3(x + 0.2, 2, 2)});  // touches a's corner
+        b.push_back({Vec3(x, 0.3, 0.3), Vec3(x, 0.3, 0.3)});      // the same point
+        b.push_back({Vec3(x, 0, 0), Vec3(x + 0.1, 1, 0)});         // flat, on a's face
+    }
+    const auto listA = everyOther(a.size(), 1);
+    const auto listB = everyOther(b.size(), 1);
+    const auto expected = bruteForce(a, listA, b, listB);
+    ASSERT_FALSE(expected.empty());
+    for (const std::size_t target : {1u, 64u, 100000u}) EXPECT_EQ(viaTree(a, listA, b, listB, target), expected);
+}
+
+TEST(BoxTree, CoordinatesFarFromTheOriginAndBeyondFloatRange) {
+    // Tiny boxes far out (float spacing there is larger than the boxes) and boxes beyond the float range: the
+    // float boxes are coarse or unbounded there, the double decision still exact.
+    std::mt19937 rng(11);
+    for (const double offset : {1e7, 1e15, 1e38, 1e300}) {
+        const auto a = randomBoxes(rng, 400, offset * 1e-9, offset * 1e-10, offset);
+        const auto b = randomBoxes(rng, 300, offset * 1e-9, offset * 2e-10, offset);
+        const auto listA = everyOther(a.size(), 1);
+        const auto listB = everyOther(b.size(), 1);
+        const auto expected = bruteForce(a, listA, b, listB);
+        ASSERT_FALSE(expected.empty()) << offset;
+        EXPECT_EQ(viaTree(a, listA, b, listB, 8), expected) << offset;
+    }
+}
+
+TEST(BoxTree, EmptyListsAndDisjointTrees) {
+    std::mt19937 rng(3);
+    const auto a = randomBoxes(rng, 100, 1.0, 0.1, 0.0);
+    const auto b = randomBoxes(rng, 100, 1.0, 0.1, 100.0);
+    EXPECT_TRUE(viaTree(a, {}, b, everyOther(b.size(), 1), 8).empty());
+    EXPECT_TRUE(viaTree(a, everyOther(a.size(), 1), b, {}, 8).empty());
+    EXPECT_TRUE(viaTree(a, everyOther(a.size(), 1), b, everyOther(b.size(), 1), 8).empty());
+}
+
+TEST(BoxTree, RebuildReusesMemoryWithoutStaleNodes) {
+    // A tree rebuilt smaller must not keep levels or leaves of its larger past.
+    std::mt19937 rng(5);
+    BoxTree ta;
+    BoxTree tb;
+    const auto big = randomBoxes(rng, 5000, 10.0, 1.0, 0.0);
+    ta.build(big, everyOther(big.size(), 1));
+    const auto a = randomBoxes(rng, 20, 10.0, 1.0, 0.0);
+    const auto b = randomBoxes(rng, 5000, 10.0, 1.0, 0.0);
+    const auto listA = everyOther(a.size(), 1);
+    const auto listB = everyOther(b.size(), 1);
+    ta.build(a, listA);
+    tb.build(b, listB);
+    std::vector<BoxTree::NodePair> frontier;
+    std::vector<BoxTree::NodePair> stack;
+    BoxTree::split(ta, tb, 4, frontier);
+    std::vector<TrianglePair> got;
+    for (const BoxTree::NodePair& p : frontier) BoxTree::leafPairs(ta, tb, p, stack, got);
+    std::sort(got.begin(), got.end());
+    EXPECT_EQ(got, bruteForce(a, listA, b, listB));
+}
+
+TEST(FloatRounding, OutwardForEveryMagnitude) {
+    std::mt19937_64 rng(13);
+    std::uniform_real_distribution<double> mantissa(-1.0, 1.0);
+    std::uniform_int_distribution<int> exponent(-160, 160);
+    std::vector<double> values = {0.0, -0.0, 1.0, -1.0, 1e-45, -1e-45, 1e-310, -1e-310, 3.4028234663852886e38,
+                                  -3.4028234663852886e38, 3.5e38, -3.5e38, 1e300, -1e300, 0.1, -0.1};
+    for (int i = 0; i < 100000; ++i) values.push_back(std::ldexp(mantissa(rng), exponent(rng)));
+    for (const double v : values) {
+        ASSERT_LE(static_cast<double>(floatDown(v)), v) << v;
+        ASSERT_GE(static_cast<double>(floatUp(v)), v) << v;
+        ASSERT_LE(static_cast<double>(floatBelow(v)), v) << v;
+        ASSERT_GE(static_cast<double>(floatAbove(v)), v) << v;
+        // floatDown / floatUp are the nearest floats on their side: the next float beyond is past v.
+        const float down = floatDown(v);
+        const float up = floatUp(v);
+        if (std::isfinite(down) && down < std::numeric_limits<float>::max()) {
+            ASSERT_GT(static_cast<double>(std::nextafter(down, std::numeric_limits<float>::infinity())), v) << v;
+        }
+        if (std::isfinite(up) && up > -std::numeric_limits<float>::max()) {
+            ASSERT_LT(static_cast<double>(std::nextafter(up, -std::numeric_limits<float>::infinity())), v) << v;
+        }
+        // floatBelow / floatAbove stay within a few ulps inside the float range.
+        if (std::fabs(v) < 1e38 && std::fabs(v) > 1e-30) {  // a few ulps: well under 1e-6 relative
+            ASSERT_LE(std::fabs(static_cast<double>(floatBelow(v)) - v), std::fabs(v) * 1e-6) << v;
+            ASSERT_LE(std::fabs(static_cast<double>(floatAbove(v)) - v), std::fabs(v) * 1e-6) << v;
+        }
+    }
+}
+
+}  // namespace
+}  // namespace cullide
