@@ -52,13 +52,15 @@ void checkRange(const TriangleMesh& m, RangeCheck& r) {
 }  // namespace
 
 std::vector<ValidatedObject> validateObjects(const std::vector<Object>& objects, double margin,
-                                             std::vector<ObjectDiagnostic>& rejected, TaskPool* pool) {
+                                             std::vector<ObjectDiagnostic>& rejected, TaskPool* pool,
+                                             const std::vector<std::uint8_t>* known) {
+    auto isKnown = [&](std::size_t i) { return known != nullptr && (*known)[i] != 0; };
     std::vector<ValidatedObject> out(objects.size());
     // Meshes are checked in ranges of triangles, on every worker when a pool is given.
     constexpr std::size_t kRange = 16384;
     std::vector<RangeCheck> ranges;
     for (std::size_t i = 0; i < objects.size(); ++i) {
-        if (objects[i].mesh == nullptr) continue;
+        if (objects[i].mesh == nullptr || isKnown(i)) continue;
         const std::size_t n = objects[i].mesh->triangles.size();
         for (std::size_t first = 0; first < n; first += kRange) {
             RangeCheck r;
@@ -81,6 +83,7 @@ std::vector<ValidatedObject> validateObjects(const std::vector<Object>& objects,
         const Object& o = objects[i];
         const auto id = static_cast<std::uint32_t>(i);
         ValidatedObject& v = out[i];
+        if (isKnown(i)) continue;
         if (o.mesh == nullptr) {
             if (!o.box.isFinite()) {
                 rejected.push_back({id, "box proxy has a non-finite coordinate"});

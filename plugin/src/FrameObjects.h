@@ -22,8 +22,11 @@ struct ValidatedObject {
 /// `rejected` with a message (the first defect of the mesh, in triangle order). Boxes are inflated by margin / 2,
 /// so two boxes overlap iff their L-infinity distance is at most the margin. With a pool, meshes are checked on
 /// every worker; the result is the same.
+/// Objects with `known[i]` set are skipped (their entry is left invalid and unchecked: the caller has their
+/// result from an earlier frame).
 std::vector<ValidatedObject> validateObjects(const std::vector<Object>& objects, double margin,
-                                             std::vector<ObjectDiagnostic>& rejected, TaskPool* pool = nullptr);
+                                             std::vector<ObjectDiagnostic>& rejected, TaskPool* pool = nullptr,
+                                             const std::vector<std::uint8_t>* known = nullptr);
 
 /// All pairs (a < b) of valid objects whose boxes overlap, sorted: sweep and prune along the widest axis.
 std::vector<std::pair<std::uint32_t, std::uint32_t>> overlappingPairs(const std::vector<ValidatedObject>& objects);

@@ -13,6 +13,8 @@
 #include <limits>
 #include <numeric>
 #include <stdexcept>
+#include <string>
+#include <unordered_map>
 
 namespace cullide {
 namespace {
@@ -43,7 +45,9 @@ public:
 
         // CPU box pre-pass over objects.
         Timer prepass;
-        m_valid = validateObjects(objects, margin, result.rejected, &m_pool);
+        lookUpStatics(objects);
+        m_valid = validateObjects(objects, margin, result.rejected, &m_pool, &m_known);
+        mergeStatics(result, stats);
         stats.objects = objects.size();
         stats.rejectedObjects = result.rejected.size();
         for (std::size_t i = 0; i < objects.size(); ++i) {
@@ -102,6 +106,73 @@ public:
     }
 
 private:
+    /// What the culler keeps of a static mesh (Object::staticKey) between frames: its validation and its triangle
+    /// boxes, valid while (version, vertex count, triangle count) stay the same.
+    struct StaticEntry {
+        std::uint64_t version = 0;
+        std::size_t vertices = 0;
+        std::size_t triangles = 0;
+        bool checked = false;
+        ValidatedObject valid;
+        std::string error;  ///< the rejection message, if it was rejected
+        bool boxesReady = false;
+        std::vector<Aabb> boxes;
+        std::uint64_t lastFrame = 0;
+    };
+    /// Entries unused for this many frames are dropped (a static object far from every moving one is not handed
+    /// to the culler by the adapter; it comes back when something approaches).
+    static constexpr std::uint64_t kStaticKeepFrames = 240;
+
+    void lookUpStatics(const std::vector<Object>& objects) {
+        ++m_frame;
+        for (auto it = m_static.begin(); it != m_static.end();)
+            it = it->second.lastFrame + kStaticKeepFrames < m_frame ? m_static.erase(it) : std::next(it);
+        m_staticEntry.assign(objects.size(), nullptr);
+        m_known.assign(objects.size(), 0);
+        for (std::size_t i = 0; i < objects.size(); ++i) {
+            const Object& o = objects[i];
+            if (o.mesh == nullptr || o.staticKey == 0) continue;
+            StaticEntry& e = m_static[o.staticKey];
+            if (e.lastFrame == m_frame) continue;  // a key used twice in one frame: the second is not cached
+            if (!e.checked || e.version != o.version || e.vertices != o.mesh->vertices.size() ||
+                e.triangles != o.mesh->triangles.size()) {
+                e = StaticEntry{};
+                e.version = o.version;
+                e.vertices = o.mesh->vertices.size();
+                e.triangles = o.mesh->triangles.size();
+            }
+            e.lastFrame = m_frame;
+            m_staticEntry[i] = &e;
+            m_known[i] = e.checked ? 1 : 0;
+        }
+    }
+
+    /// Validation results of statics: kept ones into this frame, new ones into the cache.
+    void mergeStatics(Result& result, Stats& stats) {
+        bool added = false;
+        for (std::size_t i = 0; i < m_staticEntry.size(); ++i) {
+            StaticEntry* e = m_staticEntry[i];
+            if (e == nullptr) continue;
+            const auto id = static_cast<std::uint32_t>(i);
+            if (m_known[i]) {
+                m_valid[i] = e->valid;
+                if (!e->error.empty()) {
+                    result.rejected.push_back({id, e->error});
+                    added = true;
+                }
+                ++stats.staticObjectsReused;
+                continue;
+            }
+            e->checked = true;
+            e->valid = m_valid[i];
+            for (const ObjectDiagnostic& d : result.rejected)
+                if (d.object == id) e->error = d.message;
+        }
+        if (added)
+            std::stable_sort(result.rejected.begin(), result.rejected.end(),
+                             [](const ObjectDiagnostic& a, const ObjectDiagnostic& b) { return a.object < b.object; });
+    }
+
     const TriangleMesh& meshOf(std::uint32_t o) const { return *(*m_objects)[o].mesh; }
     bool isMesh(std::uint32_t o) const { return m_valid[o].isMesh; }
 
@@ -135,6 +206,8 @@ private:
         m_groups.clear();
         m_order.resize(m_valid.size());
         m_triangleBoxes.resize(m_valid.size());
+        m_boxesOf.assign(m_valid.size(), nullptr);
+        m_needBoxes.assign(m_valid.size(), 0);
         const auto k = static_cast<std::uint32_t>(m_settings.groupSize);
         for (std::uint32_t o = 0; o < m_valid.size(); ++o) {
             if (!m_active[o] || !isMesh(o)) continue;
@@ -145,13 +218,23 @@ private:
                 m_order[o].resize(mesh.triangles.size());
                 std::iota(m_order[o].begin(), m_order[o].end(), 0u);
             }
-            m_triangleBoxes[o].resize(mesh.triangles.size());
+            StaticEntry* e = m_staticEntry[o];
+            if (e != nullptr) {
+                m_boxesOf[o] = &e->boxes;
+                if (e->boxesReady) continue;
+                e->boxes.resize(mesh.triangles.size());
+                e->boxesReady = true;  // filled below
+            } else {
+                m_triangleBoxes[o].resize(mesh.triangles.size());
+                m_boxesOf[o] = &m_triangleBoxes[o];
+            }
+            m_needBoxes[o] = 1;
         }
         // Every active mesh's triangle boxes, then its group boxes, in ranges on every worker.
         constexpr std::uint32_t kRange = 8192;
         m_ranges.clear();
         for (std::uint32_t o = 0; o < m_valid.size(); ++o) {
-            if (!m_active[o] || !isMesh(o)) continue;
+            if (!m_needBoxes[o]) continue;
             const auto n = static_cast<std::uint32_t>(meshOf(o).triangles.size());
             for (std::uint32_t first = 0; first < n; first += kRange) m_ranges.push_back({o, first, std::min(n, first + kRange)});
         }
@@ -160,7 +243,7 @@ private:
             for (std::size_t r = begin; r < end; ++r) {
                 const Range& range = m_ranges[r];
                 const TriangleMesh& mesh = meshOf(range.object);
-                std::vector<Aabb>& boxes = m_triangleBoxes[range.object];
+                std::vector<Aabb>& boxes = *m_boxesOf[range.object];
                 for (std::uint32_t t = range.begin; t < range.end; ++t) boxes[t] = triangleBounds(mesh, t, inflate);
             }
         });
@@ -174,7 +257,7 @@ private:
         m_pool.parallelFor(m_groupCandidates.size(), 256, [&](std::size_t begin, std::size_t end) {
             for (std::size_t i = begin; i < end; ++i) {
                 Group& g = m_groupCandidates[i];
-                const std::vector<Aabb>& boxes = m_triangleBoxes[g.object];
+                const std::vector<Aabb>& boxes = *m_boxesOf[g.object];
                 const std::vector<std::uint32_t>& order = m_order[g.object];
                 for (std::uint32_t t = g.first; t < g.first + g.count; ++t) g.box.grow(boxes[order[t]]);
                 m_groupKept[i] = !prepass || overlapsPartner(g.object, g.box);
@@ -288,7 +371,7 @@ private:
                 kept.clear();
                 for (std::size_t i = task * kGroupsPerTask; i < std::min(groups.size(), (task + 1) * kGroupsPerTask); ++i) {
                     const Group& g = groups[i];
-                    const std::vector<Aabb>& boxes = m_triangleBoxes[g.object];
+                    const std::vector<Aabb>& boxes = *m_boxesOf[g.object];
                     const bool test = prepass && m_partners[g.object].size() <= 16;
                     for (std::uint32_t k = g.first; k < g.first + g.count; ++k) {
                         const std::uint32_t t = m_order[g.object][k];
@@ -306,7 +389,7 @@ private:
 
     void runTriangleLevel(const std::vector<std::uint32_t>& proxies, Stats& stats) {
         beginLevel(stats);
-        for (const Tri& t : m_tris) addTriangleItem(t.object, &t.triangle, 1, m_triangleBoxes[t.object][t.triangle]);
+        for (const Tri& t : m_tris) addTriangleItem(t.object, &t.triangle, 1, (*m_boxesOf[t.object])[t.triangle]);
         for (std::uint32_t o : proxies) addBoxItem(o, m_objectBox[o], m_valid[o].box);
         pruneLevel("triangles", stats);
         finishFromTriangles(m_survivors);
@@ -423,8 +506,7 @@ private:
             if (isMesh(a) && isMesh(b)) {
                 if (m_survivingTriangles[a].empty() || m_survivingTriangles[b].empty()) continue;
                 pair.hasTriangles = true;
-                jobs.push_back({a, b, &m_survivingTriangles[a], &m_survivingTriangles[b], &m_triangleBoxes[a],
-                                &m_triangleBoxes[b]});
+                jobs.push_back({a, b, &m_survivingTriangles[a], &m_survivingTriangles[b], m_boxesOf[a], m_boxesOf[b]});
                 jobPair.push_back(result.pairs.size());
             } else if (isMesh(a) || isMesh(b)) {
                 if (!meshTouchesBox(meshOf(isMesh(a) ? a : b), m_valid[isMesh(a) ? b : a].box, m_settings.margin))
@@ -475,7 +557,13 @@ private:
     std::vector<Group> m_groupCandidates;    ///< every group of the active meshes, before the pre-pass
     std::vector<std::uint8_t> m_groupKept;
     std::vector<std::vector<std::uint32_t>> m_order;  ///< per active mesh: triangles in Morton order
-    std::vector<std::vector<Aabb>> m_triangleBoxes;   ///< per active mesh: every triangle's box, inflated by margin / 2
+    std::vector<std::vector<Aabb>> m_triangleBoxes;   ///< per active non-static mesh: every triangle's box
+    std::vector<std::vector<Aabb>*> m_boxesOf;  ///< per active mesh: its triangle boxes (inflated by margin / 2)
+    std::vector<std::uint8_t> m_needBoxes;            ///< per object: its boxes are computed this frame
+    std::unordered_map<std::uint64_t, StaticEntry> m_static;  ///< by Object::staticKey
+    std::vector<StaticEntry*> m_staticEntry;          ///< per object: its entry (null: not static or not cached)
+    std::vector<std::uint8_t> m_known;                ///< per object: validation kept from an earlier frame
+    std::uint64_t m_frame = 0;
     mutable std::vector<std::uint64_t> m_mortonScratch;
     std::vector<std::uint32_t> m_groupBox;
     std::vector<std::uint32_t> m_objectBox;

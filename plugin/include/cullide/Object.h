@@ -13,8 +13,13 @@ struct Object {
     const TriangleMesh* mesh = nullptr;
     /// Box-only proxy (used when mesh == nullptr). Must be finite.
     Aabb box;
-    /// Non-zero: a caller-chosen identity for geometry that does not change between frames (static geometry).
-    /// The culler keeps such geometry on the GPU and re-uploads it only when (staticKey, version, counts) differ.
+    /// Non-zero: a caller-chosen identity for a mesh that does not change between frames (static geometry), with
+    /// `version` changed by the caller whenever its vertices or triangles do. The culler keeps what it derives from
+    /// such a mesh (its validation, its triangle boxes) between frames and recomputes it only when (staticKey,
+    /// version, vertex count, triangle count) differ: changing the mesh without changing `version` is an error
+    /// (stale boxes can miss contacts). Entries unused for 240 frames are dropped. A key used by two objects of
+    /// one frame is cached for the first only. The GPU levels still upload every active mesh each frame they run
+    /// (see docs/architecture.md).
     std::uint64_t staticKey = 0;
     std::uint64_t version = 0;
 };

@@ -39,6 +39,7 @@ struct Stats {
     /// same exact pairs: the GPU levels only prune; with exactTriangles false, more candidates), and gpuError says
     /// why. The next frame tries the GPU again.
     std::size_t gpuFallbacks = 0;
+    std::size_t staticObjectsReused = 0;  ///< static meshes (Object::staticKey) whose checks and boxes were kept
     std::string gpuError;
     std::size_t bytesUploaded = 0;
     std::size_t bytesReadBack = 0;

@@ -1,0 +1,89 @@
+// Static geometry (Object::staticKey): the culler keeps a static mesh's validation and triangle boxes between
+// frames and recomputes them when (key, version, counts) change; results always equal the reference culler's.
+#include "Compare.h"
+#include "GlTestSupport.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+namespace cullide::test {
+namespace {
+
+void expectSameAsReference(const std::vector<Object>& objects, Culler& culler, Result& result, const char* what) {
+    Result reference;
+    createReferenceCuller(culler.settings())->run(objects, reference);
+    culler.run(objects, result);
+    const Comparison c = compare(reference, result);
+    EXPECT_EQ(c.missed, 0u) << what << ": " << c.firstMissed;
+    EXPECT_EQ(c.spurious, 0u) << what;
+    EXPECT_TRUE(c.objectPairsEqual) << what;
+    ASSERT_EQ(result.rejected.size(), reference.rejected.size()) << what;
+    for (std::size_t i = 0; i < result.rejected.size(); ++i) {
+        EXPECT_EQ(result.rejected[i].object, reference.rejected[i].object) << what;
+        EXPECT_EQ(result.rejected[i].message, reference.rejected[i].message) << what;
+    }
+}
+
+TEST(StaticCache, KeptWhileTheVersionStaysAndRecomputedWhenItChanges) {
+    for (const GpuLevels levels : {GpuLevels::Auto, GpuLevels::Always}) {
+        Settings settings;
+        settings.gpuLevels = levels;
+        settings.exactThreshold = 0;
+        settings.resolution = 64;
+        CULLIDE_GPU_CULLER_OR_SKIP(culler, settings);
+        auto meshes = randomSoups(5, 12, 200, 0.1);
+        auto objects = asObjects(meshes);
+        objects[0].staticKey = 42;
+        objects[0].version = 1;
+        Result result;
+        expectSameAsReference(objects, *culler, result, "first frame");
+        EXPECT_EQ(result.stats.staticObjectsReused, 0u);
+        expectSameAsReference(objects, *culler, result, "second frame");
+        EXPECT_EQ(result.stats.staticObjectsReused, 1u);
+        // The static mesh moves onto another object: with a new version, the culler must see it there.
+        const Vec3 shift = 0.5 * (meshes[1].vertices[0] - meshes[0].vertices[0]);
+        for (Vec3& v : meshes[0].vertices) v += shift;
+        objects[0].version = 2;
+        expectSameAsReference(objects, *culler, result, "moved, new version");
+        EXPECT_EQ(result.stats.staticObjectsReused, 0u);
+        expectSameAsReference(objects, *culler, result, "moved, kept");
+        EXPECT_EQ(result.stats.staticObjectsReused, 1u);
+        // Fewer triangles under the same version: counts differ, so recomputed.
+        meshes[0].triangles.resize(meshes[0].triangles.size() / 2);
+        expectSameAsReference(objects, *culler, result, "fewer triangles, same version");
+        EXPECT_EQ(result.stats.staticObjectsReused, 0u);
+    }
+}
+
+TEST(StaticCache, RejectedStaticMeshStaysRejectedInObjectOrder) {
+    Settings settings;
+    CULLIDE_GPU_CULLER_OR_SKIP(culler, settings);
+    auto meshes = randomSoups(9, 6, 100, 0.1);
+    meshes[1].vertices[meshes[1].triangles[3][0]].x() = std::nan("");
+    meshes[4].triangles[2][1] = 100000;
+    auto objects = asObjects(meshes);
+    objects[4].staticKey = 7;  // cached rejection after a non-cached one
+    Result result;
+    for (int frame = 0; frame < 3; ++frame) {
+        expectSameAsReference(objects, *culler, result, "frame");
+        ASSERT_EQ(result.rejected.size(), 2u);
+        EXPECT_EQ(result.rejected[0].object, 1u);
+        EXPECT_EQ(result.rejected[1].object, 4u);
+    }
+    EXPECT_EQ(result.stats.staticObjectsReused, 1u);
+}
+
+TEST(StaticCache, KeyUsedTwiceInOneFrameIsNotConfused) {
+    Settings settings;
+    CULLIDE_GPU_CULLER_OR_SKIP(culler, settings);
+    auto meshes = randomSoups(13, 8, 150, 0.1);
+    meshes[3].triangles.resize(40);  // different counts under the same key
+    auto objects = asObjects(meshes);
+    objects[2].staticKey = objects[3].staticKey = 99;
+    Result result;
+    for (int frame = 0; frame < 3; ++frame) expectSameAsReference(objects, *culler, result, "shared key");
+}
+
+}  // namespace
+}  // namespace cullide::test
