@@ -25,7 +25,7 @@ void CullideEngine::setup(const BenchFrame& first) {
     m_objects.assign(first.world->size(), Object{});
     for (std::size_t i = 0; i < m_objects.size(); ++i) {
         // Geometry that never changes in world space is declared static (the API's staticKey): the GPU culler keeps
-        // it on the device instead of uploading it every frame.
+        // its validation and triangle boxes between frames.
         if ((*first.motion)[i] == Motion::Static) m_objects[i].staticKey = i + 1;
     }
 }

@@ -375,7 +375,8 @@ struct CullideBroadphase::Impl {
     void updateWorld(Proxy* p, const btTransform& t) {
         const bullet::ShapeTriangles& g = *p->geometry;
         if (p->worldValid && p->worldFrom == t && p->world.vertices.size() == g.vertices.size()) return;
-        p->world.triangles = g.triangles;
+        // worldValid is cleared whenever the geometry changes: a valid world mesh only needs new vertices.
+        if (!p->worldValid || p->world.triangles.size() != g.triangles.size()) p->world.triangles = g.triangles;
         p->world.vertices.resize(g.vertices.size());
         const btMatrix3x3& basis = t.getBasis();
         const btVector3& origin = t.getOrigin();

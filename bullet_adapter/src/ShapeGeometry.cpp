@@ -55,17 +55,46 @@ int meshVertexCount(const btStridingMeshInterface& mesh) {
     return n;
 }
 
-/// 64-bit hash of raw bytes, 8 at a time (about 50 us for 20K vertices): detects deformation with no help from
-/// the application beyond what Bullet itself needs (the vertex data).
+/// 64-bit hash of raw bytes: four independent lanes of 8 bytes (the multiply chains overlap, ~4x the throughput
+/// of one lane: the adapter hashes every mesh shape every step), folded together at the end. Detects deformation
+/// with no help from the application beyond what Bullet itself needs (the vertex data).
 std::uint64_t hashBytes(std::uint64_t h, const unsigned char* data, std::size_t size) {
+    constexpr std::uint64_t kPrime = 0x100000001b3ull;
+    auto mix = [](std::uint64_t lane, std::uint64_t w) {
+        lane = (lane ^ w) * kPrime;
+        return lane ^ (lane >> 29);
+    };
+    std::uint64_t lane[4] = {h, h ^ 0x9e3779b97f4a7c15ull, h ^ 0xbf58476d1ce4e5b9ull, h ^ 0x94d049bb133111ebull};
     std::size_t i = 0;
+    for (; i + 32 <= size; i += 32) {
+        std::uint64_t w[4];
+        std::memcpy(w, data + i, 32);
+        for (int k = 0; k < 4; ++k) lane[k] = mix(lane[k], w[k]);
+    }
     for (; i + 8 <= size; i += 8) {
         std::uint64_t w = 0;
         std::memcpy(&w, data + i, 8);
-        h = (h ^ w) * 0x100000001b3ull;
-        h ^= h >> 29;
+        lane[0] = mix(lane[0], w);
     }
-    for (; i < size; ++i) h = (h ^ data[i]) * 0x100000001b3ull;
+    for (; i < size; ++i) lane[0] = (lane[0] ^ data[i]) * kPrime;
+    std::uint64_t out = mix(mix(mix(lane[0], lane[1]), lane[2]), lane[3]);
+    return mix(out, size);
+}
+
+/// Hash of `count` records of `bytes` bytes, `stride` apart: tightly packed arrays (the common case) in one pass;
+/// padded ones (btVector3's unused fourth float, interleaved layouts) gathered in blocks first, padding left out.
+std::uint64_t hashStrided(std::uint64_t h, const unsigned char* base, int count, int stride, std::size_t bytes) {
+    if (count <= 0) return h;
+    if (static_cast<std::size_t>(stride) == bytes) return hashBytes(h, base, static_cast<std::size_t>(count) * bytes);
+    constexpr int kBlock = 1024;
+    std::vector<unsigned char> block(static_cast<std::size_t>(kBlock) * bytes);
+    for (int first = 0; first < count; first += kBlock) {
+        const int n = std::min(kBlock, count - first);
+        for (int i = 0; i < n; ++i)
+            std::memcpy(block.data() + static_cast<std::size_t>(i) * bytes,
+                        base + static_cast<std::ptrdiff_t>(first + i) * stride, bytes);
+        h = hashBytes(h, block.data(), static_cast<std::size_t>(n) * bytes);
+    }
     return h;
 }
 
@@ -75,18 +104,8 @@ std::uint64_t hashSubpart(std::uint64_t h, const btStridingMeshInterface& mesh, 
     const std::size_t vertexBytes = v.type == PHY_DOUBLE ? 3 * sizeof(double) : 3 * sizeof(float);
     const std::size_t indexBytes = v.indexType == PHY_SHORT ? 3 * sizeof(unsigned short)
                                    : v.indexType == PHY_UCHAR ? 3 : 3 * sizeof(unsigned int);
-    // Tightly packed arrays (the common case) in one pass, 8 bytes at a time.
-    if (static_cast<std::size_t>(v.stride) == vertexBytes)
-        h = hashBytes(h, v.vertexBase, static_cast<std::size_t>(v.numVerts) * vertexBytes);
-    else
-        for (int i = 0; i < v.numVerts; ++i)
-            h = hashBytes(h, v.vertexBase + static_cast<std::ptrdiff_t>(i) * v.stride, vertexBytes);
-    if (static_cast<std::size_t>(v.indexStride) == indexBytes)
-        h = hashBytes(h, v.indexBase, static_cast<std::size_t>(v.numFaces) * indexBytes);
-    else
-        for (int f = 0; f < v.numFaces; ++f)
-            h = hashBytes(h, v.indexBase + static_cast<std::ptrdiff_t>(f) * v.indexStride, indexBytes);
-    return h;
+    h = hashStrided(h, v.vertexBase, v.numVerts, v.stride, vertexBytes);
+    return hashStrided(h, v.indexBase, v.numFaces, v.indexStride, indexBytes);
 }
 
 }  // namespace

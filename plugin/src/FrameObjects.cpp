@@ -10,43 +10,59 @@ namespace cullide {
 
 namespace {
 
-/// A mesh's first defect in one range of its triangles.
-struct RangeCheck {
+/// One range of a mesh's vertices (finite? their box) or triangles (largest index), checked on a worker.
+struct MeshRange {
     std::uint32_t object = 0;
+    bool vertices = false;
     std::size_t begin = 0;
     std::size_t end = 0;
-    Aabb box;
-    std::size_t badTriangle = SIZE_MAX;  ///< first defective triangle of the range (SIZE_MAX: none)
-    std::uint32_t badIndex = 0;
-    bool indexOutOfRange = false;
+    Aabb box;                   ///< vertices: their box
+    bool finite = true;         ///< vertices: all finite
+    std::uint32_t maxIndex = 0;  ///< triangles: largest vertex index
 };
 
-void checkRange(const TriangleMesh& m, RangeCheck& r) {
-    const std::size_t vertexCount = m.vertices.size();
+void checkVertices(const TriangleMesh& m, MeshRange& r) {
     double lo[3] = {r.box.min[0], r.box.min[1], r.box.min[2]};
     double hi[3] = {r.box.max[0], r.box.max[1], r.box.max[2]};
-    for (std::size_t t = r.begin; t < r.end; ++t) {
-        for (std::uint32_t index : m.triangles[t]) {
-            if (index >= vertexCount) {
-                r.badTriangle = t;
-                r.badIndex = index;
-                r.indexOutOfRange = true;
-                return;
-            }
-            const Vec3& p = m.vertices[index];
-            if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
-                r.badTriangle = t;
-                r.badIndex = index;
-                return;
-            }
-            for (int k = 0; k < 3; ++k) {
-                lo[k] = std::min(lo[k], p[k]);
-                hi[k] = std::max(hi[k], p[k]);
-            }
+    bool finite = true;
+    for (std::size_t i = r.begin; i < r.end; ++i) {
+        const Vec3& p = m.vertices[i];
+        for (int k = 0; k < 3; ++k) {
+            finite = finite && std::isfinite(p[k]);
+            lo[k] = std::min(lo[k], p[k]);
+            hi[k] = std::max(hi[k], p[k]);
         }
     }
+    r.finite = finite;
     r.box.min = Vec3(lo[0], lo[1], lo[2]);
     r.box.max = Vec3(hi[0], hi[1], hi[2]);
+}
+
+void checkIndices(const TriangleMesh& m, MeshRange& r) {
+    std::uint32_t largest = 0;
+    for (std::size_t t = r.begin; t < r.end; ++t)
+        for (std::uint32_t index : m.triangles[t]) largest = std::max(largest, index);
+    r.maxIndex = largest;
+}
+
+/// The slow path, for a mesh with a bad index or a non-finite vertex: its first defect in triangle order (an
+/// empty string when only unreferenced vertices are non-finite) and the box of the vertices its triangles use.
+std::string firstDefect(const TriangleMesh& m, Aabb& box) {
+    const std::size_t vertexCount = m.vertices.size();
+    box = Aabb{};
+    for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+        for (std::uint32_t index : m.triangles[t]) {
+            if (index >= vertexCount)
+                return "triangle " + std::to_string(t) + " has vertex index " + std::to_string(index) +
+                       " out of range (" + std::to_string(vertexCount) + " vertices)";
+            const Vec3& p = m.vertices[index];
+            if (!p.allFinite())
+                return "vertex " + std::to_string(index) + " (triangle " + std::to_string(t) +
+                       ") has a non-finite coordinate";
+            box.grow(p);
+        }
+    }
+    return {};
 }
 
 }  // namespace
@@ -56,22 +72,35 @@ std::vector<ValidatedObject> validateObjects(const std::vector<Object>& objects,
                                              const std::vector<std::uint8_t>* known) {
     auto isKnown = [&](std::size_t i) { return known != nullptr && (*known)[i] != 0; };
     std::vector<ValidatedObject> out(objects.size());
-    // Meshes are checked in ranges of triangles, on every worker when a pool is given.
-    constexpr std::size_t kRange = 16384;
-    std::vector<RangeCheck> ranges;
+    // Fast path, in ranges on every worker when a pool is given: are all vertices finite, all indices in range?
+    // Then the box is that of all vertices (a superset of the used ones when some are unused: only looser
+    // culling). Otherwise the mesh takes the slow path, in triangle order.
+    constexpr std::size_t kRange = 32768;
+    std::vector<MeshRange> ranges;
     for (std::size_t i = 0; i < objects.size(); ++i) {
         if (objects[i].mesh == nullptr || isKnown(i)) continue;
-        const std::size_t n = objects[i].mesh->triangles.size();
-        for (std::size_t first = 0; first < n; first += kRange) {
-            RangeCheck r;
-            r.object = static_cast<std::uint32_t>(i);
-            r.begin = first;
-            r.end = std::min(n, first + kRange);
-            ranges.push_back(r);
+        const TriangleMesh& m = *objects[i].mesh;
+        if (m.triangles.empty()) continue;
+        for (const bool vertices : {true, false}) {
+            const std::size_t n = vertices ? m.vertices.size() : m.triangles.size();
+            for (std::size_t first = 0; first < n; first += kRange) {
+                MeshRange r;
+                r.object = static_cast<std::uint32_t>(i);
+                r.vertices = vertices;
+                r.begin = first;
+                r.end = std::min(n, first + kRange);
+                ranges.push_back(r);
+            }
         }
     }
     auto check = [&](std::size_t begin, std::size_t end) {
-        for (std::size_t k = begin; k < end; ++k) checkRange(*objects[ranges[k].object].mesh, ranges[k]);
+        for (std::size_t k = begin; k < end; ++k) {
+            MeshRange& r = ranges[k];
+            if (r.vertices)
+                checkVertices(*objects[r.object].mesh, r);
+            else
+                checkIndices(*objects[r.object].mesh, r);
+        }
     };
     if (pool != nullptr)
         pool->parallelFor(ranges.size(), 1, check);
@@ -98,29 +127,27 @@ std::vector<ValidatedObject> validateObjects(const std::vector<Object>& objects,
             continue;
         }
         const TriangleMesh& m = *o.mesh;
-        std::string error;
+        bool fast = true;
         for (; next < ranges.size() && ranges[next].object == id; ++next) {
-            const RangeCheck& r = ranges[next];
-            if (!error.empty()) continue;
-            if (r.badTriangle != SIZE_MAX) {
-                if (r.indexOutOfRange)
-                    error = "triangle " + std::to_string(r.badTriangle) + " has vertex index " +
-                            std::to_string(r.badIndex) + " out of range (" + std::to_string(m.vertices.size()) +
-                            " vertices)";
-                else
-                    error = "vertex " + std::to_string(r.badIndex) + " (triangle " + std::to_string(r.badTriangle) +
-                            ") has a non-finite coordinate";
+            const MeshRange& r = ranges[next];
+            if (r.vertices) {
+                fast = fast && r.finite;
+                v.box.grow(r.box);
+            } else {
+                fast = fast && r.maxIndex < m.vertices.size();
+            }
+        }
+        if (!fast) {
+            const std::string error = firstDefect(m, v.box);
+            if (!error.empty()) {
+                rejected.push_back({id, error});
+                v.box = Aabb{};
                 continue;
             }
-            v.box.grow(r.box);
-        }
-        if (!error.empty()) {
-            rejected.push_back({id, error});
-            v.box = Aabb{};
-            continue;
         }
         if (m.vertices.size() > 0xFFFFFFFFull || m.triangles.size() > 0x7FFFFFFFull) {
             rejected.push_back({id, "mesh too large (more than 2^31 triangles or 2^32 vertices)"});
+            v.box = Aabb{};
             continue;
         }
         v.valid = true;

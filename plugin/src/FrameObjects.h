@@ -19,7 +19,8 @@ struct ValidatedObject {
 };
 
 /// Checks every object (finite coordinates, indices in range, finite non-empty proxy boxes); invalid ones go to
-/// `rejected` with a message (the first defect of the mesh, in triangle order). Boxes are inflated by margin / 2,
+/// `rejected` with a message (the first defect of the mesh, in triangle order). A mesh's box is that of its
+/// vertices when all are finite, else of the vertices its triangles use. Boxes are inflated by margin / 2,
 /// so two boxes overlap iff their L-infinity distance is at most the margin. With a pool, meshes are checked on
 /// every worker; the result is the same.
 /// Objects with `known[i]` set are skipped (their entry is left invalid and unchecked: the caller has their
