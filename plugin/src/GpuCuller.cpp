@@ -227,10 +227,12 @@ private:
             } else {
                 m_triangleBoxes[o].resize(mesh.triangles.size());
                 m_boxesOf[o] = &m_triangleBoxes[o];
+                if (!m_gpuLevels) continue;
             }
             m_needBoxes[o] = 1;
         }
-        // Every active mesh's triangle boxes, then its group boxes, in ranges on every worker.
+        // New static meshes' triangle boxes (and, with GPU levels, every other active mesh's), in ranges on every
+        // worker; without GPU levels the other meshes' boxes are computed where they are filtered (collectDirect).
         constexpr std::uint32_t kRange = 8192;
         m_ranges.clear();
         for (std::uint32_t o = 0; o < m_valid.size(); ++o) {
@@ -247,6 +249,7 @@ private:
                 for (std::uint32_t t = range.begin; t < range.end; ++t) boxes[t] = triangleBounds(mesh, t, inflate);
             }
         });
+        if (!m_gpuLevels) return;  // groups only feed GPU levels: collectDirect filters triangles itself
         m_groupCandidates.clear();
         for (std::uint32_t o = 0; o < m_valid.size(); ++o) {
             if (!m_active[o] || !isMesh(o)) continue;
@@ -387,6 +390,55 @@ private:
             m_tris.insert(m_tris.end(), m_taskTris[task].begin(), m_taskTris[task].end());
     }
 
+    /// Without GPU levels, in one pass on every worker: each active mesh's triangle boxes (those not kept from an
+    /// earlier frame), and its surviving triangles — those whose box overlaps a partner's box (with more than 16
+    /// partners, every triangle of a run of k whose joint box does, as the group filter would).
+    void collectDirect() {
+        const auto k = static_cast<std::uint32_t>(m_settings.groupSize);
+        const std::uint32_t range = k * std::max<std::uint32_t>(1, 8192 / k);
+        m_ranges.clear();
+        for (std::uint32_t o = 0; o < m_valid.size(); ++o) {
+            if (!m_active[o] || !isMesh(o)) continue;
+            const auto n = static_cast<std::uint32_t>(meshOf(o).triangles.size());
+            for (std::uint32_t first = 0; first < n; first += range)
+                m_ranges.push_back({o, first, std::min(n, first + range)});
+        }
+        if (m_rangeKept.size() < m_ranges.size()) m_rangeKept.resize(m_ranges.size());
+        const double inflate = 0.5 * m_settings.margin;
+        m_pool.parallelFor(m_ranges.size(), 1, [&](std::size_t begin, std::size_t end) {
+            thread_local std::vector<std::uint32_t> kept;  // per thread: neighbouring ranges' vectors share lines
+            for (std::size_t r = begin; r < end; ++r) {
+                const Range& rg = m_ranges[r];
+                const TriangleMesh& mesh = meshOf(rg.object);
+                std::vector<Aabb>& boxes = *m_boxesOf[rg.object];
+                const bool compute = m_staticEntry[rg.object] == nullptr;
+                kept.clear();
+                if (m_partners[rg.object].size() <= 16) {
+                    for (std::uint32_t t = rg.begin; t < rg.end; ++t) {
+                        if (compute) boxes[t] = triangleBounds(mesh, t, inflate);
+                        if (overlapsPartner(rg.object, boxes[t])) kept.push_back(t);
+                    }
+                } else {
+                    for (std::uint32_t first = rg.begin; first < rg.end; first += k) {
+                        const std::uint32_t last = std::min(rg.end, first + k);
+                        Aabb box;
+                        for (std::uint32_t t = first; t < last; ++t) {
+                            if (compute) boxes[t] = triangleBounds(mesh, t, inflate);
+                            box.grow(boxes[t]);
+                        }
+                        if (!overlapsPartner(rg.object, box)) continue;
+                        for (std::uint32_t t = first; t < last; ++t) kept.push_back(t);
+                    }
+                }
+                m_rangeKept[r].assign(kept.begin(), kept.end());
+            }
+        });
+        for (std::size_t r = 0; r < m_ranges.size(); ++r) {  // ranges in object and triangle order: sorted lists
+            auto& list = m_survivingTriangles[m_ranges[r].object];
+            list.insert(list.end(), m_rangeKept[r].begin(), m_rangeKept[r].end());
+        }
+    }
+
     void runTriangleLevel(const std::vector<std::uint32_t>& proxies, Stats& stats) {
         beginLevel(stats);
         for (const Tri& t : m_tris) addTriangleItem(t.object, &t.triangle, 1, (*m_boxesOf[t.object])[t.triangle]);
@@ -432,6 +484,10 @@ private:
     /// a level whose input is small enough goes straight to the exact stage, and GPU levels are skipped where they
     /// do not pay (Settings::gpuLevels).
     void runAutoPipeline(Stats& stats) {
+        if (!m_gpuLevels) {
+            collectDirect();
+            return;
+        }
         std::vector<std::uint32_t> proxies = activeProxies();
         std::vector<Group> groups = m_groups;
         if (m_gpuLevels && triangleCount(groups) > m_settings.exactThreshold) {
@@ -578,6 +634,7 @@ private:
     std::uint32_t m_ownerCount = 0;
     std::vector<Tri> m_tris;
     std::vector<std::vector<Tri>> m_taskTris;
+    std::vector<std::vector<std::uint32_t>> m_rangeKept;  ///< collectDirect: survivors per triangle range
     std::vector<std::vector<std::uint32_t>> m_survivingTriangles;
     std::vector<ExactJobResult> m_jobResults;
 };

@@ -26,8 +26,8 @@ struct Stats {
     std::size_t rejectedObjects = 0;
     std::size_t prepassObjectsIn = 0;   ///< objects entering the CPU box pre-pass
     std::size_t prepassObjectsOut = 0;  ///< objects whose box overlaps another object's box
-    std::size_t prepassGroupsIn = 0;
-    std::size_t prepassGroupsOut = 0;
+    std::size_t prepassGroupsIn = 0;   ///< groups of k triangles entering the pre-pass (0 without GPU levels:
+    std::size_t prepassGroupsOut = 0;  ///< that path filters triangles directly)
     std::vector<LevelStats> levels;
     std::size_t pcsObjects = 0;
     std::size_t candidateObjectPairs = 0;
