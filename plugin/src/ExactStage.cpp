@@ -22,7 +22,8 @@ ExactStage::ExactStage(TaskPool& pool) : m_pool(pool), m_scratch(std::make_uniqu
 ExactStage::~ExactStage() = default;
 
 void ExactStage::run(const std::vector<Object>& objects, const std::vector<ExactJob>& jobs, double margin, bool exact,
-                     std::vector<ExactJobResult>& results, Stats& stats) {
+                     std::vector<ExactJobResult>& results, Stats& stats, const std::vector<BoxJob>& boxJobs,
+                     std::vector<std::uint8_t>* touches) {
     results.assign(jobs.size(), ExactJobResult{});
     m_candidates.resize(jobs.size());
     // Phase 1: a box tree over each object's surviving triangles (once, however many pairs the object is in: a
@@ -43,11 +44,21 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
         jobListA[j] = listIndex(jobs[j].trianglesA, jobs[j].boxesA);
         jobListB[j] = listIndex(jobs[j].trianglesB, jobs[j].boxesB);
     }
+    std::vector<std::size_t> boxJobList(boxJobs.size());
+    for (std::size_t j = 0; j < boxJobs.size(); ++j) boxJobList[j] = listIndex(boxJobs[j].triangles, boxJobs[j].boxes);
     std::vector<BoxTree>& trees = m_scratch->trees;
     if (trees.size() < lists.size()) trees.resize(lists.size());
     m_pool.parallelFor(lists.size(), 1, [&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin; i < end; ++i) trees[i].build(*listBoxes[i], *lists[i]);
     });
+    if (touches != nullptr) {
+        touches->assign(boxJobs.size(), 0);
+        m_pool.parallelFor(boxJobs.size(), 16, [&](std::size_t begin, std::size_t end) {
+            thread_local std::vector<BoxTree::NodePair> stack;
+            for (std::size_t j = begin; j < end; ++j)
+                (*touches)[j] = trees[boxJobList[j]].anyOverlap(boxJobs[j].box, stack) ? 1 : 0;
+        });
+    }
     // Enough node pairs per job that one large pair (a bunny on a dragon) still feeds every worker.
     const std::size_t target = 64 * std::size_t{m_pool.size()};
     std::vector<std::vector<BoxTree::NodePair>>& frontiers = m_scratch->frontiers;

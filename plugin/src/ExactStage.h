@@ -21,6 +21,14 @@ struct ExactJob {
     const std::vector<Aabb>* boxesB = nullptr;
 };
 
+/// A mesh against a box-only proxy: does some surviving triangle's box (inflated by margin / 2) overlap `box`
+/// (already inflated by margin / 2)?
+struct BoxJob {
+    const std::vector<std::uint32_t>* triangles = nullptr;  ///< surviving triangles of the mesh
+    const std::vector<Aabb>* boxes = nullptr;               ///< box of every triangle of the mesh
+    Aabb box;
+};
+
 struct ExactJobResult {
     std::size_t candidates = 0;          ///< triangle pairs whose boxes (inflated by margin / 2) overlap
     std::vector<TrianglePair> triangles;  ///< intersecting / within-margin pairs (or all candidates), sorted
@@ -35,8 +43,10 @@ public:
     ExactStage& operator=(const ExactStage&) = delete;
 
     /// With `exact` false, every candidate is reported (no triangle test).
+    /// Box jobs are answered in `touches` (1: some triangle box overlaps), from the same trees.
     void run(const std::vector<Object>& objects, const std::vector<ExactJob>& jobs, double margin, bool exact,
-             std::vector<ExactJobResult>& results, Stats& stats);
+             std::vector<ExactJobResult>& results, Stats& stats, const std::vector<BoxJob>& boxJobs = {},
+             std::vector<std::uint8_t>* touches = nullptr);
 
 private:
     struct Scratch;  ///< per-frame working memory, kept between frames: no allocation churn on large scenes

@@ -555,6 +555,8 @@ private:
     void assemblePairs(Result& result) {
         std::vector<ExactJob> jobs;
         std::vector<std::size_t> jobPair;
+        std::vector<BoxJob> boxJobs;
+        std::vector<std::size_t> boxJobPair;
         for (const auto& [a, b] : m_pairs) {
             ObjectPair pair;
             pair.a = a;
@@ -565,13 +567,23 @@ private:
                 jobs.push_back({a, b, &m_survivingTriangles[a], &m_survivingTriangles[b], m_boxesOf[a], m_boxesOf[b]});
                 jobPair.push_back(result.pairs.size());
             } else if (isMesh(a) || isMesh(b)) {
-                if (!meshTouchesBox(meshOf(isMesh(a) ? a : b), m_valid[isMesh(a) ? b : a].box, m_settings.margin))
+                const std::uint32_t mesh = isMesh(a) ? a : b;
+                const Aabb& box = m_valid[isMesh(a) ? b : a].box;
+                if (!m_gpuLevels) {
+                    // The mesh's surviving triangles include every one whose box overlaps this partner's: its tree
+                    // answers in O(log n) (a landscape under hundreds of bodies).
+                    boxJobs.push_back({&m_survivingTriangles[mesh], m_boxesOf[mesh], box});
+                    boxJobPair.push_back(result.pairs.size());
+                } else if (!meshTouchesBox(meshOf(mesh), box, m_settings.margin)) {  // GPU levels prune survivors
                     continue;
+                }
             }
             result.pairs.push_back(std::move(pair));
         }
-        m_exact.run(*m_objects, jobs, m_settings.margin, m_settings.exactTriangles, m_jobResults, result.stats);
+        m_exact.run(*m_objects, jobs, m_settings.margin, m_settings.exactTriangles, m_jobResults, result.stats, boxJobs,
+                    &m_touches);
         std::vector<std::uint8_t> keep(result.pairs.size(), 1);
+        for (std::size_t j = 0; j < boxJobs.size(); ++j) keep[boxJobPair[j]] = m_touches[j];
         for (std::size_t j = 0; j < jobs.size(); ++j) {
             result.pairs[jobPair[j]].triangles = std::move(m_jobResults[j].triangles);
             keep[jobPair[j]] = !result.pairs[jobPair[j]].triangles.empty();
@@ -637,6 +649,7 @@ private:
     std::vector<std::vector<std::uint32_t>> m_rangeKept;  ///< collectDirect: survivors per triangle range
     std::vector<std::vector<std::uint32_t>> m_survivingTriangles;
     std::vector<ExactJobResult> m_jobResults;
+    std::vector<std::uint8_t> m_touches;
 };
 
 }  // namespace

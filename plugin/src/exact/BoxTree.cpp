@@ -220,6 +220,35 @@ void BoxTree::descend(const BoxTree& a, const BoxTree& b, const NodePair& p, std
     }
 }
 
+bool BoxTree::anyOverlap(const Aabb& query, std::vector<NodePair>& stack) const {
+    if (empty()) return false;
+    FloatBox q{};
+    for (int k = 0; k < 3; ++k) {
+        q.lo[k] = floatBelow(query.min[k]);
+        q.hi[k] = floatAbove(query.max[k]);
+    }
+    const FloatBox root = box(m_levelCount - 1, 0);
+    for (int k = 0; k < 3; ++k)
+        if (root.lo[k] > q.hi[k] || q.lo[k] > root.hi[k]) return false;
+    stack.clear();
+    stack.push_back({m_levelCount - 1, 0, 0, 0});  // (level, node) in the A fields
+    while (!stack.empty()) {
+        const NodePair p = stack.back();
+        stack.pop_back();
+        if (p.levelA == 0) {
+            if ((*m_boxes)[m_leafTriangle[p.nodeA]].overlaps(query)) return true;
+            continue;
+        }
+        unsigned mask = childMask(p.levelA, p.nodeA, q);
+        while (mask != 0) {
+            const auto i = static_cast<std::uint32_t>(__builtin_ctz(mask));
+            mask &= mask - 1;
+            stack.push_back({p.levelA - 1, p.nodeA * kFanout + i, 0, 0});
+        }
+    }
+    return false;
+}
+
 void BoxTree::split(const BoxTree& a, const BoxTree& b, std::size_t target, std::vector<NodePair>& out) {
     out.clear();
     if (a.empty() || b.empty()) return;

@@ -55,6 +55,9 @@ public:
     static void leafPairs(const BoxTree& a, const BoxTree& b, const NodePair& start, std::vector<NodePair>& stack,
                           std::vector<TrianglePair>& out);
 
+    /// True when some leaf's double box overlaps `query` (closed intervals); `stack` is working memory.
+    bool anyOverlap(const Aabb& query, std::vector<NodePair>& stack) const;
+
 private:
     FloatBox box(std::uint32_t level, std::uint32_t node) const;
     /// Bit i set when child i of `node` (at `level` > 0) overlaps `q`.
