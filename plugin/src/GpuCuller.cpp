@@ -85,6 +85,7 @@ public:
             // pre-pass keeps goes to the exact stage.
             ++stats.gpuFallbacks;
             stats.gpuError = e.what();
+            m_pass.forgetUploads();  // what the device holds is no longer trusted
             m_survivingTriangles.assign(m_valid.size(), {});
             collectTriangles(m_groups, !paper);
             finishFromTriangles({});
@@ -118,6 +119,8 @@ private:
         bool boxesReady = false;
         std::vector<Aabb> boxes;
         std::uint64_t lastFrame = 0;
+        std::uint64_t regionEpoch = 0;  ///< == m_regionEpoch: its triangles are in the device's resident region
+        std::uint32_t regionBaseTriangle = 0;
     };
     /// Entries unused for this many frames are dropped (a static object far from every moving one is not handed
     /// to the culler by the adapter; it comes back when something approaches).
@@ -279,22 +282,39 @@ private:
     }
 
     /// Positions and indices of active meshes, boxes of active objects and of the kept groups, relative to an
-    /// origin at the centre of the active objects (float precision is spent on the scene, not on its offset).
+    /// origin near the centre of the active objects (float precision is spent on the scene, not on its offset).
+    /// Static meshes (Object::staticKey) sit in a resident region at the front of the position and index buffers
+    /// and are sent to the device once: the region and its origin are kept while the active objects stay near the
+    /// origin (within half the region's extent, between a quarter and twice as large) and no more than half of it
+    /// is stale.
     void uploadGeometry(Stats& stats) {
         Aabb all;
-        for (std::uint32_t o = 0; o < m_valid.size(); ++o)
-            if (m_active[o]) all.grow(m_valid[o].box);
-        m_origin = all.isEmpty() ? Vec3::Zero() : Vec3(0.5 * (all.min + all.max));
-        m_geometry.positions.clear();
-        m_geometry.indices.clear();
+        std::size_t activeStaticTriangles = 0;
+        for (std::uint32_t o = 0; o < m_valid.size(); ++o) {
+            if (!m_active[o]) continue;
+            all.grow(m_valid[o].box);
+            if (isMesh(o) && m_staticEntry[o] != nullptr) activeStaticTriangles += meshOf(o).triangles.size();
+        }
+        const Vec3 centre = all.isEmpty() ? Vec3::Zero() : Vec3(0.5 * (all.min + all.max));
+        const double extent = all.isEmpty() ? 0.0 : all.extent().maxCoeff();
+        const bool keepRegion = m_regionEpoch != 0 && (centre - m_origin).cwiseAbs().maxCoeff() <= 0.5 * m_regionExtent &&
+                                extent <= 2.0 * m_regionExtent && extent >= 0.25 * m_regionExtent &&
+                                m_regionTriangles <= 2 * activeStaticTriangles + 65536;
+        if (!keepRegion) {
+            ++m_regionEpoch;
+            m_origin = centre;
+            m_regionExtent = std::max(extent, 1e-300);
+            m_regionVertices = 0;
+            m_regionTriangles = 0;
+        }
+        m_geometry.positions.resize(3 * m_regionVertices);
+        m_geometry.indices.resize(3 * m_regionTriangles);
+        m_geometry.keptPositions = m_geometry.positions.size();
+        m_geometry.keptIndices = m_geometry.indices.size();
         m_geometry.boxes.clear();
         m_baseTriangle.assign(m_valid.size(), 0);
         m_objectBox.assign(m_valid.size(), 0);
-        double bound = 0.0;
-        for (std::uint32_t o = 0; o < m_valid.size(); ++o) {
-            if (!m_active[o]) continue;
-            m_objectBox[o] = appendBox(m_valid[o].box, bound);
-            if (!isMesh(o)) continue;
+        auto appendMesh = [&](std::uint32_t o) {
             const TriangleMesh& mesh = meshOf(o);
             const auto baseVertex = static_cast<std::uint32_t>(m_geometry.positions.size() / 3);
             m_baseTriangle[o] = static_cast<std::uint32_t>(m_geometry.indices.size() / 3);
@@ -304,7 +324,26 @@ private:
             }
             for (const auto& t : mesh.triangles)
                 for (std::uint32_t index : t) m_geometry.indices.push_back(baseVertex + index);
+        };
+        // Static meshes: in the region already, or appended to it now (sent this frame, kept afterwards).
+        for (std::uint32_t o = 0; o < m_valid.size(); ++o) {
+            StaticEntry* e = m_staticEntry[o];
+            if (!m_active[o] || !isMesh(o) || e == nullptr) continue;
+            if (e->regionEpoch != m_regionEpoch) {
+                appendMesh(o);
+                e->regionEpoch = m_regionEpoch;
+                e->regionBaseTriangle = m_baseTriangle[o];
+            }
+            m_baseTriangle[o] = e->regionBaseTriangle;
         }
+        m_regionVertices = m_geometry.positions.size() / 3;
+        m_regionTriangles = m_geometry.indices.size() / 3;
+        // Everything else, every frame.
+        for (std::uint32_t o = 0; o < m_valid.size(); ++o)
+            if (m_active[o] && isMesh(o) && m_staticEntry[o] == nullptr) appendMesh(o);
+        double bound = 0.0;
+        for (std::uint32_t o = 0; o < m_valid.size(); ++o)
+            if (m_active[o]) m_objectBox[o] = appendBox(m_valid[o].box, bound);
         m_groupBox.resize(m_groups.size());
         for (std::size_t g = 0; g < m_groups.size(); ++g) m_groupBox[g] = appendBox(m_groups[g].box, bound);
         m_geometry.coordinateBound = bound;
@@ -637,6 +676,10 @@ private:
     std::vector<std::uint32_t> m_objectBox;
     std::vector<std::uint32_t> m_baseTriangle;
     Vec3 m_origin = Vec3::Zero();
+    std::uint64_t m_regionEpoch = 0;  ///< bumped whenever the resident static region is rebuilt (0: none yet)
+    double m_regionExtent = 0.0;      ///< extent of the active objects when the region's origin was chosen
+    std::size_t m_regionVertices = 0;
+    std::size_t m_regionTriangles = 0;
     bool m_uploaded = false;
     bool m_gpuLevels = false;  ///< whether GPU levels run this frame (Settings::gpuLevels, the device, the pipeline)
     gl::GpuGeometry m_geometry;

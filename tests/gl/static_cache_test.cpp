@@ -56,6 +56,51 @@ TEST(StaticCache, KeptWhileTheVersionStaysAndRecomputedWhenItChanges) {
     }
 }
 
+TEST(StaticCache, StaticMeshesStayOnTheDeviceWhileTheOriginHolds) {
+    // GPU levels forced (also on llvmpipe): a static mesh is sent once and kept resident at the front of the
+    // buffers; the moving meshes are sent every frame. Pairs must equal the reference in every frame, also when a
+    // far move rebuilds the region around a new origin and when the static mesh changes version.
+    Settings settings;
+    settings.gpuLevels = GpuLevels::Always;
+    settings.exactThreshold = 0;
+    settings.resolution = 64;
+    CULLIDE_GPU_CULLER_OR_SKIP(culler, settings);
+    auto meshes = randomSoups(21, 6, 300, 0.5);  // large clusters: every mesh overlaps the others
+    const auto original = meshes;
+    auto objects = asObjects(meshes);
+    objects[0].staticKey = 5;
+    objects[0].version = 1;
+    objects[2].staticKey = 6;  // a second static mesh: its place in the resident region is not the start
+    const double staticBytes = 4.0 * (3.0 * double(meshes[0].vertices.size()) + 3.0 * double(meshes[0].triangles.size()));
+    Result result;
+    std::vector<std::size_t> uploaded;
+    for (int frame = 0; frame < 6; ++frame) {
+        // Dynamic meshes wobble a little every frame; on frame 4 they all jump far away and back on frame 5.
+        for (std::size_t m = 1; m < meshes.size(); ++m)
+            for (std::size_t v = 0; v < meshes[m].vertices.size() && m != 2; ++v)
+                meshes[m].vertices[v] = original[m].vertices[v] + Vec3(0.01 * frame, 0.0, frame == 4 ? 1e3 : 0.0);
+        expectSameAsReference(objects, *culler, result, "resident static");
+        ASSERT_EQ(result.stats.gpuFallbacks, 0u) << result.stats.gpuError;
+        ASSERT_FALSE(result.stats.levels.empty()) << "GPU levels must run for this test to mean anything";
+        if (frame != 4) {
+            ASSERT_FALSE(result.pairs.empty());
+            EXPECT_EQ(result.pairs.front().a, 0u) << "the static mesh must take part";
+        }
+        uploaded.push_back(result.stats.bytesUploaded);
+    }
+    // Frame 0 sends the static mesh, frames 1-3 do not (the rest — moving meshes, boxes, level items — varies a
+    // little with the survivors); frame 4 moves the origin away, frame 5 back: the static mesh is sent again.
+    for (int frame = 1; frame <= 3; ++frame)
+        EXPECT_LT(double(uploaded[frame]), double(uploaded[0]) - 0.9 * staticBytes) << frame;
+    EXPECT_GT(double(uploaded[5]), double(uploaded[3]) + 0.9 * staticBytes);
+    // A new version of the static mesh is sent again, and the culler sees it where it now is.
+    for (Vec3& v : meshes[0].vertices) v += Vec3(0.05, 0.0, 0.0);
+    objects[0].version = 2;
+    expectSameAsReference(objects, *culler, result, "new static version");
+    EXPECT_GT(double(result.stats.bytesUploaded), double(uploaded[3]) + 0.9 * staticBytes);
+    expectSameAsReference(objects, *culler, result, "new static version, kept");
+}
+
 TEST(StaticCache, RejectedStaticMeshStaysRejectedInObjectOrder) {
     Settings settings;
     CULLIDE_GPU_CULLER_OR_SKIP(culler, settings);

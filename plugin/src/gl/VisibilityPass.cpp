@@ -34,6 +34,22 @@ void uploadBuffer(GLuint buffer, std::size_t& capacity, const void* data, std::s
     if (bytes > 0) glNamedBufferSubData(buffer, 0, static_cast<GLsizeiptr>(bytes), data);
 }
 
+/// Uploads `data` except its first `keepBytes`, which the buffer already holds (`valid` bytes of it are from the
+/// previous upload); a buffer that has to grow loses its contents and is filled whole. Returns the bytes sent.
+std::size_t uploadAfterPrefix(GLuint buffer, std::size_t& capacity, std::size_t& valid, const void* data,
+                              std::size_t bytes, std::size_t keepBytes) {
+    if (bytes > capacity || capacity == 0) {
+        reserveBuffer(buffer, capacity, bytes);
+        keepBytes = 0;
+    }
+    keepBytes = std::min({keepBytes, valid, bytes});
+    if (bytes > keepBytes)
+        glNamedBufferSubData(buffer, static_cast<GLintptr>(keepBytes), static_cast<GLsizeiptr>(bytes - keepBytes),
+                             static_cast<const unsigned char*>(data) + keepBytes);
+    valid = bytes;
+    return bytes - keepBytes;
+}
+
 std::uint32_t bitsFor(std::uint32_t maxValue) {
     std::uint32_t bits = 1;
     while (bits < 31 && (maxValue >> bits) != 0) ++bits;
@@ -56,6 +72,7 @@ struct VisibilityPass::Impl {
     GLuint images[4] = {};
     GLuint buffers[kBufferCount] = {};
     std::size_t capacity[kBufferCount] = {};
+    std::size_t valid[kBufferCount] = {};  ///< bytes of the buffer that hold the last upload (positions, indices)
     GLuint timer = 0;
     std::size_t maxGroups = 65535;  ///< GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]
     double coordinateBound = 0.0;
@@ -302,13 +319,20 @@ VisibilityPass::~VisibilityPass() = default;
 void VisibilityPass::upload(const GpuGeometry& geometry, Stats& stats) {
     Impl& s = *m_impl;
     s.context.makeCurrent();
-    uploadBuffer(s.buffers[kPositions], s.capacity[kPositions], geometry.positions.data(),
-                 geometry.positions.size() * 4);
-    uploadBuffer(s.buffers[kIndices], s.capacity[kIndices], geometry.indices.data(), geometry.indices.size() * 4);
+    stats.bytesUploaded += uploadAfterPrefix(s.buffers[kPositions], s.capacity[kPositions], s.valid[kPositions],
+                                             geometry.positions.data(), geometry.positions.size() * 4,
+                                             geometry.keptPositions * 4);
+    stats.bytesUploaded += uploadAfterPrefix(s.buffers[kIndices], s.capacity[kIndices], s.valid[kIndices],
+                                             geometry.indices.data(), geometry.indices.size() * 4,
+                                             geometry.keptIndices * 4);
     uploadBuffer(s.buffers[kBoxes], s.capacity[kBoxes], geometry.boxes.data(), geometry.boxes.size() * 4);
-    stats.bytesUploaded += (geometry.positions.size() + geometry.indices.size() + geometry.boxes.size()) * 4;
+    stats.bytesUploaded += geometry.boxes.size() * 4;
     s.coordinateBound = geometry.coordinateBound;
     s.geometry = &geometry;
+}
+
+void VisibilityPass::forgetUploads() {
+    for (std::size_t& v : m_impl->valid) v = 0;
 }
 
 void VisibilityPass::prune(const LevelItems& items, std::vector<std::uint8_t>& survivors, LevelStats& level,

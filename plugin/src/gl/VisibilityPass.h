@@ -18,6 +18,10 @@ class EglContext;
 struct GpuGeometry {
     std::vector<float> positions;       ///< xyz per vertex
     std::vector<std::uint32_t> indices;  ///< 3 global vertex indices per triangle
+    /// The first keptPositions floats of `positions` and keptIndices of `indices` are the same as in the previous
+    /// upload (static geometry): what the device already holds of them is not sent again.
+    std::size_t keptPositions = 0;
+    std::size_t keptIndices = 0;
     std::vector<float> boxes;           ///< min xyz, max xyz per box (rounded outwards)
     double coordinateBound = 0.0;       ///< max |coordinate| over positions and boxes (for error bounds)
 };
@@ -47,6 +51,8 @@ public:
 
     /// Uploads the frame's geometry; `geometry` must stay alive (unchanged) until the next upload.
     void upload(const GpuGeometry& geometry, Stats& stats);
+    /// Forgets what the device holds (after a GL error): the next upload sends everything.
+    void forgetUploads();
 
     /// Prunes the items: survivors[i] is true when item i may intersect an item of another owner. Runs at most
     /// `maxIterations` iterations (each: three axes, both directions) and stops when the set stops changing.
