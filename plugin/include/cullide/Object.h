@@ -18,8 +18,8 @@ struct Object {
     /// such a mesh (its validation, its triangle boxes) between frames and recomputes it only when (staticKey,
     /// version, vertex count, triangle count) differ: changing the mesh without changing `version` is an error
     /// (stale boxes can miss contacts). Entries unused for 240 frames are dropped. A key used by two objects of
-    /// one frame is cached for the first only. The GPU levels still upload every active mesh each frame they run
-    /// (see docs/architecture.md).
+    /// one frame is cached for the first only. When GPU levels run, such a mesh is sent to the device once and
+    /// kept there while the scene stays around the same place (see docs/architecture.md).
     std::uint64_t staticKey = 0;
     std::uint64_t version = 0;
 };
