@@ -58,6 +58,10 @@ int meshVertexCount(const btStridingMeshInterface& mesh) {
 /// 64-bit hash of raw bytes: four independent lanes of 8 bytes (the multiply chains overlap, ~4x the throughput
 /// of one lane: the adapter hashes every mesh shape every step), folded together at the end. Detects deformation
 /// with no help from the application beyond what Bullet itself needs (the vertex data).
+#if defined(__GNUC__) && !defined(__clang__)
+// GCC vectorizes the four lanes into SSE2, which has no 64-bit multiply and emulates it with shifts: 4x slower.
+__attribute__((optimize("no-tree-vectorize")))
+#endif
 std::uint64_t hashBytes(std::uint64_t h, const unsigned char* data, std::size_t size) {
     constexpr std::uint64_t kPrime = 0x100000001b3ull;
     auto mix = [](std::uint64_t lane, std::uint64_t w) {

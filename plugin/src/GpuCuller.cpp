@@ -443,6 +443,10 @@ private:
                 m_ranges.push_back({o, first, std::min(n, first + range)});
         }
         if (m_rangeKept.size() < m_ranges.size()) m_rangeKept.resize(m_ranges.size());
+        // The union of each object's partners' boxes: one test rejects the triangles far from all of them.
+        m_partnerUnion.assign(m_valid.size(), Aabb{});
+        for (std::uint32_t o = 0; o < m_valid.size(); ++o)
+            for (std::uint32_t p : m_partners[o]) m_partnerUnion[o].grow(m_valid[p].box);
         const double inflate = 0.5 * m_settings.margin;
         m_pool.parallelFor(m_ranges.size(), 1, [&](std::size_t begin, std::size_t end) {
             thread_local std::vector<std::uint32_t> kept;  // per thread: neighbouring ranges' vectors share lines
@@ -452,10 +456,11 @@ private:
                 std::vector<Aabb>& boxes = *m_boxesOf[rg.object];
                 const bool compute = m_staticEntry[rg.object] == nullptr;
                 kept.clear();
+                const Aabb& near = m_partnerUnion[rg.object];
                 if (m_partners[rg.object].size() <= 16) {
                     for (std::uint32_t t = rg.begin; t < rg.end; ++t) {
                         if (compute) boxes[t] = triangleBounds(mesh, t, inflate);
-                        if (overlapsPartner(rg.object, boxes[t])) kept.push_back(t);
+                        if (boxes[t].overlaps(near) && overlapsPartner(rg.object, boxes[t])) kept.push_back(t);
                     }
                 } else {
                     for (std::uint32_t first = rg.begin; first < rg.end; first += k) {
@@ -465,7 +470,7 @@ private:
                             if (compute) boxes[t] = triangleBounds(mesh, t, inflate);
                             box.grow(boxes[t]);
                         }
-                        if (!overlapsPartner(rg.object, box)) continue;
+                        if (!box.overlaps(near) || !overlapsPartner(rg.object, box)) continue;
                         for (std::uint32_t t = first; t < last; ++t) kept.push_back(t);
                     }
                 }
@@ -690,6 +695,7 @@ private:
     std::vector<Tri> m_tris;
     std::vector<std::vector<Tri>> m_taskTris;
     std::vector<std::vector<std::uint32_t>> m_rangeKept;  ///< collectDirect: survivors per triangle range
+    std::vector<Aabb> m_partnerUnion;                     ///< collectDirect: union of each object's partners' boxes
     std::vector<std::vector<std::uint32_t>> m_survivingTriangles;
     std::vector<ExactJobResult> m_jobResults;
     std::vector<std::uint8_t> m_touches;
