@@ -459,8 +459,11 @@ private:
                 const Aabb& near = m_partnerUnion[rg.object];
                 if (m_partners[rg.object].size() <= 16) {
                     for (std::uint32_t t = rg.begin; t < rg.end; ++t) {
-                        if (compute) boxes[t] = triangleBounds(mesh, t, inflate);
-                        if (boxes[t].overlaps(near) && overlapsPartner(rg.object, boxes[t])) kept.push_back(t);
+                        // Only kept triangles' boxes are read later: the others are not stored (memory traffic).
+                        const Aabb box = compute ? triangleBounds(mesh, t, inflate) : boxes[t];
+                        if (!box.overlaps(near) || !overlapsPartner(rg.object, box)) continue;
+                        if (compute) boxes[t] = box;
+                        kept.push_back(t);
                     }
                 } else {
                     for (std::uint32_t first = rg.begin; first < rg.end; first += k) {
@@ -670,7 +673,9 @@ private:
     std::vector<std::uint8_t> m_groupKept;
     std::vector<std::vector<std::uint32_t>> m_order;  ///< per active mesh: triangles in Morton order
     std::vector<std::vector<Aabb>> m_triangleBoxes;   ///< per active non-static mesh: every triangle's box
-    std::vector<std::vector<Aabb>*> m_boxesOf;  ///< per active mesh: its triangle boxes (inflated by margin / 2)
+    std::vector<std::vector<Aabb>*> m_boxesOf;  ///< per active mesh: triangle boxes (inflated by margin / 2), of
+                                                ///< every triangle (static meshes; any with GPU levels) or only of
+                                                ///< its surviving ones (others, CPU path)
     std::vector<std::uint8_t> m_needBoxes;            ///< per object: its boxes are computed this frame
     std::unordered_map<std::uint64_t, StaticEntry> m_static;  ///< by Object::staticKey
     std::vector<StaticEntry*> m_staticEntry;          ///< per object: its entry (null: not static or not cached)
