@@ -24,16 +24,17 @@ struct MeshRange {
 void checkVertices(const TriangleMesh& m, MeshRange& r) {
     double lo[3] = {r.box.min[0], r.box.min[1], r.box.min[2]};
     double hi[3] = {r.box.max[0], r.box.max[1], r.box.max[2]};
-    bool finite = true;
+    // Branch-free: x - x is 0 for finite x and NaN for infinities and NaNs, so the sum is finite iff all are.
+    double sum = 0.0;
     for (std::size_t i = r.begin; i < r.end; ++i) {
         const Vec3& p = m.vertices[i];
         for (int k = 0; k < 3; ++k) {
-            finite = finite && std::isfinite(p[k]);
+            sum += p[k] - p[k];
             lo[k] = std::min(lo[k], p[k]);
             hi[k] = std::max(hi[k], p[k]);
         }
     }
-    r.finite = finite;
+    r.finite = sum == 0.0;
     r.box.min = Vec3(lo[0], lo[1], lo[2]);
     r.box.max = Vec3(hi[0], hi[1], hi[2]);
 }

@@ -115,18 +115,31 @@ TEST(ReferenceCuller, LargeMeshesAreCheckedWholeAndReportTheirFirstDefect) {
     // A triangle crossing the strip's last triangles only: found only if the last range counts in the box.
     const double x = 0.001 * (kTriangles - 1);
     const TriangleMesh probe = singleTriangle({x, 0.5, -0.5}, {x, 0.5, 0.5}, {x + 0.01, 0.5, 0.0});
-    const std::vector<TriangleMesh> meshes = {strip, broken, probe};
+    TriangleMesh infinite = strip;  // an infinity (not a NaN), and an unused non-finite vertex: the latter is fine
+    infinite.vertices[infinite.triangles[40000][1]].z() = std::numeric_limits<double>::infinity();
+    TriangleMesh unusedNaN = probe;
+    unusedNaN.vertices.emplace_back(std::nan(""), 0.0, 0.0);
+    const std::vector<TriangleMesh> meshes = {strip, broken, probe, infinite, unusedNaN};
     auto culler = createReferenceCuller(Settings{});
     Result r;
     culler->run(asObjects(meshes), r);
-    ASSERT_EQ(r.rejected.size(), 1u);
+    ASSERT_EQ(r.rejected.size(), 2u);
     EXPECT_EQ(r.rejected[0].object, 1u);
     EXPECT_NE(r.rejected[0].message.find("(triangle 20000) has a non-finite coordinate"), std::string::npos)
         << r.rejected[0].message;
-    ASSERT_EQ(r.pairs.size(), 1u);
+    EXPECT_EQ(r.rejected[1].object, 3u);
+    EXPECT_NE(r.rejected[1].message.find("(triangle 40000) has a non-finite coordinate"), std::string::npos)
+        << r.rejected[1].message;
+    // The strip pairs with the probe, and with the probe's copy whose unused NaN vertex is ignored; the probes
+    // overlap each other.
+    ASSERT_EQ(r.pairs.size(), 3u);
     EXPECT_EQ(r.pairs[0].a, 0u);
     EXPECT_EQ(r.pairs[0].b, 2u);
     EXPECT_FALSE(r.pairs[0].triangles.empty());
+    EXPECT_EQ(r.pairs[1].a, 0u);
+    EXPECT_EQ(r.pairs[1].b, 4u);
+    EXPECT_EQ(r.pairs[2].a, 2u);
+    EXPECT_EQ(r.pairs[2].b, 4u);
 }
 
 TEST(ReferenceCuller, BoxProxiesPairWithoutTriangles) {
