@@ -2,6 +2,7 @@
 #include "ExactStage.h"
 #include "FloatRounding.h"
 #include "FrameObjects.h"
+#include "Morton.h"
 #include "cullide/Timer.h"
 #include "bindings.h"
 #include "cullide/Culler.h"
@@ -182,7 +183,7 @@ private:
     Aabb relative(const Aabb& b) const { return {b.min - m_origin, b.max - m_origin}; }
 
     /// Orders an object's triangles along a Morton curve of their centroids, so that k consecutive ones are close
-    /// together whatever the file order (scanned meshes and soups are not stored spatially). Per frame, O(n log n).
+    /// together whatever the file order (scanned meshes and soups are not stored spatially). Per frame, O(n).
     void spatialOrder(std::uint32_t o, std::vector<std::uint32_t>& order) const {
         const TriangleMesh& mesh = meshOf(o);
         const Aabb& box = m_valid[o].box;
@@ -190,15 +191,11 @@ private:
         m_mortonScratch.clear();
         for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
             const auto& tri = mesh.triangles[t];
-            const Vec3 c = (mesh.vertices[tri[0]] + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]) / 3.0;
-            std::uint64_t code = 0;
-            for (int a = 0; a < 3; ++a) {
-                const auto q = static_cast<std::uint64_t>(std::clamp((c[a] - box.min[a]) * scale[a], 0.0, 1023.0));
-                for (int bit = 0; bit < 10; ++bit) code |= ((q >> bit) & 1u) << (3 * bit + a);
-            }
-            m_mortonScratch.push_back(code << 32 | t);
+            const Vec3 c = ((mesh.vertices[tri[0]] + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]) / 3.0 - box.min)
+                               .cwiseProduct(scale);
+            m_mortonScratch.push_back(morton::key(morton::code(c[0], c[1], c[2]), t));
         }
-        std::sort(m_mortonScratch.begin(), m_mortonScratch.end());
+        morton::sortByCode(m_mortonScratch, m_mortonTmp);
         order.resize(m_mortonScratch.size());
         for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(m_mortonScratch[i]);
     }
@@ -682,6 +679,7 @@ private:
     std::vector<std::uint8_t> m_known;                ///< per object: validation kept from an earlier frame
     std::uint64_t m_frame = 0;
     mutable std::vector<std::uint64_t> m_mortonScratch;
+    mutable std::vector<std::uint64_t> m_mortonTmp;
     std::vector<std::uint32_t> m_groupBox;
     std::vector<std::uint32_t> m_objectBox;
     std::vector<std::uint32_t> m_baseTriangle;

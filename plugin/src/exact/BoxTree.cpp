@@ -1,6 +1,7 @@
 #include "BoxTree.h"
 
 #include "FloatRounding.h"
+#include "Morton.h"
 
 #include <algorithm>
 #include <array>
@@ -16,37 +17,6 @@ namespace cullide {
 namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
-
-/// Spreads the low 10 bits of v to every third bit.
-std::uint32_t spreadBits(std::uint32_t v) {
-    v &= 0x3FFu;
-    v = (v | (v << 16)) & 0x030000FFu;
-    v = (v | (v << 8)) & 0x0300F00Fu;
-    v = (v | (v << 4)) & 0x030C30C3u;
-    v = (v | (v << 2)) & 0x09249249u;
-    return v;
-}
-
-/// Stable LSD radix sort of keys by bits 32..61 (the Morton code; the low 32 bits are the position, already
-/// ascending, so equal codes keep their input order).
-void radixSortByCode(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& tmp) {
-    constexpr int kBits = 10;
-    constexpr std::size_t kBuckets = std::size_t{1} << kBits;
-    tmp.resize(keys.size());
-    std::array<std::uint32_t, kBuckets> count{};
-    for (int shift = 32; shift < 62; shift += kBits) {
-        count.fill(0);
-        for (std::uint64_t k : keys) ++count[(k >> shift) & (kBuckets - 1)];
-        std::uint32_t sum = 0;
-        for (std::uint32_t& c : count) {
-            const std::uint32_t n = c;
-            c = sum;
-            sum += n;
-        }
-        for (std::uint64_t k : keys) tmp[count[(k >> shift) & (kBuckets - 1)]++] = k;
-        keys.swap(tmp);
-    }
-}
 
 void clearSlot(BoxTree::Block& block, std::uint32_t slot) {
     for (int k = 0; k < 3; ++k) {
@@ -80,17 +50,16 @@ void BoxTree::build(const std::vector<Aabb>& boxes, const std::vector<std::uint3
     m_floatBoxes.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
         const Aabb& b = boxes[triangles[i]];
-        std::uint32_t code = 0;
+        double c[3];
         FloatBox& f = m_floatBoxes[i];
         for (int k = 0; k < 3; ++k) {
-            const double c = (0.5 * (b.min[k] + b.max[k]) - all.min[k]) * scale[k];
-            code |= spreadBits(static_cast<std::uint32_t>(std::clamp(c, 0.0, 1023.0))) << k;
+            c[k] = (0.5 * (b.min[k] + b.max[k]) - all.min[k]) * scale[k];
             f.lo[k] = floatBelow(b.min[k]);
             f.hi[k] = floatAbove(b.max[k]);
         }
-        m_keys[i] = (static_cast<std::uint64_t>(code) << 32) | i;
+        m_keys[i] = morton::key(morton::code(c[0], c[1], c[2]), static_cast<std::uint32_t>(i));
     }
-    radixSortByCode(m_keys, m_keysTmp);
+    morton::sortByCode(m_keys, m_keysTmp);
 
     // Leaves, then each level the union of eight nodes below, until a single root.
     if (m_levels.empty()) m_levels.emplace_back();

@@ -1,0 +1,53 @@
+// Morton (Z-order) codes of points in a box, and the stable radix sort that orders items by them: the spatial order
+// of the pre-pass's groups and of the exact stage's box trees, rebuilt every frame in O(n).
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace cullide::morton {
+
+/// Spreads the low 10 bits of v to every third bit.
+inline std::uint32_t spreadBits(std::uint32_t v) {
+    v &= 0x3FFu;
+    v = (v | (v << 16)) & 0x030000FFu;
+    v = (v | (v << 8)) & 0x0300F00Fu;
+    v = (v | (v << 4)) & 0x030C30C3u;
+    v = (v | (v << 2)) & 0x09249249u;
+    return v;
+}
+
+/// 30-bit code of a point whose coordinates, already scaled to the box, lie in [0, 1023] (clamped; NaN-free input).
+inline std::uint32_t code(double x, double y, double z) {
+    auto q = [](double v) { return static_cast<std::uint32_t>(std::clamp(v, 0.0, 1023.0)); };
+    return spreadBits(q(x)) | (spreadBits(q(y)) << 1) | (spreadBits(q(z)) << 2);
+}
+
+/// A sort key: the code in the high half, the item in the low half.
+inline std::uint64_t key(std::uint32_t code, std::uint32_t item) {
+    return (static_cast<std::uint64_t>(code) << 32) | item;
+}
+
+/// Stable LSD radix sort of keys by their code (bits 32..61); items with equal codes keep their input order.
+inline void sortByCode(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& tmp) {
+    constexpr int kBits = 10;
+    constexpr std::size_t kBuckets = std::size_t{1} << kBits;
+    tmp.resize(keys.size());
+    std::array<std::uint32_t, kBuckets> count{};
+    for (int shift = 32; shift < 62; shift += kBits) {
+        count.fill(0);
+        for (std::uint64_t k : keys) ++count[(k >> shift) & (kBuckets - 1)];
+        std::uint32_t sum = 0;
+        for (std::uint32_t& c : count) {
+            const std::uint32_t n = c;
+            c = sum;
+            sum += n;
+        }
+        for (std::uint64_t k : keys) tmp[count[(k >> shift) & (kBuckets - 1)]++] = k;
+        keys.swap(tmp);
+    }
+}
+
+}  // namespace cullide::morton
