@@ -12,7 +12,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <numeric>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -200,8 +199,9 @@ private:
         for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(m_mortonScratch[i]);
     }
 
-    /// Groups of k spatially consecutive triangles of every active mesh; with `prepass`, only groups whose box
-    /// overlaps a partner object's box are kept.
+    /// Triangle boxes of new static meshes; with GPU levels also every active mesh's boxes, its spatial order and
+    /// its groups of k spatially consecutive triangles (with `prepass`, only groups whose box overlaps a partner
+    /// object's box are kept). Without GPU levels the rest happens in collectDirect.
     void buildGroups(bool prepass, Stats& stats) {
         m_groups.clear();
         m_order.resize(m_valid.size());
@@ -212,12 +212,7 @@ private:
         for (std::uint32_t o = 0; o < m_valid.size(); ++o) {
             if (!m_active[o] || !isMesh(o)) continue;
             const TriangleMesh& mesh = meshOf(o);
-            if (m_gpuLevels) {
-                spatialOrder(o, m_order[o]);
-            } else {  // CPU only: groups are just a coarse filter, not worth a sort
-                m_order[o].resize(mesh.triangles.size());
-                std::iota(m_order[o].begin(), m_order[o].end(), 0u);
-            }
+            if (m_gpuLevels) spatialOrder(o, m_order[o]);  // the CPU path has no groups (collectDirect)
             StaticEntry* e = m_staticEntry[o];
             if (e != nullptr) {
                 m_boxesOf[o] = &e->boxes;
@@ -238,7 +233,8 @@ private:
         for (std::uint32_t o = 0; o < m_valid.size(); ++o) {
             if (!m_needBoxes[o]) continue;
             const auto n = static_cast<std::uint32_t>(meshOf(o).triangles.size());
-            for (std::uint32_t first = 0; first < n; first += kRange) m_ranges.push_back({o, first, std::min(n, first + kRange)});
+            for (std::uint32_t first = 0; first < n; first += kRange)
+                m_ranges.push_back({o, first, std::min(n, first + kRange)});
         }
         const double inflate = 0.5 * m_settings.margin;
         m_pool.parallelFor(m_ranges.size(), 1, [&](std::size_t begin, std::size_t end) {
@@ -254,7 +250,8 @@ private:
         for (std::uint32_t o = 0; o < m_valid.size(); ++o) {
             if (!m_active[o] || !isMesh(o)) continue;
             const auto n = static_cast<std::uint32_t>(meshOf(o).triangles.size());
-            for (std::uint32_t first = 0; first < n; first += k) m_groupCandidates.push_back({o, first, std::min(k, n - first), {}});
+            for (std::uint32_t first = 0; first < n; first += k)
+                m_groupCandidates.push_back({o, first, std::min(k, n - first), {}});
         }
         m_groupKept.resize(m_groupCandidates.size());
         m_pool.parallelFor(m_groupCandidates.size(), 256, [&](std::size_t begin, std::size_t end) {
@@ -294,7 +291,8 @@ private:
         }
         const Vec3 centre = all.isEmpty() ? Vec3::Zero() : Vec3(0.5 * (all.min + all.max));
         const double extent = all.isEmpty() ? 0.0 : all.extent().maxCoeff();
-        const bool keepRegion = m_regionEpoch != 0 && (centre - m_origin).cwiseAbs().maxCoeff() <= 0.5 * m_regionExtent &&
+        const bool keepRegion = m_regionEpoch != 0 &&
+                                (centre - m_origin).cwiseAbs().maxCoeff() <= 0.5 * m_regionExtent &&
                                 extent <= 2.0 * m_regionExtent && extent >= 0.25 * m_regionExtent &&
                                 m_regionTriangles <= 2 * activeStaticTriangles + 65536;
         if (!keepRegion) {
@@ -408,7 +406,8 @@ private:
             thread_local std::vector<Tri> kept;  // per thread: neighbouring tasks' vectors share cache lines
             for (std::size_t task = begin; task < end; ++task) {
                 kept.clear();
-                for (std::size_t i = task * kGroupsPerTask; i < std::min(groups.size(), (task + 1) * kGroupsPerTask); ++i) {
+                const std::size_t last = std::min(groups.size(), (task + 1) * kGroupsPerTask);
+                for (std::size_t i = task * kGroupsPerTask; i < last; ++i) {
                     const Group& g = groups[i];
                     const std::vector<Aabb>& boxes = *m_boxesOf[g.object];
                     const bool test = prepass && m_partners[g.object].size() <= 16;

@@ -71,7 +71,8 @@ TEST(StaticCache, StaticMeshesStayOnTheDeviceWhileTheOriginHolds) {
     objects[0].staticKey = 5;
     objects[0].version = 1;
     objects[2].staticKey = 6;  // a second static mesh: its place in the resident region is not the start
-    const double staticBytes = 4.0 * (3.0 * double(meshes[0].vertices.size()) + 3.0 * double(meshes[0].triangles.size()));
+    const double staticBytes =
+        4.0 * (3.0 * double(meshes[0].vertices.size()) + 3.0 * double(meshes[0].triangles.size()));
     Result result;
     std::vector<std::size_t> uploaded;
     for (int frame = 0; frame < 6; ++frame) {
