@@ -2,7 +2,6 @@
 // of the pre-pass's groups and of the exact stage's box trees, rebuilt every frame in O(n).
 #pragma once
 
-#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -19,9 +18,10 @@ inline std::uint32_t spreadBits(std::uint32_t v) {
     return v;
 }
 
-/// 30-bit code of a point whose coordinates, already scaled to the box, lie in [0, 1023] (clamped; NaN-free input).
+/// 30-bit code of a point whose coordinates are already scaled to [0, 1023]. Values outside are clamped, and a NaN
+/// (overflow near the double range: inf * 0) counts as 0: the code only orders items, it never decides a pair.
 inline std::uint32_t code(double x, double y, double z) {
-    auto q = [](double v) { return static_cast<std::uint32_t>(std::clamp(v, 0.0, 1023.0)); };
+    auto q = [](double v) { return !(v > 0.0) ? 0u : v >= 1023.0 ? 1023u : static_cast<std::uint32_t>(v); };
     return spreadBits(q(x)) | (spreadBits(q(y)) << 1) | (spreadBits(q(z)) << 2);
 }
 

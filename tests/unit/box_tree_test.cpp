@@ -99,7 +99,7 @@ TEST(BoxTree, CoordinatesFarFromTheOriginAndBeyondFloatRange) {
     // Tiny boxes far out (float spacing there is larger than the boxes) and boxes beyond the float range: the
     // float boxes are coarse or unbounded there, the double decision still exact.
     std::mt19937 rng(11);
-    for (const double offset : {1e7, 1e15, 1e38, 1e300}) {
+    for (const double offset : {1e7, 1e15, 1e38, 1e300, 1.7e308}) {
         const auto a = randomBoxes(rng, 400, offset * 1e-9, offset * 1e-10, offset);
         const auto b = randomBoxes(rng, 300, offset * 1e-9, offset * 2e-10, offset);
         const auto listA = everyOther(a.size(), 1);
@@ -108,6 +108,24 @@ TEST(BoxTree, CoordinatesFarFromTheOriginAndBeyondFloatRange) {
         ASSERT_FALSE(expected.empty()) << offset;
         EXPECT_EQ(viaTree(a, listA, b, listB, 8), expected) << offset;
     }
+}
+
+TEST(BoxTree, BoxesSpanningTheWholeDoubleRange) {
+    // Centres and extents overflow to infinity here (the Morton scale becomes 0, inf * 0 is NaN): the order
+    // degrades, the answer must not.
+    std::vector<Aabb> a, b;
+    const double big = 1.7e308;
+    for (int i = 0; i < 40; ++i) {
+        const double s = (i % 2 ? 1.0 : -1.0) * big * (0.5 + 0.01 * i);
+        a.push_back({Vec3(s, -big, 0.0), Vec3(std::max(s, 0.0), big, 1.0)});
+        b.push_back({Vec3(-big, s, 0.5), Vec3(big, std::max(s, 0.0), 0.5 + 1e-3 * i)});
+    }
+    a.push_back({Vec3(-big, -big, -big), Vec3(big, big, big)});
+    const auto listA = everyOther(a.size(), 1);
+    const auto listB = everyOther(b.size(), 1);
+    const auto expected = bruteForce(a, listA, b, listB);
+    ASSERT_FALSE(expected.empty());
+    for (const std::size_t target : {1u, 8u, 100000u}) EXPECT_EQ(viaTree(a, listA, b, listB, target), expected);
 }
 
 TEST(BoxTree, EmptyListsAndDisjointTrees) {

@@ -53,7 +53,7 @@ void BoxTree::build(const std::vector<Aabb>& boxes, const std::vector<std::uint3
         double c[3];
         FloatBox& f = m_floatBoxes[i];
         for (int k = 0; k < 3; ++k) {
-            c[k] = (0.5 * (b.min[k] + b.max[k]) - all.min[k]) * scale[k];
+            c[k] = (0.5 * b.min[k] + 0.5 * b.max[k] - all.min[k]) * scale[k];  // no overflow near 1e308
             f.lo[k] = floatBelow(b.min[k]);
             f.hi[k] = floatAbove(b.max[k]);
         }
