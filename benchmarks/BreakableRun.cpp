@@ -73,6 +73,7 @@ void runBreakable(const RunArgs& args, nlohmann::json& record) {
             out.candidates = fr.cullide.culler.candidateTrianglePairs;
             out.bytesUploaded = fr.cullide.culler.bytesUploaded;
             out.bytesReadBack = fr.cullide.culler.bytesReadBack;
+            out.gpuDeviceBytes = fr.cullide.culler.gpuDeviceBytes;
         } else {
             out.stages.push_back({"broadphase", fr.broadphaseMs});
         }

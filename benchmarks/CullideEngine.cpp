@@ -50,6 +50,7 @@ void CullideEngine::run(const BenchFrame& frame, FrameOutput& out) {
     }
     out.bytesUploaded = s.bytesUploaded;
     out.bytesReadBack = s.bytesReadBack;
+    out.gpuDeviceBytes = s.gpuDeviceBytes;
     for (const ObjectPair& p : m_result.pairs) {
         if (!p.hasTriangles) continue;
         for (const TrianglePair& t : p.triangles) out.pairs.addTriangle(p.a, t.a, p.b, t.b);

@@ -29,6 +29,7 @@ struct FrameOutput {
     std::size_t contacts = 0;        ///< contact points (Bullet)
     std::size_t bytesUploaded = 0;
     std::size_t bytesReadBack = 0;
+    std::size_t gpuDeviceBytes = 0;  ///< culler's buffers and images on its GL device
 
     void clear() { *this = FrameOutput{}; }
 };

@@ -27,6 +27,7 @@ void RunRecord::add(const FrameOutput& out, const PairSet* exact) {
     m_contacts += out.contacts;
     m_maxUploaded = std::max(m_maxUploaded, out.bytesUploaded);
     m_maxReadBack = std::max(m_maxReadBack, out.bytesReadBack);
+    m_maxDevice = std::max(m_maxDevice, out.gpuDeviceBytes);
     m_sumUploaded += out.bytesUploaded;
     if (exact != nullptr) {
         m_compared = true;
@@ -64,6 +65,7 @@ void RunRecord::write(nlohmann::json& r) const {
             r["false_positive_ratio"] = static_cast<double>(m_candidates) / static_cast<double>(m_triangles.expected);
     }
     r["bytes_uploaded_max"] = m_maxUploaded;
+    r["gpu_device_bytes_max"] = m_maxDevice;
     r["bytes_uploaded_mean"] = m_total.empty() ? 0.0 : static_cast<double>(m_sumUploaded) / static_cast<double>(m_total.size());
     r["bytes_read_back_max"] = m_maxReadBack;
 }

@@ -31,7 +31,7 @@ private:
     std::size_t m_candidates = 0;
     bool m_hasCandidates = false;
     std::size_t m_contacts = 0;
-    std::size_t m_maxUploaded = 0, m_maxReadBack = 0, m_sumUploaded = 0;
+    std::size_t m_maxUploaded = 0, m_maxReadBack = 0, m_sumUploaded = 0, m_maxDevice = 0;
 };
 
 double median(std::vector<double> v);

@@ -203,7 +203,10 @@ void SteppingScene::step(FrameOutput& out) {
                             static_cast<std::uint32_t>(manifold->getBody1()->getUserIndex()));
     }
     out.pairs.finish();
-    if (m.cullide != nullptr) out.bytesUploaded = m.cullide->getLastFrameStats().culler.bytesUploaded;
+    if (m.cullide != nullptr) {
+        out.bytesUploaded = m.cullide->getLastFrameStats().culler.bytesUploaded;
+        out.gpuDeviceBytes = m.cullide->getLastFrameStats().culler.gpuDeviceBytes;
+    }
 }
 
 nlohmann::json SteppingScene::describe() const {

@@ -102,6 +102,7 @@ public:
         stats.pcsObjects = result.pcs.size();
         stats.candidateObjectPairs = result.pairs.size();
         result.pcsTriangles.swap(m_survivingTriangles);  // reassigned at the start of the next frame
+        stats.gpuDeviceBytes = m_pass.deviceBytes();
         stats.totalMs = total.ms();
         m_objects = nullptr;
     }

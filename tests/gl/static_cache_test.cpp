@@ -83,6 +83,8 @@ TEST(StaticCache, StaticMeshesStayOnTheDeviceWhileTheOriginHolds) {
         expectSameAsReference(objects, *culler, result, "resident static");
         ASSERT_EQ(result.stats.gpuFallbacks, 0u) << result.stats.gpuError;
         ASSERT_FALSE(result.stats.levels.empty()) << "GPU levels must run for this test to mean anything";
+        // The device holds the four 64² view images (three views wide) and at least the uploaded geometry.
+        EXPECT_GE(result.stats.gpuDeviceBytes, std::size_t{4} * 4 * 3 * 64 * 64 + std::size_t(staticBytes));
         if (frame != 4) {
             ASSERT_FALSE(result.pairs.empty());
             EXPECT_EQ(result.pairs.front().a, 0u) << "the static mesh must take part";

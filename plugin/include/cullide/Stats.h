@@ -42,6 +42,8 @@ struct Stats {
     std::size_t staticObjectsReused = 0;  ///< static meshes (Object::staticKey) whose checks and boxes were kept
     std::string gpuError;
     std::size_t bytesUploaded = 0;
+    /// What the culler holds on its GL device after the frame: buffer capacities plus the view images.
+    std::size_t gpuDeviceBytes = 0;
     std::size_t bytesReadBack = 0;
     double prepassMs = 0.0;
     double uploadMs = 0.0;

@@ -331,6 +331,14 @@ void VisibilityPass::upload(const GpuGeometry& geometry, Stats& stats) {
     s.geometry = &geometry;
 }
 
+std::size_t VisibilityPass::deviceBytes() const {
+    const Impl& s = *m_impl;
+    std::size_t bytes = 4 * std::size_t{4} * 3 * static_cast<std::size_t>(s.settings.resolution) *
+                        static_cast<std::size_t>(s.settings.resolution);  // four r32ui images, three views wide
+    for (const std::size_t c : s.capacity) bytes += c;
+    return bytes;
+}
+
 void VisibilityPass::forgetUploads() {
     for (std::size_t& v : m_impl->valid) v = 0;
 }

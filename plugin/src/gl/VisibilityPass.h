@@ -53,6 +53,8 @@ public:
     void upload(const GpuGeometry& geometry, Stats& stats);
     /// Forgets what the device holds (after a GL error): the next upload sends everything.
     void forgetUploads();
+    /// Bytes held on the device: buffer capacities plus the view images.
+    std::size_t deviceBytes() const;
 
     /// Prunes the items: survivors[i] is true when item i may intersect an item of another owner. Runs at most
     /// `maxIterations` iterations (each: three axes, both directions) and stops when the set stops changing.
