@@ -160,7 +160,7 @@ std::vector<ValidatedObject> validateObjects(const std::vector<Object>& objects,
 
 bool meshTouchesBox(const TriangleMesh& mesh, const Aabb& box, double margin) {
     for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
-        if (triangleBounds(mesh, t).inflated(0.5 * margin).overlaps(box)) return true;
+        if (triangleBounds(mesh, t, 0.5 * margin).overlaps(box)) return true;
     return false;
 }
 
