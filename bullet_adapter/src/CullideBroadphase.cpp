@@ -3,6 +3,7 @@
 
 #include "ShapeGeometry.h"
 #include "cullide/Result.h"
+#include "cullide/TriangleTest.h"
 
 #include <BulletCollision/BroadphaseCollision/btDbvt.h>
 #include <BulletCollision/CollisionDispatch/btCollisionDispatcher.h>
@@ -133,6 +134,7 @@ struct CullideBroadphase::Impl {
     /// Ghost pairs: AABBs within this distance (btDbvtBroadphase pairs fattened leaves, gDbvtMargin = 0.05;
     /// btKinematicCharacterController sweeps only against its ghost's pairs and relies on that slack).
     btScalar ghostMargin = btScalar(0.1);
+    bool deepPenetrationFallback = true;
     std::vector<Proxy*> ghosts;  ///< proxies of ghost objects (eager pairing)
 
     CullideFrameStats stats;
@@ -583,18 +585,18 @@ struct CullideBroadphase::Impl {
         rec.transformFirst = objectOf(first)->getWorldTransform();
         rec.transformSecond = objectOf(second)->getWorldTransform();
         if (gimpactPair) {
-            // Only pairs whose triangle boxes, grown by the shapes' margins, overlap (Bullet's own candidate
-            // criterion; the clip method must not see distant pairs).
-            const double ma = double(bullet::triangleMarginOf(objectOf(pa)->getCollisionShape()));
-            const double mb = double(bullet::triangleMarginOf(objectOf(pb)->getCollisionShape()));
-            auto box = [](const TriangleMesh& m, std::uint32_t t, double grow) {
-                Aabb b;
-                for (std::uint32_t v : m.triangles[t]) b.grow(m.vertices[v]);
-                return b.inflated(grow);
-            };
+            // The dispatcher keeps, of these near pairs, those that Bullet's own BVH search would also produce.
             rec.triangles.pairs.reserve(op.triangles.size());
+            cullide::Timer penetration;
+            bool intersecting = false;
             for (const TrianglePair& tp : op.triangles) {
-                if (!box(pa->world, tp.a, ma).overlaps(box(pb->world, tp.b, mb))) continue;
+                if (deepPenetrationFallback && !intersecting) {
+                    const TriangleIndices& a = pa->world.triangles[tp.a];
+                    const TriangleIndices& b = pb->world.triangles[tp.b];
+                    const std::vector<Vec3>& va = pa->world.vertices;
+                    const std::vector<Vec3>& vb = pb->world.vertices;
+                    intersecting = trianglesIntersect(va[a[0]], va[a[1]], va[a[2]], vb[b[0]], vb[b[1]], vb[b[2]]);
+                }
                 const BulletTriangle ta = pa->geometry->refs[tp.a];
                 const BulletTriangle tb = pb->geometry->refs[tp.b];
                 rec.triangles.pairs.push_back(flip ? BulletTrianglePair{tb, ta} : BulletTrianglePair{ta, tb});
@@ -607,6 +609,9 @@ struct CullideBroadphase::Impl {
                           return x.b.index < y.b.index;
                       });
             stats.trianglePairs += rec.triangles.pairs.size();
+            rec.triangles.interpenetrating = intersecting;
+            if (intersecting) ++stats.interpenetratingPairs;
+            if (deepPenetrationFallback) stats.penetrationTestMs += penetration.ms();
         } else {
             const bool meshIsA = ka == GeometryKind::TriangleMesh;
             const bullet::ShapeTriangles& mesh = meshIsA ? *pa->geometry : *pb->geometry;
@@ -904,6 +909,8 @@ void CullideBroadphase::invalidateShape(const btCollisionShape* shape) {
 
 void CullideBroadphase::setGhostPairMargin(btScalar margin) { m_impl->ghostMargin = btMax(margin, btScalar(0)); }
 btScalar CullideBroadphase::getGhostPairMargin() const { return m_impl->ghostMargin; }
+void CullideBroadphase::setDeepPenetrationFallback(bool enable) { m_impl->deepPenetrationFallback = enable; }
+bool CullideBroadphase::getDeepPenetrationFallback() const { return m_impl->deepPenetrationFallback; }
 
 const CullideFrameStats& CullideBroadphase::getLastFrameStats() const { return m_impl->stats; }
 std::size_t CullideBroadphase::getRejectedCount() const { return m_impl->rejectedTotal; }

@@ -14,9 +14,53 @@
 #include <algorithm>
 #include <array>
 #include <typeinfo>
+#include <unordered_map>
 #include <vector>
 
 namespace cullide {
+namespace detail {
+
+/// The leaf node of each primitive of a GImpact box set (btGImpactQuantizedBvh), so a surviving triangle pair can be
+/// tested exactly as Bullet's BVH traversal tests it. Entries are checked on every lookup (the leaf must still hold
+/// the primitive) and rebuilt when a box set was rebuilt (updateBound after deforming) or its address reused.
+class GImpactLeafIndex {
+public:
+    /// The leaf node of primitive `prim` in `set`, or -1 when the set has no such leaf.
+    int leafOf(const btGImpactBoxSet& set, int prim) {
+        std::vector<int>& leaves = m_leaves[&set];
+        if (!valid(set, leaves, prim)) {
+            if (m_leaves.size() > kMaxSets) {  // box sets of deleted shapes: start over
+                m_leaves.clear();
+                return leafOf(set, prim);
+            }
+            rebuild(set, leaves);
+            if (!valid(set, leaves, prim)) return -1;
+        }
+        return leaves[static_cast<std::size_t>(prim)];
+    }
+
+private:
+    static constexpr std::size_t kMaxSets = 4096;
+
+    static bool valid(const btGImpactBoxSet& set, const std::vector<int>& leaves, int prim) {
+        if (prim < 0 || static_cast<std::size_t>(prim) >= leaves.size()) return false;
+        const int node = leaves[static_cast<std::size_t>(prim)];
+        return node >= 0 && node < set.getNodeCount() && set.isLeafNode(node) && set.getNodeData(node) == prim;
+    }
+    static void rebuild(const btGImpactBoxSet& set, std::vector<int>& leaves) {
+        leaves.assign(static_cast<std::size_t>(std::max(set.getPrimitiveManager()->get_primitive_count(), 0)), -1);
+        for (int node = 0; node < set.getNodeCount(); ++node) {
+            if (!set.isLeafNode(node)) continue;
+            const int prim = set.getNodeData(node);
+            if (prim >= 0 && static_cast<std::size_t>(prim) < leaves.size()) leaves[static_cast<std::size_t>(prim)] = node;
+        }
+    }
+
+    std::unordered_map<const btGImpactBoxSet*, std::vector<int>> m_leaves;
+};
+
+}  // namespace detail
+
 namespace {
 
 CullideCollisionDispatcher& cullideDispatcher(btDispatcher* d) { return *static_cast<CullideCollisionDispatcher*>(d); }
@@ -47,12 +91,22 @@ public:
         CullideDispatchStats* statsPtr = nullptr;
         const PairTriangles* triangles = cullideTrianglesFor(m_dispatcher, body0Wrap, body1Wrap, swapped, statsPtr);
         CullideDispatchStats& stats = *statsPtr;
-        if (triangles == nullptr) {
+        const auto* shape0 = static_cast<const btGImpactMeshShape*>(body0Wrap->getCollisionShape());
+        const auto* shape1 = static_cast<const btGImpactMeshShape*>(body1Wrap->getCollisionShape());
+        if (triangles == nullptr || !allPartsHaveBoxSets(*shape0) || !allPartsHaveBoxSets(*shape1)) {
+            // Nothing culled to trust, or a part without a box set (Bullet then tests child boxes; let it).
             ++stats.fallbackPairs;
             btGImpactCollisionAlgorithm::processCollision(body0Wrap, body1Wrap, dispatchInfo, resultOut);
             return;
         }
         ++stats.cullidePairs;
+        if (triangles->interpenetrating) {
+            // The meshes intersect: GImpact's penetration contacts can come from triangle pairs far apart, which
+            // CULLIDE's near pairs do not include. Bullet's full algorithm keeps them (the fallback is optional).
+            ++stats.penetrationPairs;
+            btGImpactCollisionAlgorithm::processCollision(body0Wrap, body1Wrap, dispatchInfo, resultOut);
+            return;
+        }
         clearCache();  // GImpact recreates its manifold every frame; with no surviving pair it stays cleared
         m_resultOut = resultOut;
         m_dispatchInfo = &dispatchInfo;
@@ -60,11 +114,8 @@ public:
             ++stats.clearedPairs;
             return;
         }
-        stats.trianglePairs += triangles->pairs.size();
 
         // Pairs in (body0, body1) order, grouped by part pair, deterministic order.
-        static thread_local std::vector<std::array<int, 4>> ordered;  // part0, part1, tri0, tri1
-        static thread_local std::vector<int> interleaved;
         ordered.clear();
         for (const BulletTrianglePair& p : triangles->pairs) {
             const BulletTriangle& t0 = swapped ? p.b : p.a;
@@ -73,28 +124,76 @@ public:
         }
         if (swapped) std::sort(ordered.begin(), ordered.end());
 
-        const auto* shape0 = static_cast<const btGImpactMeshShape*>(body0Wrap->getCollisionShape());
-        const auto* shape1 = static_cast<const btGImpactMeshShape*>(body1Wrap->getCollisionShape());
+        detail::GImpactLeafIndex& leafIndex = cullideDispatcher(m_dispatcher).gimpactLeafIndex();
         std::size_t begin = 0;
         while (begin < ordered.size()) {
             std::size_t end = begin;
-            interleaved.clear();
             while (end < ordered.size() && ordered[end][0] == ordered[begin][0] &&
-                   ordered[end][1] == ordered[begin][1]) {
-                interleaved.push_back(ordered[end][2]);
-                interleaved.push_back(ordered[end][3]);
+                   ordered[end][1] == ordered[begin][1])
                 ++end;
-            }
             m_part0 = ordered[begin][0];
             m_part1 = ordered[begin][1];
+            const btGImpactMeshShapePart* part0 = shape0->getMeshPart(m_part0);
+            const btGImpactMeshShapePart* part1 = shape1->getMeshPart(m_part1);
+            bulletCandidates(body0Wrap->getWorldTransform(), *part0, body1Wrap->getWorldTransform(), *part1,
+                             leafIndex, ordered, begin, end);
+            stats.trianglePairs += interleaved.size() / 2;
             // collide_sat_triangles locks the parts' child shapes itself.
-            collide_sat_triangles(body0Wrap, body1Wrap, shape0->getMeshPart(m_part0), shape1->getMeshPart(m_part1),
-                                  interleaved.data(), static_cast<int>(end - begin));
+            if (!interleaved.empty())
+                collide_sat_triangles(body0Wrap, body1Wrap, part0, part1, interleaved.data(),
+                                      static_cast<int>(interleaved.size() / 2));
             begin = end;
         }
-        if (getLastManifold() != nullptr) m_resultOut->refreshContactPoints();
+        if (getLastManifold() != nullptr)
+            m_resultOut->refreshContactPoints();
+        else
+            ++stats.clearedPairs;
     }
 
+private:
+    static thread_local std::vector<std::array<int, 4>> ordered;  // part0, part1, tri0, tri1
+    static thread_local std::vector<int> interleaved;
+
+    /// Keeps, of ordered[begin, end) (one part pair), the triangle pairs that Bullet's own candidate search
+    /// (btGImpactQuantizedBvh::find_collision) would also produce, into `interleaved`: the parts' quantized leaf
+    /// boxes overlap in part 0's frame, tested as Bullet tests them (the 15-axis test for the roots, the 6 face axes
+    /// below). CULLIDE's pairs are near pairs; Bullet's are box-overlapping pairs; the clip method runs on pairs in
+    /// both. Both parts have box sets.
+    static void bulletCandidates(const btTransform& trans0, const btGImpactMeshShapePart& part0,
+                                 const btTransform& trans1, const btGImpactMeshShapePart& part1,
+                                 detail::GImpactLeafIndex& leafIndex, const std::vector<std::array<int, 4>>& pairs,
+                                 std::size_t begin, std::size_t end) {
+        interleaved.clear();
+        const btGImpactBoxSet& set0 = *part0.getBoxSet();
+        const btGImpactBoxSet& set1 = *part1.getBoxSet();
+        BT_BOX_BOX_TRANSFORM_CACHE cache;
+        cache.calc_from_homogenic(trans0, trans1);
+        btAABB box0, box1;
+        set0.getNodeBound(0, box0);
+        set1.getNodeBound(0, box1);
+        if (!box0.overlapping_trans_cache(box1, cache, true)) return;  // Bullet finds no pair at all
+        const bool rootsOnly = set0.isLeafNode(0) && set1.isLeafNode(0);
+        for (std::size_t i = begin; i < end; ++i) {
+            const int leaf0 = leafIndex.leafOf(set0, pairs[i][2]);
+            const int leaf1 = leafIndex.leafOf(set1, pairs[i][3]);
+            if (leaf0 < 0 || leaf1 < 0) continue;  // not in Bullet's box set: Bullet never tests it either
+            if (!rootsOnly) {
+                set0.getNodeBound(leaf0, box0);
+                set1.getNodeBound(leaf1, box1);
+                if (!box0.overlapping_trans_cache(box1, cache, false)) continue;
+            }
+            interleaved.push_back(pairs[i][2]);
+            interleaved.push_back(pairs[i][3]);
+        }
+    }
+
+    static bool allPartsHaveBoxSets(const btGImpactMeshShape& shape) {
+        for (int part = 0; part < shape.getMeshPartCount(); ++part)
+            if (!shape.getMeshPart(part)->hasBoxSet()) return false;
+        return true;
+    }
+
+public:
     struct CreateFunc : btCollisionAlgorithmCreateFunc {
         btCollisionAlgorithm* CreateCollisionAlgorithm(btCollisionAlgorithmConstructionInfo& ci,
                                                        const btCollisionObjectWrapper* body0Wrap,
@@ -104,6 +203,9 @@ public:
         }
     };
 };
+
+thread_local std::vector<std::array<int, 4>> CullideGImpactAlgorithm::ordered;
+thread_local std::vector<int> CullideGImpactAlgorithm::interleaved;
 
 /// A stand-in for a triangle mesh that enumerates only CULLIDE's surviving triangles (mesh-local vertices, Bullet's
 /// part and triangle ids). Lives on the stack for one processCollision call.
@@ -205,7 +307,9 @@ bool registeredIs(const btCollisionAlgorithmCreateFunc* f) {
 CullideCollisionDispatcher::CullideCollisionDispatcher(detail::PrecisionChecked,
                                                        btCollisionConfiguration* collisionConfiguration,
                                                        CullideBroadphase* broadphase)
-    : btCollisionDispatcher(collisionConfiguration), m_broadphase(broadphase) {}
+    : btCollisionDispatcher(collisionConfiguration),
+      m_broadphase(broadphase),
+      m_leafIndex(std::make_unique<detail::GImpactLeafIndex>()) {}
 
 CullideCollisionDispatcher::~CullideCollisionDispatcher() = default;
 
@@ -254,6 +358,7 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
     m_total.trianglePairs += m_current.trianglePairs;
     m_total.fallbackPairs += m_current.fallbackPairs;
     m_total.clearedPairs += m_current.clearedPairs;
+    m_total.penetrationPairs += m_current.penetrationPairs;
     m_total.dispatchMs += m_current.dispatchMs;
     if (m_broadphase != nullptr && pairCache == m_broadphase->getOverlappingPairCache()) m_lastStep = m_current;
     m_current = outer;

@@ -313,8 +313,7 @@ void mirrorState(TestWorld& from, TestWorld& to) {
 }
 
 void ContactAgreement::add(const ContactMap& reference, const ContactMap& other,
-                           const std::function<double(const std::pair<int, int>&)>& tolerance,
-                           const std::set<std::pair<int, int>>& skipDepth) {
+                           const std::function<double(const std::pair<int, int>&)>& tolerance) {
     for (const auto& [key, ref] : reference) {
         ++referencePairs;
         const auto it = other.find(key);
@@ -326,10 +325,6 @@ void ContactAgreement::add(const ContactMap& reference, const ContactMap& other,
                               key.second, ref.points, ref.minDistance);
                 firstMissing = buf;
             }
-            continue;
-        }
-        if (skipDepth.count(key) != 0) {
-            ++uncomparedDepths;
             continue;
         }
         ++comparedPairs;

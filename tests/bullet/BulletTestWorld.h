@@ -11,7 +11,6 @@
 #include <cstdint>
 #include <functional>
 #include <map>
-#include <set>
 #include <memory>
 #include <string>
 #include <utility>
@@ -122,13 +121,10 @@ struct ContactAgreement {
     std::size_t depthMismatches = 0;  ///< |min distance difference| > tolerance
     double maxDepthDifference = 0.0;
     std::size_t extraPairs = 0;       ///< pairs with contacts only in the other world
-    std::size_t uncomparedDepths = 0; ///< pair-steps whose depth was not compared (see `skipDepth`)
     std::string firstMissing;
-    /// `tolerance(pair)` gives the allowed |min distance difference| of a pair; pairs in `skipDepth` are checked
-    /// for presence only.
+    /// `tolerance(pair)` gives the allowed |min distance difference| of a pair.
     void add(const ContactMap& reference, const ContactMap& other,
-             const std::function<double(const std::pair<int, int>&)>& tolerance,
-             const std::set<std::pair<int, int>>& skipDepth = {});
+             const std::function<double(const std::pair<int, int>&)>& tolerance);
 };
 
 /// Accumulated per-step measurements of one world.

@@ -1,10 +1,7 @@
 #include "SceneSupport.h"
 
-#include "cullide/TriangleTest.h"
-
 #include <BulletCollision/CollisionDispatch/btCollisionObjectWrapper.h>
 #include <BulletCollision/CollisionDispatch/btManifoldResult.h>
-#include <BulletCollision/Gimpact/btGImpactShape.h>
 
 #include <cstdio>
 #include <set>
@@ -12,45 +9,18 @@
 namespace cullide::test {
 namespace {
 
-/// Contact keys of one step; value: for GImpact triangle pairs the distance between the (unmargined) world
-/// triangles, else -1.
-std::map<TriangleContactKey, double>* g_recording = nullptr;
-
-const btGImpactMeshShape* gimpactMesh(const btCollisionShape* s) {
-    if (s == nullptr || s->getShapeType() != GIMPACT_SHAPE_PROXYTYPE) return nullptr;
-    const auto* g = static_cast<const btGImpactShapeInterface*>(s);
-    return g->getGImpactShapeType() == CONST_GIMPACT_TRIMESH_SHAPE ? static_cast<const btGImpactMeshShape*>(g)
-                                                                    : nullptr;
-}
-
-bool worldTriangle(const btCollisionObjectWrapper* w, int part, int index, Vec3 out[3]) {
-    const btGImpactMeshShape* mesh = gimpactMesh(w->getCollisionShape());
-    if (mesh == nullptr || part < 0 || index < 0 || part >= mesh->getMeshPartCount()) return false;
-    const btGImpactMeshShapePart* p = mesh->getMeshPart(part);
-    p->lockChildShapes();
-    btPrimitiveTriangle t;
-    p->getPrimitiveTriangle(index, t);
-    p->unlockChildShapes();
-    for (int i = 0; i < 3; ++i) {
-        const btVector3 v = w->getWorldTransform() * t.m_vertices[i];
-        out[i] = Vec3(double(v.x()), double(v.y()), double(v.z()));
-    }
-    return true;
-}
+/// (object pair, triangle pair) keys that produced a contact point this step.
+std::set<TriangleContactKey>* g_recording = nullptr;
 
 bool recordContact(btManifoldPoint& /*cp*/, const btCollisionObjectWrapper* w0, int part0, int index0,
                    const btCollisionObjectWrapper* w1, int part1, int index1) {
     if (g_recording == nullptr) return false;
     const int a = w0->getCollisionObject()->getUserIndex();
     const int b = w1->getCollisionObject()->getUserIndex();
-    double distance = -1.0;
-    Vec3 t0[3], t1[3];
-    if (worldTriangle(w0, part0, index0, t0) && worldTriangle(w1, part1, index1, t1))
-        distance = triangleDistance(t0[0], t0[1], t0[2], t1[0], t1[1], t1[2]);
     if (a <= b)
-        g_recording->emplace(TriangleContactKey{a, part0, index0, b, part1, index1}, distance);
+        g_recording->insert(TriangleContactKey{a, part0, index0, b, part1, index1});
     else
-        g_recording->emplace(TriangleContactKey{b, part1, index1, a, part0, index0}, distance);
+        g_recording->insert(TriangleContactKey{b, part1, index1, a, part0, index0});
     return false;
 }
 
@@ -65,7 +35,7 @@ MirrorRun runMirrored(TestWorld& reference, TestWorld& cullide, const MirrorOpti
     MirrorRun run;
     ContactAddedCallback previous = gContactAddedCallback;
     gContactAddedCallback = recordContact;
-    std::map<TriangleContactKey, double> defaultContacts, cullideContacts;
+    std::set<TriangleContactKey> defaultContacts, cullideContacts;
     for (int s = 0; s < options.steps; ++s) {
         if (options.before) options.before(s, reference, cullide);
         enableCallbacks(reference);
@@ -79,18 +49,9 @@ MirrorRun runMirrored(TestWorld& reference, TestWorld& cullide, const MirrorOpti
         reference.step();
         g_recording = nullptr;
 
-        std::set<std::pair<int, int>> deepPairs;
-        for (const auto& [k, distance] : defaultContacts)
-            if (distance > options.deepContactDistance) deepPairs.insert({k[0], k[3]});
-        run.agreement.add(contactsOf(reference.world()), contactsOf(cullide.world()), options.tolerance, deepPairs);
-        for (const auto& [k, distance] : defaultContacts) {
+        run.agreement.add(contactsOf(reference.world()), contactsOf(cullide.world()), options.tolerance);
+        for (const TriangleContactKey& k : defaultContacts) {
             if (k[1] < 0 && k[2] < 0 && k[4] < 0 && k[5] < 0) continue;  // no triangle involved
-            if (distance > options.deepContactDistance) {
-                // GImpact's clip method derives penetration contacts from triangle pairs whose boxes overlap but
-                // which are far apart (deep interpenetration); CULLIDE hands over near pairs only.
-                ++run.distantTriangleContacts;
-                continue;
-            }
             ++run.triangleContacts;
             if (cullideContacts.count(k) == 0) {
                 ++run.triangleContactsMissing;
@@ -108,6 +69,7 @@ MirrorRun runMirrored(TestWorld& reference, TestWorld& cullide, const MirrorOpti
             run.cullideTrianglePairs += d->getLastStepStats().trianglePairs;
             run.cullidePairsFromTriangles += d->getLastStepStats().cullidePairs;
             run.fallbackPairs += d->getLastStepStats().fallbackPairs;
+            run.penetrationPairs += d->getLastStepStats().penetrationPairs;
         }
         if (const CullideBroadphase* bp = cullide.cullideBroadphase()) {
             const CullideFrameStats& f = bp->getLastFrameStats();
@@ -133,22 +95,21 @@ void printMirrorRun(const char* scene, const MirrorRun& run) {
     std::printf("[%s] %zu steps\n  %s\n  %s\n", scene, run.steps, run.defaultTimes.summary("default").c_str(),
                 run.cullideTimes.summary("cullide").c_str());
     std::printf("  cullide narrow phase: %.1f pairs/step fed from CULLIDE triangle lists, %.1f triangle pairs "
-                "(or mesh triangles)/step, %.1f fallback pairs/step\n",
+                "(or mesh triangles)/step, %.1f fallback pairs/step, %.2f interpenetrating GImpact pairs/step (Bullet's full "
+                "algorithm)\n",
                 double(run.cullidePairsFromTriangles) / n, double(run.cullideTrianglePairs) / n,
-                double(run.fallbackPairs) / n);
+                double(run.fallbackPairs) / n, double(run.penetrationPairs) / n);
     std::printf("  cullide broadphase breakdown (ms/step): build %.3f, cull %.3f (pre-pass %.3f, upload %.3f, GPU "
                 "levels %.3f, exact %.3f), pair sync %.3f; %.0f triangles and %.1f culler pairs/step\n",
                 run.buildMs / n, run.cullMs / n, run.prepassMs / n, run.uploadMs / n, run.gpuLevelsMs / n,
                 run.exactMs / n, run.syncMs / n, double(run.cullerTriangles) / n, double(run.cullerPairs) / n);
     const ContactAgreement& a = run.agreement;
     std::printf("  contacts: %zu pair-steps with contacts (default), %zu missing under CULLIDE, %zu over tolerance "
-                "(max |min-distance diff| %.2e), %zu pair-steps with contacts only under CULLIDE, %zu deep-penetration "
-                "pair-steps compared for presence only\n",
-                a.referencePairs, a.missingPairs, a.depthMismatches, a.maxDepthDifference, a.extraPairs,
-                a.uncomparedDepths);
+                "(max |min-distance diff| %.2e), %zu pair-steps with contacts only under CULLIDE\n",
+                a.referencePairs, a.missingPairs, a.depthMismatches, a.maxDepthDifference, a.extraPairs);
     std::printf("  triangle level: %zu (pair, triangle) contact keys under default, %zu without a contact under "
-                "CULLIDE; %zu GImpact keys from triangles farther apart than the margins (deep penetration)\n",
-                run.triangleContacts, run.triangleContactsMissing, run.distantTriangleContacts);
+                "CULLIDE\n",
+                run.triangleContacts, run.triangleContactsMissing);
     std::fflush(stdout);
 }
 

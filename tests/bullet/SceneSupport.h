@@ -28,6 +28,7 @@ struct MirrorRun {
     std::size_t cullideTrianglePairs = 0;  ///< triangle pairs (or mesh triangles) handed to the narrow phase
     std::size_t cullidePairsFromTriangles = 0;
     std::size_t fallbackPairs = 0;
+    std::size_t penetrationPairs = 0;  ///< interpenetrating GImpact pair-steps given Bullet's full algorithm
     std::size_t steps = 0;
     /// Sums of the CULLIDE broadphase's per-frame breakdown.
     double buildMs = 0.0, cullMs = 0.0, syncMs = 0.0, prepassMs = 0.0, uploadMs = 0.0, gpuLevelsMs = 0.0,
@@ -38,9 +39,6 @@ struct MirrorRun {
     std::size_t triangleContacts = 0;
     std::size_t triangleContactsMissing = 0;
     std::string firstTriangleMissing;
-    /// GImpact contact keys under the default pipeline whose two triangles are farther apart than
-    /// MirrorOptions::deepContactDistance (not expected under CULLIDE, not counted above).
-    std::size_t distantTriangleContacts = 0;
 };
 
 struct MirrorOptions {
@@ -49,8 +47,6 @@ struct MirrorOptions {
     std::function<double(const std::pair<int, int>&)> tolerance = [](const std::pair<int, int>&) { return 1e-6; };
     /// Runs after every step with both worlds.
     std::function<void(int, TestWorld&, TestWorld&)> each;
-    /// GImpact triangle pairs farther apart than this are not expected to be handed over (see MirrorRun).
-    double deepContactDistance = 1e30;
     /// Before every step (after the state copy): add/remove objects in both worlds.
     std::function<void(int, TestWorld&, TestWorld&)> before;
 };

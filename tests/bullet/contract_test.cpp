@@ -265,7 +265,6 @@ TEST(BulletContract, CullerShrinkFailureKeepsTheSoundCuller) {
         testing::internal::CaptureStderr();
         MirrorOptions options;
         options.steps = 90;
-        options.deepContactDistance = 2 * 0.01;
         options.tolerance = [](const std::pair<int, int>& pair) {
             return pair.first == 0 ? 1e-6 : 2.0 * double(gContactBreakingThreshold);
         };

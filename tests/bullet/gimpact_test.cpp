@@ -52,8 +52,6 @@ TEST(BulletGImpact, ToriNoContactMissingAndContactsAgree) {
     scene.populate(cullide);
     MirrorOptions options;
     options.steps = 200;
-    // Triangle pairs farther apart than both margins touch only in GImpact's deep-penetration logic.
-    options.deepContactDistance = 2 * 0.04;
     // Torus-torus contacts come from CULLIDE's triangle pairs in sorted order, Bullet's from its box-tree order;
     // the manifold (rebuilt every frame by GImpact) keeps 4 points out of many and merges points closer than the
     // breaking threshold, so the retained deepest point may differ by up to that threshold. Torus-plane pairs run
@@ -148,7 +146,6 @@ TEST(BulletGImpact, DeformingMeshNeedsNoExtraCall) {
     populate(cullide);
     MirrorOptions options;
     options.steps = 120;
-    options.deepContactDistance = 2 * 0.04;
     options.tolerance = [](const std::pair<int, int>&) { return 2.0 * double(gContactBreakingThreshold); };
     // Outer radius 1.3 * factor against a neighbour 2.7 away: out of contact, touching, overlapping, and back.
     options.before = [&](int step, TestWorld& ref, TestWorld&) {

@@ -36,10 +36,9 @@ struct GImpactBox {
     }
 };
 
-MirrorOptions gimpactOptions(int steps, double deep) {
+MirrorOptions gimpactOptions(int steps) {
     MirrorOptions options;
     options.steps = steps;
-    options.deepContactDistance = deep;
     // As in the GImpact tori scene: the 4-point manifold keeps different points when triangle pairs come in a
     // different order; pairs with the plane (object 0) run Bullet's own algorithm on identical input.
     options.tolerance = [](const std::pair<int, int>& pair) {
@@ -58,18 +57,52 @@ TEST(BulletHardCases, ThinPlatesRestingFaceOnFace) {
     for (TestWorld* w : {&reference, &cullide}) {
         btGImpactCollisionAlgorithm::registerAlgorithm(&w->dispatcher());
         w->addBody(plane, 0, btTransform::getIdentity());
-        // A twisted stack, 0.5 mm apart: the plates settle face on face (coplanar, touching) without ever
-        // interpenetrating deeper than the margins (GImpact's deep-penetration contacts from distant triangle
-        // pairs are a separate, known deviation: see bullet_adapter/README.md).
+        // A twisted stack, 0.5 mm apart: the plates settle face on face (coplanar, touching).
         for (int k = 0; k < 5; ++k)
             w->addBody(plate.shape.get(), 1,
                        btTransform(btQuaternion(btVector3(0, 1, 0), btScalar(0.2) * btScalar(k)),
                                    btVector3(btScalar(0.05) * btScalar(k), btScalar(0.0205 + 0.0405 * k), 0)));
     }
-    const MirrorRun run = runMirrored(reference, cullide, gimpactOptions(150, 2 * 0.01));
+    const MirrorRun run = runMirrored(reference, cullide, gimpactOptions(150));
     printMirrorRun("thin plates", run);
     expectAgreement(run, 300);
     EXPECT_GT(run.cullidePairsFromTriangles, 0u);
+}
+
+/// Five 4 cm GImpact plates dropped 20 cm onto each other: on impact they interpenetrate by more than their
+/// thickness, and GImpact's clip method then also makes penetration contacts from triangle pairs far apart.
+MirrorRun dropThinPlates(bool deepPenetrationFallback) {
+    ShapeStore shapes;
+    btCollisionShape* plane = shapes.plane(btVector3(0, 1, 0), 0);
+    GImpactBox plate(btVector3(1, btScalar(0.02), btScalar(0.7)), btScalar(0.01));
+    TestWorld reference(PipelineKind::Default);
+    TestWorld cullide(PipelineKind::Cullide);
+    cullide.cullideBroadphase()->setDeepPenetrationFallback(deepPenetrationFallback);
+    for (TestWorld* w : {&reference, &cullide}) {
+        btGImpactCollisionAlgorithm::registerAlgorithm(&w->dispatcher());
+        w->addBody(plane, 0, btTransform::getIdentity());
+        for (int k = 0; k < 5; ++k)
+            w->addBody(plate.shape.get(), 1,
+                       btTransform(btQuaternion(btVector3(0, 1, 0), btScalar(0.3) * btScalar(k)),
+                                   btVector3(btScalar(0.05) * btScalar(k), btScalar(0.1 + 0.24 * k), 0)));
+    }
+    return runMirrored(reference, cullide, gimpactOptions(120));
+}
+
+TEST(BulletHardCases, ThinPlatesDroppedInterpenetrateLikeWithBullet) {
+    CULLIDE_BULLET_REQUIRE_GL();
+    const MirrorRun run = dropThinPlates(true);
+    printMirrorRun("thin plates dropped, deep-penetration fallback on", run);
+    expectAgreement(run, 300);
+    EXPECT_GT(run.penetrationPairs, 0u) << "the plates never interpenetrated: the scene tests nothing";
+    EXPECT_GT(run.cullidePairsFromTriangles, run.penetrationPairs);  // resting pairs still use the culled lists
+
+    // Without the fallback the deviation the fallback removes is there (this scene can fail).
+    const MirrorRun without = dropThinPlates(false);
+    printMirrorRun("thin plates dropped, deep-penetration fallback off", without);
+    EXPECT_EQ(without.agreement.missingPairs, 0u) << without.agreement.firstMissing;
+    EXPECT_EQ(without.penetrationPairs, 0u);
+    EXPECT_GT(without.agreement.depthMismatches + without.triangleContactsMissing, 0u);
 }
 
 TEST(BulletHardCases, GImpactSceneFarFromTheOrigin) {
@@ -93,7 +126,7 @@ TEST(BulletHardCases, GImpactSceneFarFromTheOrigin) {
                                                       btScalar(1.5) + btScalar(1.7) * btScalar(k), 0)));
     }
     // The floor is object 0 here but a GImpact mesh, not a plane: its pairs use CULLIDE's triangle lists too.
-    MirrorOptions options = gimpactOptions(200, 2 * 0.04);
+    MirrorOptions options = gimpactOptions(200);
     options.tolerance = [](const std::pair<int, int>&) { return 2.0 * double(gContactBreakingThreshold); };
     const MirrorRun run = runMirrored(reference, cullide, options);
     printMirrorRun("far from the origin", run);

@@ -77,23 +77,35 @@ TEST(BulletScale, GImpactTorusPile) {
                                                btScalar(1.9 * z - 1.9 - 0.15 * y))));
         }
     };
-    TestWorld reference(PipelineKind::Default);
-    TestWorld cullide(PipelineKind::Cullide);
-    populate(reference);
-    populate(cullide);
     MirrorOptions options;
     options.steps = 120 / kStepScale;
-    options.deepContactDistance = 2 * 0.04;
     options.tolerance = [](const std::pair<int, int>& pair) {
         return pair.first == 0 ? 1e-6 : 2.0 * double(gContactBreakingThreshold);
     };
-    const MirrorRun run = runMirrored(reference, cullide, options);
-    printMirrorRun("scale: pile of 27 GImpact tori (576 triangles each)", run);
-    printRenderer(cullide);
-    expectAgreement(run, 1000 / kStepScale);
-    EXPECT_LE(run.cullideTimes.pairs, run.defaultTimes.pairs);
-    EXPECT_GT(run.cullidePairsFromTriangles, 0u);
-    EXPECT_EQ(run.fallbackPairs, 0u);
+    auto run = [&](bool deepPenetrationFallback) {
+        TestWorld reference(PipelineKind::Default);
+        TestWorld cullide(PipelineKind::Cullide);
+        cullide.cullideBroadphase()->setDeepPenetrationFallback(deepPenetrationFallback);
+        populate(reference);
+        populate(cullide);
+        const MirrorRun result = runMirrored(reference, cullide, options);
+        if (deepPenetrationFallback) printRenderer(cullide);
+        return result;
+    };
+    const MirrorRun exact = run(true);
+    printMirrorRun("scale: pile of 27 GImpact tori (576 triangles each)", exact);
+    expectAgreement(exact, 1000 / kStepScale);
+    EXPECT_LE(exact.cullideTimes.pairs, exact.defaultTimes.pairs);
+    EXPECT_GT(exact.cullidePairsFromTriangles, 0u);
+    EXPECT_EQ(exact.fallbackPairs, 0u);
+    EXPECT_GT(exact.penetrationPairs, 0u) << "no tori interpenetrated: the fallback is not exercised";
+
+    // Speed against error: the same pile with interpenetrating pairs on the culled lists too. No pair goes missing;
+    // GImpact's contacts from distant triangle pairs of interpenetrating tori do.
+    const MirrorRun fast = run(false);
+    printMirrorRun("scale: the same pile, deep-penetration fallback off", fast);
+    EXPECT_EQ(fast.agreement.missingPairs, 0u) << fast.agreement.firstMissing;
+    EXPECT_EQ(fast.penetrationPairs, 0u);
 }
 
 }  // namespace

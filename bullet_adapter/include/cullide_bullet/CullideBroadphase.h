@@ -67,10 +67,14 @@ struct BulletTrianglePair {
 
 /// What CULLIDE kept for one object pair in the last calculateOverlappingPairs().
 struct PairTriangles {
-    /// GImpact-GImpact: surviving candidate triangle pairs (culled at margin d, and their boxes grown by the shapes'
-    /// margins overlap, Bullet's own candidate criterion),
-    /// sorted by (a.part, b.part, a.index, b.index).
+    /// GImpact-GImpact: surviving candidate triangle pairs (within the culling margin d), sorted by (a.part, b.part,
+    /// a.index, b.index). The dispatcher hands Bullet's triangle routine those that Bullet's own BVH search would
+    /// also produce (overlapping quantized leaf boxes).
     std::vector<BulletTrianglePair> pairs;
+    /// GImpact-GImpact: the two meshes intersect (a surviving triangle pair shares a point, exact test) and the
+    /// deep-penetration fallback is on: the dispatcher runs Bullet's full GImpact algorithm for the pair this step,
+    /// so the penetration contacts that GImpact derives from distant triangle pairs are kept.
+    bool interpenetrating = false;
     /// Convex-hull-mesh: the mesh's surviving triangles, sorted, and their vertices in the mesh's local frame
     /// exactly as Bullet's processAllTriangles yields them (3 per triangle).
     std::vector<BulletTriangle> meshTriangles;
@@ -95,6 +99,9 @@ struct CullideFrameStats {
     std::size_t pairsRemoved = 0;
     std::size_t pcsTriangles = 0;        ///< triangles that survived culling (the triangle-level PCS), all objects
     std::size_t trianglePairs = 0;       ///< surviving triangle pairs kept for the dispatcher
+    std::size_t interpenetratingPairs = 0;  ///< GImpact pairs whose meshes intersect (see setDeepPenetrationFallback)
+    double penetrationTestMs = 0.0;      ///< filtering GImpact pairs' triangle pairs with the exact intersection
+                                         ///< tests of the deep-penetration fallback (0 when it is off)
     double margin = 0.0;                 ///< the culler's distance margin d this frame
     double buildMs = 0.0;                ///< building the culling frame (world-space triangles, boxes)
     double cullMs = 0.0;                 ///< culler run
@@ -157,6 +164,15 @@ public:
     /// character moves per step.
     void setGhostPairMargin(btScalar margin);
     btScalar getGhostPairMargin() const;
+
+    /// GImpact-GImpact pairs whose meshes intersect (exact test on the surviving triangle pairs) get Bullet's full
+    /// GImpact algorithm for that step (default: on). GImpact's clip method also makes penetration contacts from
+    /// triangle pairs that are far apart but whose boxes overlap; only such pairs, deep inside the other mesh, make
+    /// them, and CULLIDE's near pairs do not include them. With the fallback the contacts of interpenetrating pairs
+    /// are exactly Bullet's; without it they come from the near pairs only (faster when meshes often intersect, but
+    /// the deepest penetration can be under-reported). Resting contacts within the margins are not affected.
+    void setDeepPenetrationFallback(bool enable);
+    bool getDeepPenetrationFallback() const;
 
     const CullideFrameStats& getLastFrameStats() const;
     /// Number of rejected non-finite AABBs (createProxy/setAabb calls) and geometry since construction.

@@ -19,10 +19,14 @@
 #include <BulletCollision/CollisionDispatch/btCollisionDispatcher.h>
 
 #include <cstddef>
+#include <memory>
 
 class btCollisionConfiguration;
 
 namespace cullide {
+namespace detail {
+class GImpactLeafIndex;
+}
 
 struct CullideDispatchStats {
     std::size_t pairsDispatched = 0;    ///< pairs in the dispatched caches (all dispatchAllCollisionPairs calls)
@@ -30,6 +34,8 @@ struct CullideDispatchStats {
     std::size_t trianglePairs = 0;      ///< triangle pairs (or mesh triangles for convex-mesh) handed over
     std::size_t fallbackPairs = 0;      ///< triangle-capable pairs processed by Bullet's full algorithm instead
     std::size_t clearedPairs = 0;       ///< pairs with no surviving triangle: manifolds cleared
+    std::size_t penetrationPairs = 0;   ///< interpenetrating GImpact pairs given Bullet's full algorithm (included
+                                        ///< in cullidePairs; see CullideBroadphase::setDeepPenetrationFallback)
     double dispatchMs = 0.0;            ///< wall time in dispatchAllCollisionPairs
     void reset() { *this = CullideDispatchStats{}; }
 };
@@ -61,6 +67,8 @@ public:
 
     /// Used by the algorithms: counters for the current dispatch.
     CullideDispatchStats& currentStats() { return m_current; }
+    /// Used by the GImpact algorithm: primitive -> leaf node of GImpact box sets (Bullet's candidate criterion).
+    detail::GImpactLeafIndex& gimpactLeafIndex() { return *m_leafIndex; }
 
 private:
     CullideCollisionDispatcher(detail::PrecisionChecked, btCollisionConfiguration* collisionConfiguration,
@@ -70,6 +78,7 @@ private:
     CullideDispatchStats m_current;
     CullideDispatchStats m_lastStep;
     CullideDispatchStats m_total;
+    std::unique_ptr<detail::GImpactLeafIndex> m_leafIndex;
 };
 
 }  // namespace cullide
