@@ -181,6 +181,16 @@ public:
           btCollisionConfiguration* c)
         : btDiscreteDynamicsWorld(d, b, s, c), m_owner(owner) {}
 
+    /// What internalSingleStepSimulation does before solving: unconstrained motion (the swept AABBs of continuous
+    /// collision), CCD's predictive contacts, collision detection.
+    void detectCollisionsOfAStep(btScalar dt) {
+        predictUnconstraintMotion(dt);
+        getDispatchInfo().m_timeStep = dt;
+        getDispatchInfo().m_stepCount = 0;
+        createPredictiveContacts(dt);
+        performDiscreteCollisionDetection();
+    }
+
 protected:
     void solveConstraints(btContactSolverInfo& info) override {
         btDiscreteDynamicsWorld::solveConstraints(info);
@@ -254,7 +264,7 @@ void TestWorld::adopt(std::unique_ptr<btCollisionObject> object) {
 
 void TestWorld::step(btScalar dt) { m_world->stepSimulation(dt, 1, dt); }
 
-void TestWorld::detectCollisions() { m_world->performDiscreteCollisionDetection(); }
+void TestWorld::detectCollisions(btScalar dt) { static_cast<World&>(*m_world).detectCollisionsOfAStep(dt); }
 
 double TestWorld::lastBroadphaseMs() const {
     if (m_kind == PipelineKind::Default) return static_cast<const DefaultBroadphase&>(*m_broadphase).lastMs;

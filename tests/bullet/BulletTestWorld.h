@@ -73,8 +73,9 @@ public:
     void adopt(std::unique_ptr<btCollisionObject> object);
 
     void step(btScalar dt = btScalar(1.0 / 60.0));
-    /// Collision detection only (updateAabbs, pairs, narrow phase), timed.
-    void detectCollisions();
+    /// Collision detection of a step without the solver: unconstrained motion, CCD's predictive contacts,
+    /// updateAabbs, pairs, narrow phase (timed).
+    void detectCollisions(btScalar dt = btScalar(1.0 / 60.0));
 
     /// Timing of the last collision detection: broadphase (calculateOverlappingPairs) and narrow phase
     /// (dispatchAllCollisionPairs), and the pair count handed to the narrow phase.
