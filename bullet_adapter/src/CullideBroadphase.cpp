@@ -92,6 +92,10 @@ struct Record {
     const btCollisionShape* shapeSecond = nullptr;
     btTransform transformFirst;
     btTransform transformSecond;
+    /// A side that is a compound: its children's wrappers (compound algorithm) may use the record too; the mesh
+    /// triangles kept for the whole compound are a superset of those near any one child.
+    bool compoundFirst = false;
+    bool compoundSecond = false;
     PairTriangles triangles;
 };
 
@@ -453,6 +457,11 @@ struct CullideBroadphase::Impl {
                 case bullet::GeometryKind::ConvexHull:
                     hull = std::max(hull, double(shape->getMargin()));
                     break;
+                case bullet::GeometryKind::Compound:
+                    // Hull children go through the hull rules; other children are boxes that include their margin.
+                    hull = std::max(hull, double(bullet::triangleMarginOf(shape)));
+                    boxes = true;
+                    break;
                 case bullet::GeometryKind::TriangleMesh:
                     mesh = std::max(mesh, double(shape->getMargin()));
                     break;
@@ -570,9 +579,11 @@ struct CullideBroadphase::Impl {
         const GeometryKind ka = pa->geometry ? pa->geometry->kind : GeometryKind::None;
         const GeometryKind kb = pb->geometry ? pb->geometry->kind : GeometryKind::None;
         const bool gimpactPair = ka == GeometryKind::GImpactMesh && kb == GeometryKind::GImpactMesh;
-        const bool hullMesh = (ka == GeometryKind::ConvexHull && kb == GeometryKind::TriangleMesh) ||
-                              (ka == GeometryKind::TriangleMesh && kb == GeometryKind::ConvexHull);
-        if (!gimpactPair && !hullMesh) return;
+        // Convex hulls and compounds of convex children against triangle meshes: the mesh's surviving triangles.
+        auto convexSide = [](GeometryKind k) { return k == GeometryKind::ConvexHull || k == GeometryKind::Compound; };
+        const bool convexMesh = (convexSide(ka) && kb == GeometryKind::TriangleMesh) ||
+                                (ka == GeometryKind::TriangleMesh && convexSide(kb));
+        if (!gimpactPair && !convexMesh) return;
         // Record orientation: first = lower unique id; culler orientation: a = pa.
         const bool flip = pa->m_uniqueId > pb->m_uniqueId;
         const Proxy* first = flip ? pb : pa;
@@ -584,6 +595,8 @@ struct CullideBroadphase::Impl {
         rec.shapeSecond = objectOf(second)->getCollisionShape();
         rec.transformFirst = objectOf(first)->getWorldTransform();
         rec.transformSecond = objectOf(second)->getWorldTransform();
+        rec.compoundFirst = first->geometry->kind == GeometryKind::Compound;
+        rec.compoundSecond = second->geometry->kind == GeometryKind::Compound;
         if (gimpactPair) {
             // The dispatcher keeps, of these near pairs, those that Bullet's own BVH search would also produce.
             rec.triangles.pairs.reserve(op.triangles.size());
@@ -789,8 +802,9 @@ struct CullideBroadphase::Impl {
         const btCollisionObject* o0 = w0->getCollisionObject();
         const btCollisionObject* o1 = w1->getCollisionObject();
         if (o0 == nullptr || o1 == nullptr) return nullptr;
-        if (w0->getCollisionShape() != o0->getCollisionShape() || w1->getCollisionShape() != o1->getCollisionShape())
-            return nullptr;  // a child shape (compound, GImpact part): not what was culled
+        // A child wrapper (compound algorithm, GImpact part) is trusted only on a compound's side of the record.
+        const bool child0 = w0->getCollisionShape() != o0->getCollisionShape();
+        const bool child1 = w1->getCollisionShape() != o1->getCollisionShape();
         const btBroadphaseProxy* p0 = o0->getBroadphaseHandle();
         const btBroadphaseProxy* p1 = o1->getBroadphaseHandle();
         if (p0 == nullptr || p1 == nullptr) return nullptr;
@@ -807,8 +821,14 @@ struct CullideBroadphase::Impl {
         const btCollisionShape* s1 = swapped ? rec.shapeFirst : rec.shapeSecond;
         const btTransform& t0 = swapped ? rec.transformSecond : rec.transformFirst;
         const btTransform& t1 = swapped ? rec.transformFirst : rec.transformSecond;
-        if (s0 != w0->getCollisionShape() || s1 != w1->getCollisionShape()) return nullptr;
-        if (!(t0 == w0->getWorldTransform()) || !(t1 == w1->getWorldTransform())) return nullptr;  // moved since
+        const bool compound0 = swapped ? rec.compoundSecond : rec.compoundFirst;
+        const bool compound1 = swapped ? rec.compoundFirst : rec.compoundSecond;
+        if ((child0 && !compound0) || (child1 && !compound1)) return nullptr;
+        // Compare the objects' shapes and transforms (a child wrapper carries the child's).
+        if (s0 != o0->getCollisionShape() || s1 != o1->getCollisionShape()) return nullptr;
+        if (!(t0 == o0->getWorldTransform()) || !(t1 == o1->getWorldTransform())) return nullptr;  // moved since
+        if (!child0 && !(t0 == w0->getWorldTransform())) return nullptr;
+        if (!child1 && !(t1 == w1->getWorldTransform())) return nullptr;
         return &rec.triangles;
     }
 };

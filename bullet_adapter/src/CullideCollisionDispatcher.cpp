@@ -296,6 +296,16 @@ CullideGImpactAlgorithm::CreateFunc g_gimpactCreate;
 CullideConvexMeshAlgorithm<false>::CreateFunc g_convexMeshCreate;
 CullideConvexMeshAlgorithm<true>::CreateFunc g_meshConvexCreate;
 
+/// A convex shape the broadphase culls as triangles: a convex hull body, or a convex child of a compound (the
+/// compound algorithm wraps its children; the compound is culled as its children's hulls and boxes).
+bool culledConvex(const btCollisionObjectWrapper* w) {
+    const btCollisionShape* shape = w->getCollisionShape();
+    if (shape->getShapeType() == CONVEX_HULL_SHAPE_PROXYTYPE) return true;
+    const btCollisionObject* object = w->getCollisionObject();
+    return shape->isConvex() && object != nullptr && object->getCollisionShape() != shape &&
+           object->getCollisionShape()->getShapeType() == COMPOUND_SHAPE_PROXYTYPE;
+}
+
 template <typename T>
 bool registeredIs(const btCollisionAlgorithmCreateFunc* f) {
     return f != nullptr && typeid(*f) == typeid(T);
@@ -328,10 +338,10 @@ btCollisionAlgorithm* CullideCollisionDispatcher::findAlgorithm(const btCollisio
         if (t0 == GIMPACT_SHAPE_PROXYTYPE && t1 == GIMPACT_SHAPE_PROXYTYPE &&
             registeredIs<btGImpactCollisionAlgorithm::CreateFunc>(registered))
             replacement = &g_gimpactCreate;
-        else if (t0 == CONVEX_HULL_SHAPE_PROXYTYPE && t1 == TRIANGLE_MESH_SHAPE_PROXYTYPE &&
+        else if (t1 == TRIANGLE_MESH_SHAPE_PROXYTYPE && culledConvex(body0Wrap) &&
                  registeredIs<btConvexConcaveCollisionAlgorithm::CreateFunc>(registered))
             replacement = &g_convexMeshCreate;
-        else if (t0 == TRIANGLE_MESH_SHAPE_PROXYTYPE && t1 == CONVEX_HULL_SHAPE_PROXYTYPE &&
+        else if (t0 == TRIANGLE_MESH_SHAPE_PROXYTYPE && culledConvex(body1Wrap) &&
                  registeredIs<btConvexConcaveCollisionAlgorithm::SwappedCreateFunc>(registered))
             replacement = &g_meshConvexCreate;
         if (replacement != nullptr) {

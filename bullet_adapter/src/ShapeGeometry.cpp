@@ -1,6 +1,7 @@
 #include "ShapeGeometry.h"
 
 #include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
+#include <BulletCollision/CollisionShapes/btCompoundShape.h>
 #include <BulletCollision/CollisionShapes/btConvexHullShape.h>
 #include <BulletCollision/CollisionShapes/btStridingMeshInterface.h>
 #include <BulletCollision/CollisionShapes/btTriangleMeshShape.h>
@@ -8,6 +9,7 @@
 #include <LinearMath/btConvexHullComputer.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 namespace cullide::bullet {
@@ -129,6 +131,25 @@ std::uint64_t sourceHashOf(const btCollisionShape* shape) {
         const auto* hull = static_cast<const btConvexHullShape*>(shape);
         h = hashBytes(h, reinterpret_cast<const unsigned char*>(hull->getUnscaledPoints()),
                       static_cast<std::size_t>(hull->getNumPoints()) * sizeof(btVector3));
+    } else if (geometryKindOf(shape) == GeometryKind::Compound) {
+        // Children, their placement and what each is built from: updateChildTransform, added or removed children,
+        // rescaled or edited children all change it.
+        const auto* compound = static_cast<const btCompoundShape*>(shape);
+        for (int i = 0; i < compound->getNumChildShapes(); ++i) {
+            const btCollisionShape* child = compound->getChildShape(i);
+            btVector3 record[6];
+            const btTransform& t = compound->getChildTransform(i);
+            for (int r = 0; r < 3; ++r) record[r] = t.getBasis()[r];
+            record[3] = t.getOrigin();
+            child->getAabb(btTransform::getIdentity(), record[4], record[5]);
+            const std::uintptr_t id = reinterpret_cast<std::uintptr_t>(child);
+            h = hashBytes(h, reinterpret_cast<const unsigned char*>(&id), sizeof id);
+            for (const btVector3& v : record)
+                h = hashBytes(h, reinterpret_cast<const unsigned char*>(v.m_floats), 3 * sizeof(btScalar));
+            h = hashBytes(h, reinterpret_cast<const unsigned char*>(child->getLocalScaling().m_floats),
+                          3 * sizeof(btScalar));
+            h ^= sourceHashOf(child) * 0x9e3779b97f4a7c15ull;
+        }
     }
     return h;
 }
@@ -231,6 +252,55 @@ void buildConvexHull(const btConvexHullShape& hull, ShapeTriangles& out) {
     out.margin = hull.getMargin();
 }
 
+/// Appends `part` (triangles in its own frame) to `out`, placed by `t`.
+void appendPlaced(const ShapeTriangles& part, const btTransform& t, ShapeTriangles& out) {
+    const auto base = static_cast<std::uint32_t>(out.vertices.size());
+    for (const btVector3& v : part.vertices) out.vertices.push_back(t * v);
+    for (const TriangleIndices& tri : part.triangles) {
+        out.refs.push_back({0, static_cast<int>(out.triangles.size())});
+        out.triangles.push_back({base + tri[0], base + tri[1], base + tri[2]});
+    }
+}
+
+/// The 12 triangles of a box [mn, mx] placed by `t`.
+void appendBox(const btVector3& mn, const btVector3& mx, const btTransform& t, ShapeTriangles& out) {
+    ShapeTriangles box;
+    for (int i = 0; i < 8; ++i)
+        box.vertices.emplace_back(i & 1 ? mx.x() : mn.x(), i & 2 ? mx.y() : mn.y(), i & 4 ? mx.z() : mn.z());
+    box.triangles = {{0, 2, 1}, {1, 2, 3}, {4, 5, 6}, {5, 7, 6}, {0, 1, 4}, {1, 5, 4},
+                     {2, 6, 3}, {3, 6, 7}, {0, 4, 2}, {2, 4, 6}, {1, 3, 5}, {3, 7, 5}};
+    appendPlaced(box, t, out);
+}
+
+/// Children of a compound into `out` (compound frame); false when a child has no convex description.
+bool buildCompound(const btCompoundShape& compound, const btTransform& placement, int depth, ShapeTriangles& out) {
+    if (depth > 32) return false;  // not a shape Bullet itself could traverse sensibly
+    for (int i = 0; i < compound.getNumChildShapes(); ++i) {
+        const btCollisionShape* child = compound.getChildShape(i);
+        const btTransform t = placement * compound.getChildTransform(i);
+        if (child->getShapeType() == COMPOUND_SHAPE_PROXYTYPE) {
+            if (!buildCompound(*static_cast<const btCompoundShape*>(child), t, depth + 1, out)) return false;
+        } else if (child->getShapeType() == CONVEX_HULL_SHAPE_PROXYTYPE &&
+                   static_cast<const btConvexHullShape*>(child)->getNumPoints() > 0) {
+            ShapeTriangles hull;
+            buildConvexHull(*static_cast<const btConvexHullShape*>(child), hull);
+            appendPlaced(hull, t, out);
+        } else if (child->isConvex()) {
+            btVector3 mn, mx;  // the child's local box, its collision margin included
+            child->getAabb(btTransform::getIdentity(), mn, mx);
+            for (int a = 0; a < 3; ++a)
+                if (!std::isfinite(double(mn[a])) || !std::isfinite(double(mx[a])) || std::fabs(double(mn[a])) > 1e15 ||
+                    std::fabs(double(mx[a])) > 1e15)
+                    return false;
+            appendBox(mn, mx, t, out);
+        } else {
+            return false;  // a concave child (mesh, plane, heightfield): the compound stays a box proxy
+        }
+        out.margin = std::max(out.margin, child->getMargin());
+    }
+    return true;
+}
+
 }  // namespace
 
 GeometryKind geometryKindOf(const btCollisionShape* shape) {
@@ -242,6 +312,8 @@ GeometryKind geometryKindOf(const btCollisionShape* shape) {
             return GeometryKind::TriangleMesh;
         case CONVEX_HULL_SHAPE_PROXYTYPE:
             return GeometryKind::ConvexHull;
+        case COMPOUND_SHAPE_PROXYTYPE:
+            return GeometryKind::Compound;
         default:
             return GeometryKind::None;
     }
@@ -275,6 +347,12 @@ std::shared_ptr<ShapeTriangles> buildShapeTriangles(const btCollisionShape* shap
             if (out->sourceCount > 0) buildConvexHull(*hull, *out);
             break;
         }
+        case GeometryKind::Compound: {
+            const auto* compound = static_cast<const btCompoundShape*>(shape);
+            out->sourceCount = compound->getNumChildShapes();
+            if (!buildCompound(*compound, btTransform::getIdentity(), 0, *out)) return nullptr;
+            break;
+        }
         case GeometryKind::None:
             break;
     }
@@ -297,6 +375,9 @@ bool stillMatches(const ShapeTriangles& geometry, const btCollisionShape* shape,
         case GeometryKind::ConvexHull:
             sameSize = static_cast<const btConvexHullShape*>(shape)->getNumPoints() == geometry.sourceCount;
             break;
+        case GeometryKind::Compound:
+            sameSize = static_cast<const btCompoundShape*>(shape)->getNumChildShapes() == geometry.sourceCount;
+            break;
         case GeometryKind::None:
             return false;
     }
@@ -308,6 +389,13 @@ btScalar triangleMarginOf(const btCollisionShape* shape) {
     if (const btGImpactMeshShape* mesh = asGImpactMesh(shape)) {
         btScalar m = 0;
         for (int p = 0; p < mesh->getMeshPartCount(); ++p) m = std::max(m, mesh->getMeshPart(p)->getMargin());
+        return m;
+    }
+    if (shape != nullptr && shape->getShapeType() == COMPOUND_SHAPE_PROXYTYPE) {
+        const auto* compound = static_cast<const btCompoundShape*>(shape);
+        btScalar m = 0;
+        for (int i = 0; i < compound->getNumChildShapes(); ++i)
+            m = std::max(m, triangleMarginOf(compound->getChildShape(i)));
         return m;
     }
     return shape != nullptr ? shape->getMargin() : btScalar(0);

@@ -19,6 +19,9 @@ enum class GeometryKind {
     GImpactMesh,  ///< btGImpactMeshShape (CONST_GIMPACT_TRIMESH_SHAPE)
     TriangleMesh, ///< btBvhTriangleMeshShape / btTriangleMeshShape (TRIANGLE_MESH_SHAPE_PROXYTYPE)
     ConvexHull,   ///< btConvexHullShape: the hull of its scaled points
+    Compound,     ///< btCompoundShape of convex children (nested compounds too): hull children as their hulls,
+                  ///< other convex children as their local boxes (12 triangles, margin included), in the
+                  ///< compound's frame. A compound with a concave child has no triangle geometry.
 };
 
 GeometryKind geometryKindOf(const btCollisionShape* shape);
@@ -46,7 +49,8 @@ std::shared_ptr<ShapeTriangles> buildShapeTriangles(const btCollisionShape* shap
 /// True while `geometry` still describes `shape`: same pointer, kind, scaling, source size and content hash.
 bool stillMatches(const ShapeTriangles& geometry, const btCollisionShape* shape, std::uint64_t sourceHash);
 
-/// The collision margin Bullet applies to the shape's triangles (GImpact: the parts' margins).
+/// The collision margin Bullet applies to the shape's triangles (GImpact: the parts' margins; compounds: the
+/// largest of their children's).
 btScalar triangleMarginOf(const btCollisionShape* shape);
 
 }  // namespace cullide::bullet
