@@ -2,7 +2,8 @@
 //
 //   cullide-demo [--scene breakable|env1|env2|env3] [--frames N] [--resolution N] [--mode reliable|sampled]
 //                [--seed S] [--out DIR] [--snapshot-every K] [--check-every K] [--mesh PATH]
-//                [--breakable-mesh PATH] [--objects N] [--pipeline P] [--quiet] [--help]
+//                [--breakable-mesh PATH] [--objects N] [--pipeline P] [--deep-penetration-fallback on|off]
+//                [--quiet] [--help]
 //
 // Writes DIR/frames.csv (one row per frame), DIR/summary.json, DIR/snapshots/frame_NNNN.png every K frames and
 // DIR/contact_sheet.png. Exit status: 0 success, 1 reference check failed (a missed pair in reliable mode) or
@@ -41,7 +42,8 @@ constexpr int kExitInput = 4;
 const char* const kUsage =
     "usage: cullide-demo [--scene breakable|env1|env2|env3] [--frames N] [--resolution N] [--mode reliable|sampled]\n"
     "                    [--seed S] [--out DIR] [--snapshot-every K] [--check-every K] [--mesh PATH]\n"
-    "                    [--breakable-mesh PATH] [--objects N] [--pipeline P] [--quiet] [--help]\n"
+    "                    [--breakable-mesh PATH] [--objects N] [--pipeline P]\n"
+    "                    [--deep-penetration-fallback on|off] [--quiet] [--help]\n"
     "\n"
     "Runs a CULLIDE scene headless and writes per-frame figures, a summary and snapshots.\n"
     "\n"
@@ -61,6 +63,10 @@ const char* const kUsage =
     "  --objects N         object count for env1 / env2 (default 100 / 6)\n"
     "  --pipeline P        breakable: cullide (default), bullet-dbvt or bullet-axis-sweep (Bullet's own\n"
     "                      broadphase and dispatcher with GImpact, for comparison)\n"
+    "  --deep-penetration-fallback on|off\n"
+    "                      breakable, cullide: intersecting GImpact pairs get Bullet's full algorithm, so\n"
+    "                      contacts are exactly Bullet's (default on); off is faster, with fewer contacts\n"
+    "                      between interpenetrating pieces\n"
     "  --quiet             no progress line\n"
     "  --help              show this help\n"
     "\n"
@@ -109,6 +115,7 @@ long long parseInteger(const std::string& flag, const std::string& value, long l
 
 Options parse(int argc, char** argv, bool& help) {
     Options o;
+    bool fallbackGiven = false;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         auto value = [&]() -> std::string {
@@ -152,6 +159,12 @@ Options parse(int argc, char** argv, bool& help) {
                 o.runner.pipeline != "bullet-axis-sweep")
                 throw UsageError("--pipeline expects cullide, bullet-dbvt or bullet-axis-sweep, got '" +
                                  o.runner.pipeline + "'");
+        } else if (a == "--deep-penetration-fallback") {
+            const std::string v = value();
+            if (v != "on" && v != "off")
+                throw UsageError("--deep-penetration-fallback expects on or off, got '" + v + "'");
+            o.runner.deepPenetrationFallback = v == "on";
+            fallbackGiven = true;
         } else if (a == "--quiet") {
             o.quiet = true;
         } else {
@@ -164,6 +177,8 @@ Options parse(int argc, char** argv, bool& help) {
     const bool breakable = o.runner.scene == "breakable";
     if (!breakable && (!o.runner.mesh.empty() || !o.runner.breakableMesh.empty() || o.runner.pipeline != "cullide"))
         throw UsageError("--mesh, --breakable-mesh and --pipeline apply to --scene breakable only");
+    if (fallbackGiven && (!breakable || o.runner.pipeline != "cullide"))
+        throw UsageError("--deep-penetration-fallback applies to --scene breakable with --pipeline cullide only");
     if (o.runner.objects > 0 && o.runner.scene != "env1" && o.runner.scene != "env2")
         throw UsageError("--objects applies to --scene env1 and env2 only");
     return o;
@@ -323,6 +338,7 @@ int run(const Options& o) {
         {"frames", frames},
         {"seed", o.runner.seed},
         {"pipeline", o.runner.scene == "breakable" ? o.runner.pipeline : "culler"},
+        {"deep_penetration_fallback", o.runner.deepPenetrationFallback},
         {"mode", o.runner.culler.mode == cullide::Mode::Reliable ? "reliable" : "sampled"},
         {"resolution", o.runner.culler.resolution},
         {"renderer", runner->renderer()},

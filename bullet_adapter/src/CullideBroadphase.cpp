@@ -598,11 +598,22 @@ struct CullideBroadphase::Impl {
         rec.compoundFirst = first->geometry->kind == GeometryKind::Compound;
         rec.compoundSecond = second->geometry->kind == GeometryKind::Compound;
         if (gimpactPair) {
-            // The dispatcher keeps, of these near pairs, those that Bullet's own BVH search would also produce.
+            // Near pairs whose triangle boxes, grown by the shapes' margins, overlap: a pair whose boxes are apart
+            // is farther apart than both margins, and the clip method can then make a contact only from a triangle
+            // deeper inside the other mesh than both margins, which needs the meshes to intersect (the fallback
+            // below). The dispatcher keeps, of these, those that Bullet's own BVH search would also produce.
+            const double ma = double(bullet::triangleMarginOf(objectOf(pa)->getCollisionShape()));
+            const double mb = double(bullet::triangleMarginOf(objectOf(pb)->getCollisionShape()));
+            auto box = [](const TriangleMesh& m, std::uint32_t t, double grow) {
+                Aabb b;
+                for (std::uint32_t v : m.triangles[t]) b.grow(m.vertices[v]);
+                return b.inflated(grow);
+            };
             rec.triangles.pairs.reserve(op.triangles.size());
             cullide::Timer penetration;
             bool intersecting = false;
             for (const TrianglePair& tp : op.triangles) {
+                if (!box(pa->world, tp.a, ma).overlaps(box(pb->world, tp.b, mb))) continue;
                 if (deepPenetrationFallback && !intersecting) {
                     const TriangleIndices& a = pa->world.triangles[tp.a];
                     const TriangleIndices& b = pb->world.triangles[tp.b];

@@ -25,24 +25,13 @@ namespace detail {
 /// the primitive) and rebuilt when a box set was rebuilt (updateBound after deforming) or its address reused.
 class GImpactLeafIndex {
 public:
-    /// The leaf node of primitive `prim` in `set`, or -1 when the set has no such leaf.
-    int leafOf(const btGImpactBoxSet& set, int prim) {
-        std::vector<int>& leaves = m_leaves[&set];
-        if (!valid(set, leaves, prim)) {
-            if (m_leaves.size() > kMaxSets) {  // box sets of deleted shapes: start over
-                m_leaves.clear();
-                return leafOf(set, prim);
-            }
-            rebuild(set, leaves);
-            if (!valid(set, leaves, prim)) return -1;
-        }
-        return leaves[static_cast<std::size_t>(prim)];
+    /// The leaf node of each primitive of `set`, as last built: callers check an entry with `holds` before use and
+    /// call `rebuild` when it fails.
+    std::vector<int>& leavesOf(const btGImpactBoxSet& set) {
+        if (m_leaves.size() > kMaxSets && m_leaves.find(&set) == m_leaves.end()) m_leaves.clear();  // dead sets
+        return m_leaves[&set];
     }
-
-private:
-    static constexpr std::size_t kMaxSets = 4096;
-
-    static bool valid(const btGImpactBoxSet& set, const std::vector<int>& leaves, int prim) {
+    static bool holds(const btGImpactBoxSet& set, const std::vector<int>& leaves, int prim) {
         if (prim < 0 || static_cast<std::size_t>(prim) >= leaves.size()) return false;
         const int node = leaves[static_cast<std::size_t>(prim)];
         return node >= 0 && node < set.getNodeCount() && set.isLeafNode(node) && set.getNodeData(node) == prim;
@@ -55,7 +44,17 @@ private:
             if (prim >= 0 && static_cast<std::size_t>(prim) < leaves.size()) leaves[static_cast<std::size_t>(prim)] = node;
         }
     }
+    /// The leaf of `prim` (rebuilding `leaves` once if it is stale), or -1 when the set has none.
+    static int leafOf(const btGImpactBoxSet& set, std::vector<int>& leaves, int prim) {
+        if (!holds(set, leaves, prim)) {
+            rebuild(set, leaves);
+            if (!holds(set, leaves, prim)) return -1;
+        }
+        return leaves[static_cast<std::size_t>(prim)];
+    }
 
+private:
+    static constexpr std::size_t kMaxSets = 4096;
     std::unordered_map<const btGImpactBoxSet*, std::vector<int>> m_leaves;
 };
 
@@ -173,9 +172,11 @@ private:
         set1.getNodeBound(0, box1);
         if (!box0.overlapping_trans_cache(box1, cache, true)) return;  // Bullet finds no pair at all
         const bool rootsOnly = set0.isLeafNode(0) && set1.isLeafNode(0);
+        std::vector<int>& leaves0 = leafIndex.leavesOf(set0);
+        std::vector<int>& leaves1 = &set1 == &set0 ? leaves0 : leafIndex.leavesOf(set1);
         for (std::size_t i = begin; i < end; ++i) {
-            const int leaf0 = leafIndex.leafOf(set0, pairs[i][2]);
-            const int leaf1 = leafIndex.leafOf(set1, pairs[i][3]);
+            const int leaf0 = detail::GImpactLeafIndex::leafOf(set0, leaves0, pairs[i][2]);
+            const int leaf1 = detail::GImpactLeafIndex::leafOf(set1, leaves1, pairs[i][3]);
             if (leaf0 < 0 || leaf1 < 0) continue;  // not in Bullet's box set: Bullet never tests it either
             if (!rootsOnly) {
                 set0.getNodeBound(leaf0, box0);

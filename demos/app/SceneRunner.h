@@ -24,6 +24,7 @@ struct RunnerOptions {
     std::string breakableMesh;        ///< --breakable-mesh
     int objects = 0;                  ///< env1/env2 object count (0 = the paper's)
     std::string pipeline = "cullide"; ///< breakable: cullide | bullet-dbvt | bullet-axis-sweep
+    bool deepPenetrationFallback = true; ///< breakable, cullide: --deep-penetration-fallback on|off
 };
 
 class SceneRunner {

@@ -147,6 +147,7 @@ struct BreakableScene::Impl {
         switch (options.pipeline) {
         case CollisionPipeline::Cullide: {
             auto bp = std::make_unique<CullideBroadphase>(options.culler);
+            bp->setDeepPenetrationFallback(options.deepPenetrationFallback);
             cullideBp = bp.get();
             broadphase = std::move(bp);
             auto d = std::make_unique<CullideCollisionDispatcher>(config.get(), cullideBp);

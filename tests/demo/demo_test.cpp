@@ -238,6 +238,9 @@ TEST(DemoCli, BadFlagsAndMeshesGiveClearErrors) {
     EXPECT_EQ(runDemo("--scene env1 --mesh x.off", log), 2) << "flags the scene would ignore are errors";
     EXPECT_EQ(runDemo("--scene breakable --objects 5", log), 2);
     EXPECT_EQ(runDemo("--pipeline fast", log), 2);
+    EXPECT_EQ(runDemo("--deep-penetration-fallback maybe", log), 2);
+    EXPECT_EQ(runDemo("--pipeline bullet-dbvt --deep-penetration-fallback off", log), 2);
+    EXPECT_NE(slurp(log).find("applies to --scene breakable with --pipeline cullide only"), std::string::npos);
 
     std::ofstream(out / "bad.off") << "OFF\n3 1 0\n0 0 0\n1 0 0\n";  // truncated
     const int status = runDemo("--mesh " + (out / "bad.off").string() + " --frames 1 --out " + out.string(), log);

@@ -32,6 +32,9 @@ struct BreakableOptions {
     double breakImpulse = -1;   ///< total contact impulse (N s) that breaks it; < 0: scaled to the falling mass
     CollisionPipeline pipeline = CollisionPipeline::Cullide;
     Settings culler;            ///< CULLIDE settings (pipeline Cullide)
+    /// CullideBroadphase::setDeepPenetrationFallback (pipeline Cullide): intersecting GImpact pairs get Bullet's
+    /// full algorithm, so contacts are exactly Bullet's; off: faster, interpenetrating pieces see fewer contacts.
+    bool deepPenetrationFallback = true;
 };
 
 /// What one step did.
