@@ -2,8 +2,9 @@
 // pay? (issue #3: "where soft bodies collide through faces, the culler's surviving faces restrict the candidates if
 // that pays (measure it)").
 //
-// Two soft tori fall on each other under Bullet's default pipeline (the scene of tests/bullet/softbody_test.cpp, at
-// several resolutions). At first touch (step 20) and once settled (step 150) it times, per step:
+// Two soft tori fall on each other under Bullet's default pipeline (cullide::demo::SoftToriScene, shared with
+// tests/bullet/softbody_test.cpp, at several resolutions). At first touch (step 20) and once settled (step 150) it
+// times, per step:
 //   - Bullet's whole VF_SS stage for the pair: btSoftBody::defaultCollisionHandler(other) (node tree of each body
 //     against the face tree of the other, contact generation);
 //   - what a restriction would have to pay before saving anything: the soft bodies' faces handed to the culler as
@@ -14,9 +15,8 @@
 //   cullide-bench-softbody [--repeats N]
 #include "cullide/Culler.h"
 #include "cullide/Timer.h"
-#include "cullide/scenes/Procedural.h"
+#include "cullide/demo/SoftToriScene.h"
 
-#include <BulletSoftBody/btSoftBodyHelpers.h>
 #include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
 #include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
 #include <btBulletDynamicsCommon.h>
@@ -77,37 +77,11 @@ Measurement measure(int segments, int sides, int steps, int repeats) {
     info.m_gravity = world.getGravity();
     info.m_sparsesdf.Initialize();
 
-    btBoxShape groundShape(btVector3(10, 1, 10));
-    btRigidBody ground(0, nullptr, &groundShape);
-    ground.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(0, -1, 0)));
-    world.addRigidBody(&ground);
-
-    std::vector<std::unique_ptr<btSoftBody>> tori;
-    for (int k = 0; k < 2; ++k) {
-        TriangleMesh mesh = cullide::scenes::makeTorus(1.0, 0.35, segments, sides);
-        cullide::scenes::transformMesh(mesh, Eigen::Translation3d(0.3 * k, 0.5 + 1.0 * k, 0.1 * k) *
-                                                 Eigen::AngleAxisd(1.5707963 + 0.4 * k, Vec3(1, 0, 0.2 * k).normalized()));
-        std::vector<btScalar> vertices;
-        std::vector<int> indices;
-        for (const Vec3& v : mesh.vertices)
-            vertices.insert(vertices.end(), {btScalar(v.x()), btScalar(v.y()), btScalar(v.z())});
-        for (const auto& t : mesh.triangles) indices.insert(indices.end(), {int(t[0]), int(t[1]), int(t[2])});
-        tori.emplace_back(btSoftBodyHelpers::CreateFromTriMesh(info, vertices.data(), indices.data(),
-                                                               int(mesh.triangles.size()), false));
-        btSoftBody& sb = *tori.back();
-        sb.m_cfg.collisions = btSoftBody::fCollision::SDF_RS | btSoftBody::fCollision::VF_SS;
-        sb.m_cfg.piterations = 4;
-        sb.m_cfg.kDF = btScalar(0.5);
-        sb.m_materials[0]->m_kLST = btScalar(0.4);
-        sb.generateBendingConstraints(2);
-        sb.getCollisionShape()->setMargin(btScalar(0.05));
-        sb.setTotalMass(1);
-        world.addSoftBody(&sb);
-    }
+    const cullide::demo::SoftToriScene scene(world, segments, sides);
     for (int s = 0; s < steps; ++s) world.stepSimulation(btScalar(1.0 / 60.0), 1, btScalar(1.0 / 60.0));
 
-    btSoftBody& a = *tori[0];
-    btSoftBody& b = *tori[1];
+    btSoftBody& a = scene.torus(0);
+    btSoftBody& b = scene.torus(1);
     Measurement m;
     m.steps = steps;
     m.nodes = a.m_nodes.size();
@@ -152,8 +126,6 @@ Measurement measure(int segments, int sides, int steps, int repeats) {
     m.cullMs = cull / repeats;
     for (const auto& list : result.pcsTriangles) m.survivingFaces += list.size();
 
-    for (auto& sb : tori) world.removeSoftBody(sb.get());
-    world.removeRigidBody(&ground);
     return m;
 }
 

@@ -7,7 +7,7 @@
 #include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
 #include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
 
-#include "cullide/scenes/Procedural.h"
+#include "cullide/demo/SoftToriScene.h"
 
 #include <gtest/gtest.h>
 
@@ -99,41 +99,11 @@ TEST(BulletSoftBody, ClothSettlesExactlyAsWithDefaultPipeline) {
 std::vector<btVector3> runSoftTori(PipelineKind kind, int steps) {
     SoftWorld soft(kind);
     btSoftRigidDynamicsWorld& world = *soft.world;
-    btSoftBodyWorldInfo& info = world.getWorldInfo();
-
-    btBoxShape groundShape(btVector3(10, 1, 10));
-    btRigidBody ground(0, nullptr, &groundShape);
-    ground.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(0, -1, 0)));
-    world.addRigidBody(&ground);
-
-    std::vector<std::unique_ptr<btSoftBody>> tori;
-    for (int k = 0; k < 2; ++k) {
-        TriangleMesh mesh = scenes::makeTorus(1.0, 0.35, 24, 10);
-        scenes::transformMesh(mesh, Eigen::Translation3d(0.3 * k, 0.5 + 1.0 * k, 0.1 * k) *
-                                        Eigen::AngleAxisd(1.5707963 + 0.4 * k, Vec3(1, 0, 0.2 * k).normalized()));
-        std::vector<btScalar> vertices;
-        std::vector<int> indices;
-        for (const Vec3& v : mesh.vertices) vertices.insert(vertices.end(), {btScalar(v.x()), btScalar(v.y()), btScalar(v.z())});
-        for (const auto& t : mesh.triangles) indices.insert(indices.end(), {int(t[0]), int(t[1]), int(t[2])});
-        tori.emplace_back(btSoftBodyHelpers::CreateFromTriMesh(info, vertices.data(), indices.data(),
-                                                               int(mesh.triangles.size()), false));
-        btSoftBody& sb = *tori.back();
-        sb.m_cfg.collisions = btSoftBody::fCollision::SDF_RS | btSoftBody::fCollision::VF_SS;
-        sb.m_cfg.piterations = 4;
-        sb.m_cfg.kDF = btScalar(0.5);
-        sb.m_materials[0]->m_kLST = btScalar(0.4);
-        sb.generateBendingConstraints(2);
-        sb.getCollisionShape()->setMargin(btScalar(0.05));
-        sb.setTotalMass(1);
-        world.addSoftBody(&sb);
-    }
+    const demo::SoftToriScene scene(world);
     for (int s = 0; s < steps; ++s) world.stepSimulation(btScalar(1.0 / 60.0), 1, btScalar(1.0 / 60.0));
     std::vector<btVector3> nodes;
-    for (auto& sb : tori) {
-        for (int i = 0; i < sb->m_nodes.size(); ++i) nodes.push_back(sb->m_nodes[i].m_x);
-        world.removeSoftBody(sb.get());
-    }
-    world.removeRigidBody(&ground);
+    for (int k = 0; k < 2; ++k)
+        for (int i = 0; i < scene.torus(k).m_nodes.size(); ++i) nodes.push_back(scene.torus(k).m_nodes[i].m_x);
     return nodes;
 }
 
