@@ -579,8 +579,11 @@ struct CullideBroadphase::Impl {
         const GeometryKind ka = pa->geometry ? pa->geometry->kind : GeometryKind::None;
         const GeometryKind kb = pb->geometry ? pb->geometry->kind : GeometryKind::None;
         const bool gimpactPair = ka == GeometryKind::GImpactMesh && kb == GeometryKind::GImpactMesh;
-        // Convex hulls and compounds of convex children against triangle meshes: the mesh's surviving triangles.
-        auto convexSide = [](GeometryKind k) { return k == GeometryKind::ConvexHull || k == GeometryKind::Compound; };
+        // Convex hulls, compounds of convex children and GImpact meshes against triangle meshes: the mesh's
+        // surviving triangles.
+        auto convexSide = [](GeometryKind k) {
+            return k == GeometryKind::ConvexHull || k == GeometryKind::Compound || k == GeometryKind::GImpactMesh;
+        };
         const bool convexMesh = (convexSide(ka) && kb == GeometryKind::TriangleMesh) ||
                                 (ka == GeometryKind::TriangleMesh && convexSide(kb));
         if (!gimpactPair && !convexMesh) return;

@@ -76,8 +76,44 @@ const PairTriangles* cullideTrianglesFor(btDispatcher* d, const btCollisionObjec
     return broadphase != nullptr ? broadphase->trianglePairsFor(body0Wrap, body1Wrap, swapped) : nullptr;
 }
 
-/// The surviving triangle pairs of a GImpact-GImpact pair go straight to Bullet's triangle-triangle routine
-/// (collide_sat_triangles); no BVH traversal, no box tests. Same size as btGImpactCollisionAlgorithm.
+/// A stand-in for a triangle mesh that enumerates only CULLIDE's surviving triangles (mesh-local vertices, Bullet's
+/// part and triangle ids). Lives on the stack for one processCollision call.
+class SurvivingTrianglesShape final : public btConcaveShape {
+public:
+    SurvivingTrianglesShape(const btConcaveShape& mesh, const PairTriangles& triangles)
+        : m_mesh(mesh), m_triangles(triangles) {
+        m_shapeType = mesh.getShapeType();
+        setMargin(mesh.getMargin());
+    }
+
+    void processAllTriangles(btTriangleCallback* callback, const btVector3& /*aabbMin*/,
+                             const btVector3& /*aabbMax*/) const override {
+        btVector3 triangle[3];
+        const std::vector<btVector3>& v = m_triangles.meshTriangleVertices;
+        for (std::size_t i = 0; i < m_triangles.meshTriangles.size(); ++i) {
+            triangle[0] = v[3 * i];
+            triangle[1] = v[3 * i + 1];
+            triangle[2] = v[3 * i + 2];
+            callback->processTriangle(triangle, m_triangles.meshTriangles[i].part, m_triangles.meshTriangles[i].index);
+        }
+    }
+    void getAabb(const btTransform& t, btVector3& aabbMin, btVector3& aabbMax) const override {
+        m_mesh.getAabb(t, aabbMin, aabbMax);
+    }
+    void setLocalScaling(const btVector3& /*scaling*/) override {}
+    const btVector3& getLocalScaling() const override { return m_mesh.getLocalScaling(); }
+    void calculateLocalInertia(btScalar /*mass*/, btVector3& inertia) const override { inertia.setValue(0, 0, 0); }
+    const char* getName() const override { return "CullideSurvivingTriangles"; }
+
+private:
+    const btConcaveShape& m_mesh;
+    const PairTriangles& m_triangles;
+};
+
+/// GImpact pairs on CULLIDE's lists. GImpact-GImpact: the surviving triangle pairs go straight to Bullet's
+/// triangle-triangle routine (collide_sat_triangles), no BVH traversal. GImpact-triangle mesh: Bullet's own
+/// gimpact_vs_concave (per mesh triangle: a BVH query of the GImpact mesh and convex-convex tests), driven with the
+/// mesh's surviving triangles only. Same size as btGImpactCollisionAlgorithm.
 class CullideGImpactAlgorithm final : public btGImpactCollisionAlgorithm {
 public:
     CullideGImpactAlgorithm(const btCollisionAlgorithmConstructionInfo& ci, const btCollisionObjectWrapper* body0Wrap,
@@ -86,6 +122,11 @@ public:
 
     void processCollision(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
                           const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut) override {
+        if (body0Wrap->getCollisionShape()->getShapeType() != GIMPACT_SHAPE_PROXYTYPE ||
+            body1Wrap->getCollisionShape()->getShapeType() != GIMPACT_SHAPE_PROXYTYPE) {
+            processWithMesh(body0Wrap, body1Wrap, dispatchInfo, resultOut);
+            return;
+        }
         bool swapped = false;
         CullideDispatchStats* statsPtr = nullptr;
         const PairTriangles* triangles = cullideTrianglesFor(m_dispatcher, body0Wrap, body1Wrap, swapped, statsPtr);
@@ -150,6 +191,42 @@ public:
     }
 
 private:
+    /// GImpact mesh against a triangle mesh (either order): as Bullet's processCollision, with a stand-in mesh that
+    /// enumerates the surviving triangles (mesh-local vertices as processAllTriangles yields them, same margin).
+    void processWithMesh(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
+                         const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut) {
+        bool swapped = false;
+        CullideDispatchStats* statsPtr = nullptr;
+        const PairTriangles* triangles = cullideTrianglesFor(m_dispatcher, body0Wrap, body1Wrap, swapped, statsPtr);
+        CullideDispatchStats& stats = *statsPtr;
+        const bool gimpactFirst = body0Wrap->getCollisionShape()->getShapeType() == GIMPACT_SHAPE_PROXYTYPE;
+        const btCollisionObjectWrapper* gimpactWrap = gimpactFirst ? body0Wrap : body1Wrap;
+        const btCollisionObjectWrapper* meshWrap = gimpactFirst ? body1Wrap : body0Wrap;
+        if (triangles == nullptr || !meshWrap->getCollisionShape()->isConcave()) {
+            ++stats.fallbackPairs;
+            btGImpactCollisionAlgorithm::processCollision(body0Wrap, body1Wrap, dispatchInfo, resultOut);
+            return;
+        }
+        ++stats.cullidePairs;
+        clearCache();
+        m_resultOut = resultOut;
+        m_dispatchInfo = &dispatchInfo;
+        if (triangles->meshTriangles.empty()) {
+            ++stats.clearedPairs;
+            return;
+        }
+        stats.trianglePairs += triangles->meshTriangles.size();
+        const SurvivingTrianglesShape surviving(*static_cast<const btConcaveShape*>(meshWrap->getCollisionShape()),
+                                                *triangles);
+        const btCollisionObjectWrapper filtered(meshWrap->m_parent, &surviving, meshWrap->getCollisionObject(),
+                                                meshWrap->getWorldTransform(), meshWrap->m_partId,
+                                                meshWrap->m_index);
+        gimpact_vs_shape(gimpactWrap, &filtered,
+                         static_cast<const btGImpactShapeInterface*>(gimpactWrap->getCollisionShape()), &surviving,
+                         !gimpactFirst);
+        if (getLastManifold() != nullptr) m_resultOut->refreshContactPoints();
+    }
+
     static thread_local std::vector<std::array<int, 4>> ordered;  // part0, part1, tri0, tri1
     static thread_local std::vector<int> interleaved;
 
@@ -207,40 +284,6 @@ public:
 
 thread_local std::vector<std::array<int, 4>> CullideGImpactAlgorithm::ordered;
 thread_local std::vector<int> CullideGImpactAlgorithm::interleaved;
-
-/// A stand-in for a triangle mesh that enumerates only CULLIDE's surviving triangles (mesh-local vertices, Bullet's
-/// part and triangle ids). Lives on the stack for one processCollision call.
-class SurvivingTrianglesShape final : public btConcaveShape {
-public:
-    SurvivingTrianglesShape(const btConcaveShape& mesh, const PairTriangles& triangles)
-        : m_mesh(mesh), m_triangles(triangles) {
-        m_shapeType = mesh.getShapeType();
-        setMargin(mesh.getMargin());
-    }
-
-    void processAllTriangles(btTriangleCallback* callback, const btVector3& /*aabbMin*/,
-                             const btVector3& /*aabbMax*/) const override {
-        btVector3 triangle[3];
-        const std::vector<btVector3>& v = m_triangles.meshTriangleVertices;
-        for (std::size_t i = 0; i < m_triangles.meshTriangles.size(); ++i) {
-            triangle[0] = v[3 * i];
-            triangle[1] = v[3 * i + 1];
-            triangle[2] = v[3 * i + 2];
-            callback->processTriangle(triangle, m_triangles.meshTriangles[i].part, m_triangles.meshTriangles[i].index);
-        }
-    }
-    void getAabb(const btTransform& t, btVector3& aabbMin, btVector3& aabbMax) const override {
-        m_mesh.getAabb(t, aabbMin, aabbMax);
-    }
-    void setLocalScaling(const btVector3& /*scaling*/) override {}
-    const btVector3& getLocalScaling() const override { return m_mesh.getLocalScaling(); }
-    void calculateLocalInertia(btScalar /*mass*/, btVector3& inertia) const override { inertia.setValue(0, 0, 0); }
-    const char* getName() const override { return "CullideSurvivingTriangles"; }
-
-private:
-    const btConcaveShape& m_mesh;
-    const PairTriangles& m_triangles;
-};
 
 /// Convex hull vs triangle mesh: Bullet's btConvexConcaveCollisionAlgorithm (btConvexTriangleCallback, persistent
 /// manifold) driven with the surviving mesh triangles only. Same size as the base class.
@@ -336,8 +379,10 @@ btCollisionAlgorithm* CullideCollisionDispatcher::findAlgorithm(const btCollisio
         // custom registration wins.
         const btCollisionAlgorithmCreateFunc* registered = m_doubleDispatchContactPoints[t0][t1];
         btCollisionAlgorithmCreateFunc* replacement = nullptr;
-        if (t0 == GIMPACT_SHAPE_PROXYTYPE && t1 == GIMPACT_SHAPE_PROXYTYPE &&
-            registeredIs<btGImpactCollisionAlgorithm::CreateFunc>(registered))
+        const bool gimpactPair = (t0 == GIMPACT_SHAPE_PROXYTYPE &&
+                                  (t1 == GIMPACT_SHAPE_PROXYTYPE || t1 == TRIANGLE_MESH_SHAPE_PROXYTYPE)) ||
+                                 (t0 == TRIANGLE_MESH_SHAPE_PROXYTYPE && t1 == GIMPACT_SHAPE_PROXYTYPE);
+        if (gimpactPair && registeredIs<btGImpactCollisionAlgorithm::CreateFunc>(registered))
             replacement = &g_gimpactCreate;
         else if (t1 == TRIANGLE_MESH_SHAPE_PROXYTYPE && culledConvex(body0Wrap) &&
                  registeredIs<btConvexConcaveCollisionAlgorithm::CreateFunc>(registered))

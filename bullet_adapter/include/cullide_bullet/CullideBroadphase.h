@@ -75,8 +75,8 @@ struct PairTriangles {
     /// deep-penetration fallback is on: the dispatcher runs Bullet's full GImpact algorithm for the pair this step,
     /// so the penetration contacts that GImpact derives from distant triangle pairs are kept.
     bool interpenetrating = false;
-    /// Convex-hull-mesh: the mesh's surviving triangles, sorted, and their vertices in the mesh's local frame
-    /// exactly as Bullet's processAllTriangles yields them (3 per triangle).
+    /// Convex hull, compound or GImpact mesh against a triangle mesh: the mesh's surviving triangles, sorted, and
+    /// their vertices in the mesh's local frame exactly as Bullet's processAllTriangles yields them (3 per triangle).
     std::vector<BulletTriangle> meshTriangles;
     std::vector<btVector3> meshTriangleVertices;
 };
