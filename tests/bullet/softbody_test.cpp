@@ -1,6 +1,7 @@
-// btSoftRigidDynamicsWorld with CULLIDE's broadphase and dispatcher: a cloth falls onto a static box and a
-// resting rigid body. Soft bodies are box proxies for the culler (their contacts live in the soft body, not in
-// manifolds), so the cloth must end up exactly where it does with Bullet's default pipeline.
+// btSoftRigidDynamicsWorld with CULLIDE's broadphase and dispatcher: a cloth falls onto a static sphere and a
+// resting rigid box; two soft tori fall on each other. Soft bodies are box proxies for the culler (their contacts
+// live in the soft body, not in manifolds), so they must end up exactly where they do with Bullet's default
+// pipeline.
 #include "SceneSupport.h"
 
 #include <BulletSoftBody/btSoftBodyHelpers.h>
@@ -59,6 +60,11 @@ std::vector<btVector3> runCloth(PipelineKind kind) {
     btRigidBody box(1, nullptr, &boxShape, inertia);
     box.setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(btScalar(0.5), btScalar(0.6), 0)));
     world.addRigidBody(&box);
+    btSphereShape sphereShape(btScalar(0.6));
+    btRigidBody sphere(0, nullptr, &sphereShape);
+    sphere.setWorldTransform(
+        btTransform(btQuaternion::getIdentity(), btVector3(-btScalar(1.1), btScalar(0.6), btScalar(0.5))));
+    world.addRigidBody(&sphere);
 
     std::unique_ptr<btSoftBody> cloth(btSoftBodyHelpers::CreatePatch(
         info, btVector3(-2, 3, -2), btVector3(2, 3, -2), btVector3(-2, 3, 2), btVector3(2, 3, 2), 12, 12, 0, true));
@@ -71,6 +77,7 @@ std::vector<btVector3> runCloth(PipelineKind kind) {
     for (int i = 0; i < cloth->m_nodes.size(); ++i) nodes.push_back(cloth->m_nodes[i].m_x);
     nodes.push_back(box.getWorldTransform().getOrigin());
     world.removeSoftBody(cloth.get());
+    world.removeRigidBody(&sphere);
     world.removeRigidBody(&box);
     world.removeRigidBody(&ground);
     return nodes;
@@ -91,6 +98,12 @@ TEST(BulletSoftBody, ClothSettlesExactlyAsWithDefaultPipeline) {
                 "node y %.3f\n",
                 a.size() - 1, maxDeviation, double(lowest));
     EXPECT_GT(lowest, btScalar(-0.1)) << "the cloth fell through the ground";
+    btScalar overSphere = -1e9;  // the highest cloth node above the sphere's centre
+    for (std::size_t i = 0; i + 1 < b.size(); ++i)
+        if (btVector3(b[i].x() + btScalar(1.1), 0, b[i].z() - btScalar(0.5)).length() < btScalar(0.4))
+            overSphere = std::max(overSphere, b[i].y());
+    std::printf("[soft body] highest cloth node over the sphere y %.3f (sphere top 1.2)\n", double(overSphere));
+    EXPECT_GT(overSphere, btScalar(1.1)) << "the cloth does not rest on the sphere";
     EXPECT_LT(maxDeviation, 1e-4);
 }
 
