@@ -298,6 +298,7 @@ ContactMap contactsOf(btCollisionWorld& world) {
             ++pc.points;
             pc.minDistance = std::min(pc.minDistance, double(pt.getDistance()));
             pc.positionsOnB.push_back(swap ? pt.getPositionWorldOnA() : pt.getPositionWorldOnB());
+            pc.normalsOnB.push_back(swap ? -pt.m_normalWorldOnB : pt.m_normalWorldOnB);
             pc.distances.push_back(double(pt.getDistance()));
         }
     }
@@ -338,6 +339,19 @@ void ContactAgreement::add(const ContactMap& reference, const ContactMap& other,
             continue;
         }
         ++comparedPairs;
+        if (tolerance(key) <= kExactTolerance) {
+            // Same algorithm, same input: every reference point has a twin.
+            ++pointComparedPairs;
+            const PairContacts& oth = it->second;
+            for (std::size_t i = 0; i < ref.positionsOnB.size(); ++i) {
+                bool twin = false;
+                for (std::size_t j = 0; j < oth.positionsOnB.size() && !twin; ++j)
+                    twin = (ref.positionsOnB[i] - oth.positionsOnB[j]).length() <= btScalar(kExactTolerance) &&
+                           (ref.normalsOnB[i] - oth.normalsOnB[j]).length() <= btScalar(kExactTolerance) &&
+                           std::fabs(ref.distances[i] - oth.distances[j]) <= kExactTolerance;
+                if (!twin) ++pointMismatches;
+            }
+        }
         const double diff = std::fabs(ref.minDistance - it->second.minDistance);
         maxDepthDifference = std::max(maxDepthDifference, diff);
         if (diff > tolerance(key)) {

@@ -105,6 +105,7 @@ struct PairContacts {
     int points = 0;
     double minDistance = 1e30;
     std::vector<btVector3> positionsOnB;  ///< world positions (on the second object of the pair key)
+    std::vector<btVector3> normalsOnB;    ///< contact normals on the second object of the pair key
     std::vector<double> distances;
 };
 using ContactMap = std::map<std::pair<int, int>, PairContacts>;
@@ -122,6 +123,11 @@ struct ContactAgreement {
     std::size_t depthMismatches = 0;  ///< |min distance difference| > tolerance
     double maxDepthDifference = 0.0;
     std::size_t extraPairs = 0;       ///< pairs with contacts only in the other world
+    /// Pairs compared point by point (tolerance at most kExactTolerance: Bullet's algorithm on identical input), and
+    /// reference points without a twin (position, normal and distance) in the other world.
+    std::size_t pointComparedPairs = 0;
+    std::size_t pointMismatches = 0;
+    static constexpr double kExactTolerance = 1e-5;
     std::string firstMissing;
     /// `tolerance(pair)` gives the allowed |min distance difference| of a pair.
     void add(const ContactMap& reference, const ContactMap& other,

@@ -105,8 +105,10 @@ void printMirrorRun(const char* scene, const MirrorRun& run) {
                 run.exactMs / n, run.syncMs / n, double(run.cullerTriangles) / n, double(run.cullerPairs) / n);
     const ContactAgreement& a = run.agreement;
     std::printf("  contacts: %zu pair-steps with contacts (default), %zu missing under CULLIDE, %zu over tolerance "
-                "(max |min-distance diff| %.2e), %zu pair-steps with contacts only under CULLIDE\n",
-                a.referencePairs, a.missingPairs, a.depthMismatches, a.maxDepthDifference, a.extraPairs);
+                "(max |min-distance diff| %.2e), %zu pair-steps with contacts only under CULLIDE; %zu pair-steps "
+                "compared point by point (position, normal, distance), %zu points without a twin\n",
+                a.referencePairs, a.missingPairs, a.depthMismatches, a.maxDepthDifference, a.extraPairs,
+                a.pointComparedPairs, a.pointMismatches);
     std::printf("  triangle level: %zu (pair, triangle) contact keys under default, %zu without a contact under "
                 "CULLIDE\n",
                 run.triangleContacts, run.triangleContactsMissing);
@@ -117,6 +119,8 @@ void expectAgreement(const MirrorRun& run, std::size_t minimumPairSteps) {
     EXPECT_GE(run.agreement.referencePairs, minimumPairSteps) << "too few contacts: the scene tests nothing";
     EXPECT_EQ(run.agreement.missingPairs, 0u) << run.agreement.firstMissing;
     EXPECT_EQ(run.agreement.depthMismatches, 0u) << "max diff " << run.agreement.maxDepthDifference;
+    EXPECT_EQ(run.agreement.pointMismatches, 0u)
+        << "contact points (position, normal, distance) of pairs that run Bullet's algorithm on identical input";
     EXPECT_EQ(run.triangleContactsMissing, 0u) << run.firstTriangleMissing;
 }
 
