@@ -93,7 +93,7 @@ for scene in stack landscape; do
   done
 done
 if $run --list-scenes | grep -x breakable >/dev/null; then
-  for e in cullide bullet-dbvt bullet-sap; do
+  for e in cullide cullide-fast bullet-dbvt bullet-sap; do
     bench side breakable $e $breakable_steps --sample-every $breakable_sample
   done
 else
