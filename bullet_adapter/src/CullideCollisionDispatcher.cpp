@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
 #include <typeinfo>
 #include <unordered_map>
 #include <vector>
@@ -22,15 +23,43 @@ namespace detail {
 
 /// The leaf node of each primitive of a GImpact box set (btGImpactQuantizedBvh), so a surviving triangle pair can be
 /// tested exactly as Bullet's BVH traversal tests it. Entries are checked on every lookup (the leaf must still hold
-/// the primitive) and rebuilt when a box set was rebuilt (updateBound after deforming) or its address reused.
+/// the primitive) and rebuilt when a box set was rebuilt (updateBound after deforming) or its address reused; box
+/// sets unused for kKeepDispatches dispatches (deleted shapes) are dropped.
 class GImpactLeafIndex {
 public:
-    /// The leaf node of each primitive of `set`, as last built: callers check an entry with `holds` before use and
-    /// call `rebuild` when it fails.
-    std::vector<int>& leavesOf(const btGImpactBoxSet& set) {
-        if (m_leaves.size() > kMaxSets && m_leaves.find(&set) == m_leaves.end()) m_leaves.clear();  // dead sets
-        return m_leaves[&set];
+    /// Called at the start of every dispatch: drops the entries of box sets no longer used.
+    void beginDispatch() {
+        ++m_epoch;
+        for (auto it = m_leaves.begin(); it != m_leaves.end();) {
+            if (it->second.lastUse + kKeepDispatches < m_epoch)
+                it = m_leaves.erase(it);
+            else
+                ++it;
+        }
     }
+    /// The leaf node of each primitive of `set`, as last built (stable until the next beginDispatch): check an
+    /// entry with `leafOf`.
+    std::vector<int>& leavesOf(const btGImpactBoxSet& set) {
+        Entry& e = m_leaves[&set];
+        e.lastUse = m_epoch;
+        return e.leaves;
+    }
+    /// The leaf of `prim` (rebuilding `leaves` once if it is stale), or -1 when the set has none.
+    static int leafOf(const btGImpactBoxSet& set, std::vector<int>& leaves, int prim) {
+        if (!holds(set, leaves, prim)) {
+            rebuild(set, leaves);
+            if (!holds(set, leaves, prim)) return -1;
+        }
+        return leaves[static_cast<std::size_t>(prim)];
+    }
+
+private:
+    static constexpr std::uint64_t kKeepDispatches = 60;
+    struct Entry {
+        std::vector<int> leaves;
+        std::uint64_t lastUse = 0;
+    };
+
     static bool holds(const btGImpactBoxSet& set, const std::vector<int>& leaves, int prim) {
         if (prim < 0 || static_cast<std::size_t>(prim) >= leaves.size()) return false;
         const int node = leaves[static_cast<std::size_t>(prim)];
@@ -44,18 +73,9 @@ public:
             if (prim >= 0 && static_cast<std::size_t>(prim) < leaves.size()) leaves[static_cast<std::size_t>(prim)] = node;
         }
     }
-    /// The leaf of `prim` (rebuilding `leaves` once if it is stale), or -1 when the set has none.
-    static int leafOf(const btGImpactBoxSet& set, std::vector<int>& leaves, int prim) {
-        if (!holds(set, leaves, prim)) {
-            rebuild(set, leaves);
-            if (!holds(set, leaves, prim)) return -1;
-        }
-        return leaves[static_cast<std::size_t>(prim)];
-    }
 
-private:
-    static constexpr std::size_t kMaxSets = 4096;
-    std::unordered_map<const btGImpactBoxSet*, std::vector<int>> m_leaves;
+    std::uint64_t m_epoch = 0;
+    std::unordered_map<const btGImpactBoxSet*, Entry> m_leaves;
 };
 
 }  // namespace detail
@@ -405,6 +425,8 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
                                                            btDispatcher* dispatcher) {
     const CullideDispatchStats outer = m_current;  // nested dispatches (rare) keep the outer counters
     m_current.reset();
+    if (pairCache == (m_broadphase != nullptr ? m_broadphase->getOverlappingPairCache() : nullptr))
+        m_leafIndex->beginDispatch();  // once per step, not for a character controller's private cache
     cullide::Timer watch;
     btCollisionDispatcher::dispatchAllCollisionPairs(pairCache, dispatchInfo, dispatcher);
     m_current.dispatchMs = watch.ms();
