@@ -601,10 +601,11 @@ struct CullideBroadphase::Impl {
         rec.compoundFirst = first->geometry->kind == GeometryKind::Compound;
         rec.compoundSecond = second->geometry->kind == GeometryKind::Compound;
         if (gimpactPair) {
-            // Near pairs whose triangle boxes, grown by the shapes' margins, overlap: a pair whose boxes are apart
-            // is farther apart than both margins, and the clip method can then make a contact only from a triangle
-            // deeper inside the other mesh than both margins, which needs the meshes to intersect (the fallback
-            // below). The dispatcher keeps, of these, those that Bullet's own BVH search would also produce.
+            // Near pairs whose triangle boxes, grown by the shapes' margins, overlap. A pair whose boxes are apart
+            // is farther apart than both margins; the clip method can then make a contact only from a point of one
+            // triangle more than both margins behind the other's plane — inside the other mesh where it is thicker
+            // than that, i.e. deep interpenetration, which the fallback below hands to Bullet's full algorithm.
+            // The dispatcher keeps, of these pairs, those that Bullet's own BVH search would also produce.
             const double ma = double(bullet::triangleMarginOf(objectOf(pa)->getCollisionShape()));
             const double mb = double(bullet::triangleMarginOf(objectOf(pb)->getCollisionShape()));
             auto box = [](const TriangleMesh& m, std::uint32_t t, double grow) {
