@@ -7,8 +7,8 @@
 // Design (see bullet_adapter/README.md for the details and the limits):
 // - Proxies live in an internal Bullet btDbvt used only to answer rayTest / aabbTest (convex sweeps, contactTest).
 // - calculateOverlappingPairs() builds one culling frame: shapes with triangle geometry (btGImpactMeshShape,
-//   btBvhTriangleMeshShape / btTriangleMeshShape, btConvexHullShape) as world-space triangles, every other shape as
-//   its broadphase AABB; static objects only where they are near a moving one (and never paired with each other).
+//   btBvhTriangleMeshShape / btTriangleMeshShape, btConvexHullShape, btCompoundShape of convex children: hulls as
+//   hulls, other children as their boxes) as world-space triangles, every other shape as its broadphase AABB; static objects only where they are near a moving one (and never paired with each other).
 //   The culler runs once; the pair cache (a btHashedOverlappingPairCache, own or given) is synchronised with its
 //   object pairs: new pairs are added through the cache (filters, ghost pair callback), pairs that can no longer
 //   collide are removed (their algorithms freed through the dispatcher).
@@ -22,9 +22,11 @@
 //   reports points within the sum of the two margins and rebuilds its manifold every frame), for pairs with
 //   persistent convex manifolds the margins plus 1.5 * the contact breaking threshold (size-relative, as Bullet's
 //   dispatcher computes it by default). Every triangle pair that Bullet's narrow phase could turn into a contact
-//   point, or keep a persistent one alive, survives. The surviving candidate triangle pairs of GImpact-GImpact and
-//   convex-hull-mesh pairs are kept for CullideCollisionDispatcher (trianglePairsFor); Bullet's own triangle
-//   routines are the exact test (the culler runs with Settings::exactTriangles = false).
+//   point, or keep a persistent one alive, survives. The surviving candidate triangle pairs of GImpact-GImpact pairs
+//   and the mesh's surviving triangles of hull-, compound- and GImpact-vs-triangle-mesh pairs are kept for
+//   CullideCollisionDispatcher (trianglePairsFor); Bullet's own triangle routines are the exact test (the culler
+//   runs with Settings::exactTriangles = false). Interpenetrating GImpact pairs get Bullet's full algorithm
+//   (setDeepPenetrationFallback).
 #pragma once
 
 #include "cullide/Culler.h"
@@ -148,8 +150,9 @@ public:
 
     // ---- CULLIDE ----
     /// The surviving triangles for the pair of the two wrapped objects, computed by the last
-    /// calculateOverlappingPairs(), or nullptr when there are none to trust: not a GImpact-GImpact or
-    /// convex-hull-mesh pair of this broadphase, a child shape (compound), or either object moved since.
+    /// calculateOverlappingPairs(), or nullptr when there are none to trust: not a GImpact-GImpact pair or a
+    /// hull/compound/GImpact-vs-triangle-mesh pair of this broadphase, a child wrapper other than a compound's
+    /// child, or either object moved since.
     /// `swapped` is set when body0Wrap is the record's second object.
     const PairTriangles* trianglePairsFor(const btCollisionObjectWrapper* body0Wrap,
                                           const btCollisionObjectWrapper* body1Wrap, bool& swapped) const;

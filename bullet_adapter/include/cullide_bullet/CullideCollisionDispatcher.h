@@ -3,12 +3,14 @@
 //
 // - GImpact-GImpact (once the application called btGImpactCollisionAlgorithm::registerAlgorithm(dispatcher), as it
 //   must with Bullet's own dispatcher): a btGImpactCollisionAlgorithm subclass runs Bullet's triangle-triangle
-//   routine (collide_sat_triangles) on the surviving triangle pairs only.
-// - Convex hull vs btBvhTriangleMeshShape / btTriangleMeshShape: a btConvexConcaveCollisionAlgorithm subclass drives
-//   btConvexTriangleCallback with the mesh's surviving triangles only.
-// - Everything else (primitives, compounds per child, planes, soft bodies, GImpact vs convex) goes to Bullet's
-//   algorithms unchanged; so does any pair for which the broadphase has no fresh triangle data (a character
-//   controller's private pair cache after the ghost moved, contactTest, compound children, another broadphase).
+//   routine (collide_sat_triangles) on the surviving triangle pairs that Bullet's own BVH search would also
+//   produce; interpenetrating pairs run Bullet's full algorithm. GImpact vs triangle mesh: Bullet's
+//   gimpact_vs_concave over the mesh's surviving triangles only.
+// - Convex hull, or a compound's convex child, vs btBvhTriangleMeshShape / btTriangleMeshShape: a
+//   btConvexConcaveCollisionAlgorithm subclass drives btConvexTriangleCallback with the mesh's surviving triangles.
+// - Everything else (primitives, compound-compound and compound-convex per child, planes, soft bodies, GImpact vs
+//   convex) goes to Bullet's algorithms unchanged; so does any pair for which the broadphase has no fresh triangle
+//   data (a character controller's private pair cache after the ghost moved, contactTest, another broadphase).
 // - Triangle pairs are processed in sorted order: contacts are deterministic.
 // - Algorithms larger than the configuration's pool element are allocated from the heap, never from the pool.
 #pragma once
