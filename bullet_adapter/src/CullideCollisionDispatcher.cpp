@@ -130,6 +130,16 @@ private:
     const PairTriangles& m_triangles;
 };
 
+/// A triangle mesh's wrapper with the mesh replaced by its surviving triangles (same object, transform and ids).
+struct SurvivingMeshWrapper {
+    SurvivingMeshWrapper(const btCollisionObjectWrapper* meshWrap, const PairTriangles& triangles)
+        : shape(*static_cast<const btConcaveShape*>(meshWrap->getCollisionShape()), triangles),
+          wrapper(meshWrap->m_parent, &shape, meshWrap->getCollisionObject(), meshWrap->getWorldTransform(),
+                  meshWrap->m_partId, meshWrap->m_index) {}
+    SurvivingTrianglesShape shape;
+    btCollisionObjectWrapper wrapper;
+};
+
 /// GImpact pairs on CULLIDE's lists. GImpact-GImpact: the surviving triangle pairs go straight to Bullet's
 /// triangle-triangle routine (collide_sat_triangles), no BVH traversal. GImpact-triangle mesh: Bullet's own
 /// gimpact_vs_concave (per mesh triangle: a BVH query of the GImpact mesh and convex-convex tests), driven with the
@@ -236,14 +246,10 @@ private:
             return;
         }
         stats.trianglePairs += triangles->meshTriangles.size();
-        const SurvivingTrianglesShape surviving(*static_cast<const btConcaveShape*>(meshWrap->getCollisionShape()),
-                                                *triangles);
-        const btCollisionObjectWrapper filtered(meshWrap->m_parent, &surviving, meshWrap->getCollisionObject(),
-                                                meshWrap->getWorldTransform(), meshWrap->m_partId,
-                                                meshWrap->m_index);
-        gimpact_vs_shape(gimpactWrap, &filtered,
-                         static_cast<const btGImpactShapeInterface*>(gimpactWrap->getCollisionShape()), &surviving,
-                         !gimpactFirst);
+        const SurvivingMeshWrapper surviving(meshWrap, *triangles);
+        gimpact_vs_shape(gimpactWrap, &surviving.wrapper,
+                         static_cast<const btGImpactShapeInterface*>(gimpactWrap->getCollisionShape()),
+                         &surviving.shape, !gimpactFirst);
         if (getLastManifold() != nullptr) m_resultOut->refreshContactPoints();
     }
 
@@ -335,15 +341,10 @@ public:
             return;
         }
         stats.trianglePairs += triangles->meshTriangles.size();
-        const SurvivingTrianglesShape surviving(*static_cast<const btConcaveShape*>(meshWrap->getCollisionShape()),
-                                                *triangles);
-        const btCollisionObjectWrapper filtered(meshWrap->m_parent, &surviving, meshWrap->getCollisionObject(),
-                                                meshWrap->getWorldTransform(), meshWrap->m_partId,
-                                                meshWrap->m_index);
-        if (MeshFirst)
-            btConvexConcaveCollisionAlgorithm::processCollision(&filtered, body1Wrap, dispatchInfo, resultOut);
-        else
-            btConvexConcaveCollisionAlgorithm::processCollision(body0Wrap, &filtered, dispatchInfo, resultOut);
+        const SurvivingMeshWrapper surviving(meshWrap, *triangles);
+        const btCollisionObjectWrapper* mesh = &surviving.wrapper;
+        btConvexConcaveCollisionAlgorithm::processCollision(MeshFirst ? mesh : body0Wrap, MeshFirst ? body1Wrap : mesh,
+                                                            dispatchInfo, resultOut);
     }
 
     struct CreateFunc : btCollisionAlgorithmCreateFunc {

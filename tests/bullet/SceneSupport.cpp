@@ -115,6 +115,12 @@ void printMirrorRun(const char* scene, const MirrorRun& run) {
     std::fflush(stdout);
 }
 
+void expectCulledAgreement(const MirrorRun& run, std::size_t minimumPairSteps) {
+    expectAgreement(run, minimumPairSteps);
+    EXPECT_GT(run.cullidePairsFromTriangles, 0u) << "no pair went through CULLIDE's triangle lists";
+    EXPECT_EQ(run.fallbackPairs, 0u) << "pairs fell back to Bullet's full algorithm";
+}
+
 void expectAgreement(const MirrorRun& run, std::size_t minimumPairSteps) {
     EXPECT_GE(run.agreement.referencePairs, minimumPairSteps) << "too few contacts: the scene tests nothing";
     EXPECT_EQ(run.agreement.missingPairs, 0u) << run.agreement.firstMissing;

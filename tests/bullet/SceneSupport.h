@@ -61,5 +61,7 @@ void printMirrorRun(const char* scene, const MirrorRun& run);
 
 /// Checks shared by the mirrored scene tests.
 void expectAgreement(const MirrorRun& run, std::size_t minimumPairSteps);
+/// expectAgreement, and CULLIDE's triangle lists fed the narrow phase with no pair left to Bullet's full path.
+void expectCulledAgreement(const MirrorRun& run, std::size_t minimumPairSteps);
 
 }  // namespace cullide::test
