@@ -92,10 +92,6 @@ struct Record {
     const btCollisionShape* shapeSecond = nullptr;
     btTransform transformFirst;
     btTransform transformSecond;
-    /// A side that is a compound: its children's wrappers (compound algorithm) may use the record too; the mesh
-    /// triangles kept for the whole compound are a superset of those near any one child.
-    bool compoundFirst = false;
-    bool compoundSecond = false;
     PairTriangles triangles;
 };
 
@@ -598,8 +594,6 @@ struct CullideBroadphase::Impl {
         rec.shapeSecond = objectOf(second)->getCollisionShape();
         rec.transformFirst = objectOf(first)->getWorldTransform();
         rec.transformSecond = objectOf(second)->getWorldTransform();
-        rec.compoundFirst = first->geometry->kind == GeometryKind::Compound;
-        rec.compoundSecond = second->geometry->kind == GeometryKind::Compound;
         if (gimpactPair) {
             // Near pairs whose triangle boxes, grown by the shapes' margins, overlap. A pair whose boxes are apart
             // is farther apart than both margins; the clip method can then make a contact only from a point of one
@@ -614,7 +608,6 @@ struct CullideBroadphase::Impl {
                 return b.inflated(grow);
             };
             rec.triangles.pairs.reserve(op.triangles.size());
-            cullide::Timer penetration;
             bool intersecting = false;
             for (const TrianglePair& tp : op.triangles) {
                 if (!box(pa->world, tp.a, ma).overlaps(box(pb->world, tp.b, mb))) continue;
@@ -639,7 +632,6 @@ struct CullideBroadphase::Impl {
             stats.trianglePairs += rec.triangles.pairs.size();
             rec.triangles.interpenetrating = intersecting;
             if (intersecting) ++stats.interpenetratingPairs;
-            if (deepPenetrationFallback) stats.penetrationTestMs += penetration.ms();
         } else {
             const bool meshIsA = ka == GeometryKind::TriangleMesh;
             const bullet::ShapeTriangles& mesh = meshIsA ? *pa->geometry : *pb->geometry;
@@ -836,9 +828,10 @@ struct CullideBroadphase::Impl {
         const btCollisionShape* s1 = swapped ? rec.shapeFirst : rec.shapeSecond;
         const btTransform& t0 = swapped ? rec.transformSecond : rec.transformFirst;
         const btTransform& t1 = swapped ? rec.transformFirst : rec.transformSecond;
-        const bool compound0 = swapped ? rec.compoundSecond : rec.compoundFirst;
-        const bool compound1 = swapped ? rec.compoundFirst : rec.compoundSecond;
-        if ((child0 && !compound0) || (child1 && !compound1)) return nullptr;
+        // On a compound's side the compound algorithm's child wrappers may use the record: the mesh triangles kept
+        // for the whole compound are a superset of those near any one child.
+        auto compound = [](const btCollisionShape* s) { return s->getShapeType() == COMPOUND_SHAPE_PROXYTYPE; };
+        if ((child0 && !compound(s0)) || (child1 && !compound(s1))) return nullptr;
         // Compare the objects' shapes and transforms (a child wrapper carries the child's).
         if (s0 != o0->getCollisionShape() || s1 != o1->getCollisionShape()) return nullptr;
         if (!(t0 == o0->getWorldTransform()) || !(t1 == o1->getWorldTransform())) return nullptr;  // moved since

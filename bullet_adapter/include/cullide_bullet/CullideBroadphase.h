@@ -102,8 +102,6 @@ struct CullideFrameStats {
     std::size_t pcsTriangles = 0;        ///< triangles that survived culling (the triangle-level PCS), all objects
     std::size_t trianglePairs = 0;       ///< surviving triangle pairs kept for the dispatcher
     std::size_t interpenetratingPairs = 0;  ///< GImpact pairs whose meshes intersect (see setDeepPenetrationFallback)
-    double penetrationTestMs = 0.0;      ///< filtering GImpact pairs' triangle pairs with the exact intersection
-                                         ///< tests of the deep-penetration fallback (0 when it is off)
     double margin = 0.0;                 ///< the culler's distance margin d this frame
     double buildMs = 0.0;                ///< building the culling frame (world-space triangles, boxes)
     double cullMs = 0.0;                 ///< culler run
