@@ -1,16 +1,76 @@
-# ctest driver: installs the build tree into a scratch prefix, then configures, builds and runs tests/consumer.
+# ctest driver for the installed package, as a user meets it (issue 14):
+#  1. cmake --install into a scratch prefix, then move the prefix elsewhere (a relocatable install must not care);
+#  2. every installed ELF file carries only $ORIGIN-relative run paths (no build or install paths);
+#  3. the installed cullide-pairs runs from the moved prefix on a two-cube scene, without LD_LIBRARY_PATH;
+#  4. a separate CMake project finds the package with find_package, builds the culler and the two-line-swap
+#     applications and runs them, without LD_LIBRARY_PATH;
+#  5. the same two applications built with the compiler and `pkg-config --cflags --libs cullide / cullide-bullet`
+#     (plus the usual -Wl,-rpath to the package's libdir) run too.
+# Inputs: BUILD_DIR, SOURCE_DIR (tests/consumer), WORK, CXX (the compiler).
 file(REMOVE_RECURSE ${WORK})
-execute_process(COMMAND ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${WORK}/prefix RESULT_VARIABLE rc OUTPUT_QUIET)
+execute_process(COMMAND ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${WORK}/staging RESULT_VARIABLE rc
+  OUTPUT_QUIET)
 if(rc)
   message(FATAL_ERROR "cmake --install failed: ${rc}")
 endif()
-foreach(path bin/cullide-pairs include/cullide/Culler.h include/cullide_bullet/CullideBroadphase.h
-    share/cullide/shaders/cull.comp)
-  if(NOT EXISTS ${WORK}/prefix/${path})
+file(RENAME ${WORK}/staging ${WORK}/prefix)
+set(prefix ${WORK}/prefix)
+
+# The library directory as installed (lib, lib64 or lib/<multiarch>, whatever GNUInstallDirs chose).
+file(GLOB_RECURSE pcs ${prefix}/*/cullide.pc)
+list(LENGTH pcs n)
+if(NOT n EQUAL 1)
+  message(FATAL_ERROR "expected one installed cullide.pc, found: ${pcs}")
+endif()
+get_filename_component(pcdir ${pcs} DIRECTORY)
+get_filename_component(libdir ${pcdir} DIRECTORY)
+foreach(path ${prefix}/bin/cullide-pairs ${prefix}/include/cullide/Culler.h
+    ${prefix}/include/cullide_bullet/CullideBroadphase.h ${prefix}/share/cullide/shaders/cull.comp
+    ${pcdir}/cullide-bullet.pc)
+  if(NOT EXISTS ${path})
     message(FATAL_ERROR "not installed: ${path}")
   endif()
 endforeach()
-execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${WORK}/build -DCMAKE_PREFIX_PATH=${WORK}/prefix
+
+# Run paths: only $ORIGIN-relative entries.
+file(GLOB elves ${prefix}/bin/* ${libdir}/*.so.*)
+foreach(elf ${elves})
+  if(IS_SYMLINK ${elf})
+    continue()
+  endif()
+  execute_process(COMMAND readelf -d ${elf} OUTPUT_VARIABLE dyn RESULT_VARIABLE rc)
+  if(rc)
+    message(FATAL_ERROR "readelf -d ${elf} failed")
+  endif()
+  string(REGEX MATCHALL "\\((RUNPATH|RPATH)\\)[^\n]*" paths "${dyn}")
+  if(NOT paths)
+    message(FATAL_ERROR "${elf}: no run path (it would find the package's libraries only through LD_LIBRARY_PATH)")
+  endif()
+  string(REGEX MATCH "\\[([^]]*)\\]" _ "${paths}")
+  string(REPLACE ":" ";" entries "${CMAKE_MATCH_1}")
+  foreach(entry ${entries})
+    if(NOT entry MATCHES "^\\$ORIGIN")
+      message(FATAL_ERROR "${elf}: run path entry '${entry}' is not relative to $ORIGIN")
+    endif()
+  endforeach()
+endforeach()
+
+set(run ${CMAKE_COMMAND} -E env --unset=LD_LIBRARY_PATH --unset=LD_PRELOAD)
+
+# The installed program, from the moved prefix.
+file(WRITE ${WORK}/cube.off "OFF\n8 12 0\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n0 0 1\n1 0 1\n1 1 1\n0 1 1\n"
+  "3 0 2 1\n3 0 3 2\n3 4 5 6\n3 4 6 7\n3 0 1 5\n3 0 5 4\n3 2 3 7\n3 2 7 6\n3 1 2 6\n3 1 6 5\n3 3 0 4\n3 3 4 7\n")
+file(WRITE ${WORK}/scene.json "{\"objects\": [{\"mesh\": \"cube.off\"},
+  {\"mesh\": \"cube.off\", \"transform\": [1,0,0,0.5, 0,1,0,0.5, 0,0,1,0.5, 0,0,0,1]}]}")
+execute_process(COMMAND ${run} ${prefix}/bin/cullide-pairs ${WORK}/scene.json --gpu-levels never
+  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+if(rc OR NOT out MATCHES "\"object_pairs\": *\\[ *\\[ *0, *1 *\\] *\\]")
+  message(FATAL_ERROR "installed cullide-pairs failed (exit ${rc}):\n${out}\n${err}")
+endif()
+message(STATUS "installed cullide-pairs ran from the moved prefix")
+
+# find_package consumer.
+execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${WORK}/build -DCMAKE_PREFIX_PATH=${prefix}
   RESULT_VARIABLE rc)
 if(rc)
   message(FATAL_ERROR "configuring the consumer failed")
@@ -20,8 +80,31 @@ if(rc)
   message(FATAL_ERROR "building the consumer failed")
 endif()
 foreach(exe consumer consumer_bullet)
-  execute_process(COMMAND ${WORK}/build/${exe} RESULT_VARIABLE rc)
+  execute_process(COMMAND ${run} ${WORK}/build/${exe} RESULT_VARIABLE rc)
   if(rc)
-    message(FATAL_ERROR "${exe} failed")
+    message(FATAL_ERROR "${exe} (find_package) failed: ${rc}")
+  endif()
+endforeach()
+
+# pkg-config consumer: the compiler line a Makefile user writes.
+foreach(pair "consumer;cullide" "consumer_bullet;cullide-bullet")
+  list(GET pair 0 exe)
+  list(GET pair 1 module)
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env PKG_CONFIG_PATH=${pcdir}
+    pkg-config --cflags --libs ${module} OUTPUT_VARIABLE flags RESULT_VARIABLE rc OUTPUT_STRIP_TRAILING_WHITESPACE)
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env PKG_CONFIG_PATH=${pcdir}
+    pkg-config --variable=libdir ${module} OUTPUT_VARIABLE pclibdir OUTPUT_STRIP_TRAILING_WHITESPACE)
+  if(rc)
+    message(FATAL_ERROR "pkg-config ${module} failed")
+  endif()
+  separate_arguments(flags UNIX_COMMAND "${flags}")
+  execute_process(COMMAND ${CXX} -std=c++17 ${SOURCE_DIR}/${exe}.cpp -o ${WORK}/${exe}_pc ${flags}
+    -Wl,-rpath,${pclibdir} RESULT_VARIABLE rc)
+  if(rc)
+    message(FATAL_ERROR "building ${exe} with pkg-config ${module} failed: ${CXX} ${flags}")
+  endif()
+  execute_process(COMMAND ${run} ${WORK}/${exe}_pc RESULT_VARIABLE rc)
+  if(rc)
+    message(FATAL_ERROR "${exe} (pkg-config) failed: ${rc}")
   endif()
 endforeach()
