@@ -3,7 +3,7 @@
 set -euo pipefail
 packages=(cmake g++ make pkg-config git
   libbullet-dev libbullet-extras-dev libeigen3-dev libepoxy-dev libegl-dev libegl1 libegl-mesa0 libgl1-mesa-dri
-  libgtest-dev libgmock-dev nlohmann-json3-dev libcgal-dev libpng-dev)
+  libgtest-dev libgmock-dev nlohmann-json3-dev libcgal-dev libpng-dev clang libclang-rt-14-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,5 +1,7 @@
 #include "FrameObjects.h"
 
+#include "WorldMeshes.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -150,6 +152,20 @@ std::vector<ValidatedObject> validateObjects(const std::vector<Object>& objects,
             rejected.push_back({id, "mesh too large (more than 2^31 triangles or 2^32 vertices)"});
             v.box = Aabb{};
             continue;
+        }
+        if (o.transform != nullptr) {
+            // The local box becomes the world box of its transformed corners (rounding included); the vertices
+            // themselves are mapped later, only for the objects the pre-pass keeps (WorldMeshes).
+            const char* error = !isFinite(*o.transform) ? "transform has a non-finite coefficient" : nullptr;
+            if (error == nullptr) {
+                v.box = transformedBounds(*o.transform, v.box);
+                if (!v.box.isEmpty() && !v.box.isFinite()) error = "transform maps the mesh beyond the double range";
+            }
+            if (error != nullptr) {
+                rejected.push_back({id, error});
+                v.box = Aabb{};
+                continue;
+            }
         }
         v.valid = true;
         v.isMesh = true;

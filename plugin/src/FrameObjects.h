@@ -23,6 +23,8 @@ struct ValidatedObject {
 /// vertices when all are finite, else of the vertices its triangles use. Boxes are inflated by margin / 2,
 /// so two boxes overlap iff their L-infinity distance is at most the margin. With a pool, meshes are checked on
 /// every worker; the result is the same.
+/// An object with a transform is checked in its own frame (the same messages) and its box is the world box of
+/// transformedBounds(); a non-finite transform, or one that maps the box beyond the double range, rejects it.
 /// Objects with `known[i]` set are skipped (their entry is left invalid and unchecked: the caller has their
 /// result from an earlier frame).
 std::vector<ValidatedObject> validateObjects(const std::vector<Object>& objects, double margin,

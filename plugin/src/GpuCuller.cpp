@@ -3,6 +3,7 @@
 #include "FloatRounding.h"
 #include "FrameObjects.h"
 #include "Morton.h"
+#include "WorldMeshes.h"
 #include "cullide/Timer.h"
 #include "bindings.h"
 #include "cullide/Culler.h"
@@ -11,13 +12,27 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
+#include <memory>
+#include <mutex>
+#include <set>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
 
 namespace cullide {
 namespace {
+
+/// The one-line notice that a culler runs without GL: once per process and reason, not for every culler (the Bullet
+/// adapter re-creates its culler when its margin must grow).
+void noticeOnce(const std::string& reason) {
+    static std::mutex mutex;
+    static std::set<std::string> given;
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (given.insert(reason).second)
+        std::fprintf(stderr, "cullide: no usable GL device, running the CPU path (no GPU levels): %s\n", reason.c_str());
+}
 
 struct Group {
     std::uint32_t object;
@@ -28,9 +43,9 @@ struct Group {
 
 class GpuCuller final : public Culler {
 public:
-    explicit GpuCuller(const Settings& settings)
-        : m_settings(settings), m_pool(settings.threads), m_context(settings.device), m_pass(m_context, settings),
-          m_exact(m_pool) {}
+    explicit GpuCuller(const Settings& settings) : m_settings(settings), m_pool(settings.threads), m_exact(m_pool) {
+        openGl();
+    }
 
     const Settings& settings() const override { return m_settings; }
 
@@ -38,8 +53,9 @@ public:
         Timer total;
         result.clear();
         Stats& stats = result.stats;
-        stats.renderer = m_context.renderer();
-        stats.device = m_context.device();
+        stats.renderer = m_context ? m_context->renderer() : std::string();
+        stats.device = m_context ? m_context->device() : std::string("none");
+        stats.gpuUnavailable = m_gpuUnavailable;
         const double margin = m_settings.margin;
         m_objects = &objects;
 
@@ -67,9 +83,10 @@ public:
             m_active[i] = participates ? 1 : 0;
             stats.prepassObjectsOut += m_active[i];
         }
+        m_objects = &m_world.resolve(objects, m_active, &m_pool);  // world-space meshes of the kept objects
         m_survivingTriangles.assign(objects.size(), {});
-        m_gpuLevels = paper || m_settings.gpuLevels == GpuLevels::Always ||
-                      (m_settings.gpuLevels == GpuLevels::Auto && !m_context.isSoftware());
+        m_gpuLevels = m_pass != nullptr && (paper || m_settings.gpuLevels == GpuLevels::Always ||
+                                            (m_settings.gpuLevels == GpuLevels::Auto && !m_context->isSoftware()));
         buildGroups(!paper, stats);
         stats.prepassMs = prepass.ms();
 
@@ -85,7 +102,7 @@ public:
             // pre-pass keeps goes to the exact stage.
             ++stats.gpuFallbacks;
             stats.gpuError = e.what();
-            m_pass.forgetUploads();  // what the device holds is no longer trusted
+            if (m_pass) m_pass->forgetUploads();  // what the device holds is no longer trusted
             m_survivingTriangles.assign(m_valid.size(), {});
             collectTriangles(m_groups, !paper);
             finishFromTriangles({});
@@ -102,18 +119,41 @@ public:
         stats.pcsObjects = result.pcs.size();
         stats.candidateObjectPairs = result.pairs.size();
         result.pcsTriangles.swap(m_survivingTriangles);  // reassigned at the start of the next frame
-        stats.gpuDeviceBytes = m_pass.deviceBytes();
+        stats.gpuDeviceBytes = m_pass ? m_pass->deviceBytes() : 0;
         stats.totalMs = total.ms();
         m_objects = nullptr;
     }
 
 private:
+    /// The GL side (context and visibility pass), unless GPU levels are off (GpuLevels::Never: no EGL at all). Without
+    /// a usable GL device the CPU path runs instead, with a one-line notice — unless GPU levels were demanded
+    /// (GpuLevels::Always, Pipeline::Paper): then GlUnavailableError.
+    void openGl() {
+        if (m_settings.gpuLevels == GpuLevels::Never) {
+            m_gpuUnavailable = "GPU levels off (GpuLevels::Never): no GL context opened";
+            return;
+        }
+        try {
+            m_context = std::make_unique<gl::EglContext>(m_settings.device);
+            m_pass = std::make_unique<gl::VisibilityPass>(*m_context, m_settings);
+        } catch (const GlUnavailableError& e) {
+            const bool demanded = m_settings.gpuLevels == GpuLevels::Always || m_settings.pipeline == Pipeline::Paper;
+            if (demanded) throw;
+            m_pass.reset();
+            m_context.reset();
+            m_gpuUnavailable = e.what();
+            noticeOnce(m_gpuUnavailable);
+        }
+    }
+
     /// What the culler keeps of a static mesh (Object::staticKey) between frames: its validation and its triangle
     /// boxes, valid while (version, vertex count, triangle count) stay the same.
     struct StaticEntry {
         std::uint64_t version = 0;
         std::size_t vertices = 0;
         std::size_t triangles = 0;
+        bool transformed = false;
+        Transform transform;  ///< when transformed: the one the cached world boxes were built with
         bool checked = false;
         ValidatedObject valid;
         std::string error;  ///< the rejection message, if it was rejected
@@ -139,16 +179,24 @@ private:
             StaticEntry& e = m_static[o.staticKey];
             if (e.lastFrame == m_frame) continue;  // a key used twice in one frame: the second is not cached
             if (!e.checked || e.version != o.version || e.vertices != o.mesh->vertices.size() ||
-                e.triangles != o.mesh->triangles.size()) {
+                e.triangles != o.mesh->triangles.size() || !sameTransform(e, o.transform)) {
                 e = StaticEntry{};
                 e.version = o.version;
                 e.vertices = o.mesh->vertices.size();
                 e.triangles = o.mesh->triangles.size();
+                e.transformed = o.transform != nullptr;
+                if (e.transformed) e.transform = *o.transform;
             }
             e.lastFrame = m_frame;
             m_staticEntry[i] = &e;
             m_known[i] = e.checked ? 1 : 0;
         }
+    }
+
+    /// The cached world boxes of a static entry hold for this object's transform (bit for bit; NaNs never match).
+    static bool sameTransform(const StaticEntry& e, const Transform* t) {
+        if (t == nullptr) return !e.transformed;
+        return e.transformed && e.transform.linear == t->linear && e.transform.translation == t->translation;
     }
 
     /// Validation results of statics: kept ones into this frame, new ones into the cache.
@@ -343,7 +391,7 @@ private:
         m_groupBox.resize(m_groups.size());
         for (std::size_t g = 0; g < m_groups.size(); ++g) m_groupBox[g] = appendBox(m_groups[g].box, bound);
         m_geometry.coordinateBound = bound;
-        m_pass.upload(m_geometry, stats);
+        m_pass->upload(m_geometry, stats);
     }
 
     std::uint32_t appendBox(const Aabb& worldBox, double& bound) {
@@ -390,7 +438,7 @@ private:
         stats.levels.push_back(LevelStats{});
         LevelStats& level = stats.levels.back();
         level.name = name;
-        m_pass.prune(m_items, m_survivors, level, stats);
+        m_pass->prune(m_items, m_survivors, level, stats);
     }
 
     struct Tri {
@@ -649,9 +697,10 @@ private:
 
     Settings m_settings;
     TaskPool m_pool;  ///< before m_exact, which runs on it
-    gl::EglContext m_context;
-    gl::VisibilityPass m_pass;
     ExactStage m_exact;
+    std::unique_ptr<gl::EglContext> m_context;     ///< null: no GL (see openGl)
+    std::unique_ptr<gl::VisibilityPass> m_pass;    ///< declared after m_context: destroyed first
+    std::string m_gpuUnavailable;                  ///< why there is no GL context (Stats::gpuUnavailable)
 
     // Per-frame state (members to reuse allocations).
     const std::vector<Object>* m_objects = nullptr;
@@ -659,6 +708,7 @@ private:
     std::vector<std::pair<std::uint32_t, std::uint32_t>> m_pairs;
     std::vector<std::vector<std::uint32_t>> m_partners;
     std::vector<std::uint8_t> m_active;
+    WorldMeshes m_world;  ///< world-space meshes of this frame's kept objects that come with a transform
     std::vector<Group> m_groups;
     struct Range {
         std::uint32_t object;

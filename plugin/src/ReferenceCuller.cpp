@@ -1,6 +1,7 @@
 // The brute-force oracle: every triangle pair of every box-overlapping object pair, exact test.
 #include "FrameObjects.h"
 #include "TaskPool.h"
+#include "WorldMeshes.h"
 #include "cullide/Timer.h"
 #include "cullide/Culler.h"
 #include "cullide/TriangleTest.h"
@@ -17,16 +18,19 @@ public:
 
     const Settings& settings() const override { return m_settings; }
 
-    void run(const std::vector<Object>& objects, Result& result) override {
+    void run(const std::vector<Object>& input, Result& result) override {
         Timer total;
         result.clear();
         Stats& stats = result.stats;
         stats.renderer = "cpu-reference";
         const double margin = m_settings.margin;
-        const auto valid = validateObjects(objects, margin, result.rejected);
-        stats.objects = objects.size();
+        const auto valid = validateObjects(input, margin, result.rejected);
+        stats.objects = input.size();
         stats.rejectedObjects = result.rejected.size();
         const auto pairs = overlappingPairs(valid);
+        std::vector<std::uint8_t> paired(input.size(), 0);
+        for (const auto& [a, b] : pairs) paired[a] = paired[b] = 1;
+        const std::vector<Object>& objects = m_world.resolve(input, paired, &m_pool);  // world-space meshes
         std::vector<ObjectPair> out(pairs.size());
         std::vector<std::uint8_t> keep(pairs.size(), 0);
         m_pool.parallelFor(pairs.size(), 1, [&](std::size_t begin, std::size_t end) {
@@ -93,6 +97,7 @@ public:
 private:
     Settings m_settings;
     TaskPool m_pool;
+    WorldMeshes m_world;
 };
 
 }  // namespace

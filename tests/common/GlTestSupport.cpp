@@ -11,12 +11,23 @@ bool runningInCi() {
 }
 
 std::unique_ptr<Culler> makeGpuCuller(const Settings& settings, std::string& whyNot) {
+    std::unique_ptr<Culler> culler;
     try {
-        return createGpuCuller(settings);
+        culler = createGpuCuller(settings);
     } catch (const GlUnavailableError& e) {
         whyNot = e.what();
         return nullptr;
     }
+    // Without a GL device the culler still runs (the CPU path, with GpuLevels::Auto); a GL test wants the device.
+    if (settings.gpuLevels != GpuLevels::Never) {
+        Result probe;
+        culler->run({}, probe);
+        if (!probe.stats.gpuUnavailable.empty()) {
+            whyNot = probe.stats.gpuUnavailable;
+            return nullptr;
+        }
+    }
+    return culler;
 }
 
 std::unique_ptr<SnapshotRenderer> makeSnapshotRenderer(std::string& whyNot) {

@@ -248,6 +248,10 @@ TEST(DemoCli, BadFlagsAndMeshesGiveClearErrors) {
     EXPECT_EQ(status, 4) << slurp(log);
     EXPECT_NE(slurp(log).find("bad.off"), std::string::npos) << slurp(log);
     EXPECT_EQ(runDemo("--mesh /nonexistent.obj --frames 1 --out " + out.string(), log), 4) << slurp(log);
+    // A missing file is reported as missing, not by its (absent) extension.
+    EXPECT_EQ(runDemo("--mesh /nonexistent --frames 1 --out " + out.string(), log), 4) << slurp(log);
+    EXPECT_NE(slurp(log).find("/nonexistent: file does not exist"), std::string::npos) << slurp(log);
+    EXPECT_EQ(slurp(log).find("unsupported"), std::string::npos) << slurp(log);
 }
 
 }  // namespace

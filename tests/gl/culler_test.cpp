@@ -271,6 +271,7 @@ TEST(GpuCuller, FewerAxesStayReliableAndPruneLess) {
 TEST(GpuCuller, UnknownDeviceIsAClearError) {
     Settings s;
     s.device = "99";
+    s.gpuLevels = GpuLevels::Always;  // demanded GPU levels: no CPU-path fallback (tests/unit/no_gl_test.cpp)
     try {
         createGpuCuller(s);
         FAIL() << "expected GlUnavailableError";

@@ -74,7 +74,7 @@ TEST(CullidePairs, MatchesTheReferenceOnGeneratedScenes) {
         // The same scene through the library's reader and the brute-force reference.
         const auto scene = io::readSceneFile((dir / "scene.json").string());
         std::vector<TriangleMesh> meshes;
-        for (const auto& o : scene) meshes.push_back(o.mesh);
+        for (const auto& o : scene) meshes.push_back(io::worldMesh(o));
         Result expected;
         createReferenceCuller(Settings{})->run(asObjects(meshes), expected);
         std::vector<std::array<std::uint32_t, 4>> want;
@@ -110,9 +110,38 @@ TEST(CullidePairs, MalformedInputExitsWithTwoAndNamesFileAndLine) {
     EXPECT_EQ(runPairs("").status, 2);
 }
 
-TEST(CullidePairs, NoGlExitsWithThree) {
+TEST(CullidePairs, HostileSceneInputGivesShortClearErrors) {
+    const fs::path dir = fs::temp_directory_path() / ("cullide_hostile_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    // A NUL in a mesh path: refused at the scene's line, the NUL shown escaped (it used to open plain.txt).
+    std::ofstream(dir / "plain.txt") << "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    std::ofstream(dir / "nul.json") << "{\"objects\": [\n{\"mesh\": \"plain.txt\\u0000.off\"}]}";
+    CliRun r = runPairs((dir / "nul.json").string());
+    EXPECT_EQ(r.status, 2) << r.err;
+    EXPECT_NE(r.err.find("nul.json:2: objects[0].mesh contains a NUL byte"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("plain.txt\\0.off"), std::string::npos) << r.err;
+    // A 1 MB mesh name: a short message.
+    std::ofstream(dir / "long.json") << "{\"objects\": [{\"mesh\": \"" << std::string(1000000, 'a') << ".off\"}]}";
+    r = runPairs((dir / "long.json").string());
+    EXPECT_EQ(r.status, 2);
+    EXPECT_LT(r.err.size(), 500u) << r.err.substr(0, 500);
+    // A 20 MB single-line OFF: rejected at its counts line, without reading the line.
+    {
+        std::ofstream big(dir / "big.off");
+        big << "OFF 3 1 0";
+        for (int i = 0; i < 10000000; ++i) big << " 1";
+        big << "\n";
+    }
+    std::ofstream(dir / "big.json") << "{\"objects\": [{\"mesh\": \"big.off\"}]}";
+    r = runPairs((dir / "big.json").string());
+    EXPECT_EQ(r.status, 2);
+    EXPECT_NE(r.err.find("big.off:1: too many values on the counts line"), std::string::npos) << r.err;
+    fs::remove_all(dir);
+}
+
+TEST(CullidePairs, NoGlExitsWithThreeWhenGpuLevelsAreDemanded) {
     const fs::path dir = writeScene(3);
-    const CliRun r = runPairs((dir / "scene.json").string(), "CULLIDE_GL_DEVICE=99");
+    const CliRun r = runPairs((dir / "scene.json").string() + " --gpu-levels always", "CULLIDE_GL_DEVICE=99");
     EXPECT_EQ(r.status, 3) << r.err;
     EXPECT_NE(r.err.find("99"), std::string::npos) << r.err;
 }

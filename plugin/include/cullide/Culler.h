@@ -32,7 +32,11 @@ public:
     virtual const Settings& settings() const = 0;
 };
 
-/// The CULLIDE GPU culler. Throws std::invalid_argument for invalid settings and GlUnavailableError without GL.
+/// The CULLIDE GPU culler. Throws std::invalid_argument for invalid settings. GL is only needed for GPU levels:
+/// with GpuLevels::Never no GL context is opened at all; with GpuLevels::Auto and no usable GL device the culler
+/// runs the CPU path (box pre-pass, per-object box trees, exact stage: the same results) after a one-line notice on
+/// stderr (once per process and reason), and Stats::gpuUnavailable says why (Stats::device "none"); where GPU levels
+/// are demanded (GpuLevels::Always, Pipeline::Paper) it throws GlUnavailableError without a usable GL device.
 std::unique_ptr<Culler> createGpuCuller(const Settings& settings);
 
 /// All triangle pairs, exact: the oracle. Only margin and threads of the settings are used.

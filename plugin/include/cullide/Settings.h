@@ -19,6 +19,8 @@ enum class Pipeline {
     /// then triangles of surviving groups; levels stop when the exact stage is cheaper.
     Auto,
     /// The paper's pipeline: GPU object level (boxes, then triangles), sub-objects drawn as triangles, triangles.
+    /// It always runs its GPU levels (whatever Settings::gpuLevels says, except that validate() rejects it with
+    /// GpuLevels::Never), so it needs a GL device: createGpuCuller throws GlUnavailableError without one.
     Paper,
 };
 
@@ -37,7 +39,8 @@ enum class GpuLevels {
     Auto,
     /// Always run the GPU levels (tests, benchmarks, the paper-faithful pipeline).
     Always,
-    /// Never run them: CPU box pre-passes and the exact stage only.
+    /// Never run them: CPU box pre-passes and the exact stage only. Pipeline::Paper with Never is contradictory:
+    /// validate() rejects it.
     Never,
 };
 

@@ -15,12 +15,21 @@ struct LevelStats {
     std::size_t primitivesDrawn = 0;        ///< primitives submitted (all passes, all axes)
     std::size_t draws = 0;
     double cpuMs = 0.0;                     ///< wall time spent on the CPU side of the level (incl. waiting)
-    double gpuMs = 0.0;                     ///< GPU time from timer queries (0 when unavailable)
+    /// GPU time of the level's iterations from timer queries. Only meaningful with gpuTimingValid; 0 otherwise.
+    double gpuMs = 0.0;
+    /// true when every iteration of the level was timed by an available, plausible timer-query result (at most
+    /// the CPU wall time of the same span): false without timer queries and where a driver reports nonsense
+    /// (llvmpipe's first timer result in a context is an absolute time: the machine's uptime).
+    bool gpuTimingValid = true;
 };
 
 struct Stats {
-    std::string renderer;   ///< GL_RENDERER of the context used ("cpu-reference" for the reference culler)
-    std::string device;     ///< which GL device / platform was chosen
+    std::string renderer;   ///< GL_RENDERER of the context used ("cpu-reference" for the reference culler; empty
+                            ///< when the culler holds no GL context)
+    std::string device;     ///< which GL device / platform was chosen ("none" when no GL context was opened)
+    /// Empty when the culler holds a GL context; otherwise why not: no usable GL device (the GlUnavailableError
+    /// message; GpuLevels::Auto then runs the CPU path) or GpuLevels::Never (no context is opened at all).
+    std::string gpuUnavailable;
     std::size_t objects = 0;
     std::size_t triangles = 0;
     std::size_t rejectedObjects = 0;
@@ -48,7 +57,10 @@ struct Stats {
     double prepassMs = 0.0;
     double uploadMs = 0.0;
     double gpuLevelsMs = 0.0;  ///< wall time of all GPU levels (0 when none ran: that CPU work is in prepassMs)
-    double gpuMs = 0.0;        ///< GPU time from timer queries, all levels
+    double gpuMs = 0.0;        ///< GPU time from timer queries, all levels; only meaningful with gpuTimingValid
+    /// false when some GPU level's timing is absent (LevelStats::gpuTimingValid): gpuMs is then 0, not a time.
+    /// true (gpuMs 0) in frames without GPU levels.
+    bool gpuTimingValid = true;
     double exactMs = 0.0;
     double totalMs = 0.0;
 };

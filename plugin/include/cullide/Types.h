@@ -36,4 +36,17 @@ struct TriangleMesh {
     std::vector<TriangleIndices> triangles;
 };
 
+/// An affine map from a mesh's own frame to world space: world = linear · p + translation (rigid motions, scaling,
+/// shear; a singular `linear` is allowed and yields degenerate triangles).
+struct Transform {
+    Eigen::Matrix3d linear = Eigen::Matrix3d::Identity();
+    Vec3 translation = Vec3::Zero();
+};
+
+/// The world position of `p` under `t`, rounded exactly as the culler rounds it (and as the reference culler does,
+/// so both see the same triangles): coordinate i is ((l_i0·p_0 + l_i1·p_1) + l_i2·p_2) + t_i in double precision,
+/// each operation rounded to nearest, no fused multiply-add. Applications that compare contacts with their own
+/// world-space geometry can call this to get bit-identical vertices.
+Vec3 transformPoint(const Transform& t, const Vec3& p);
+
 }  // namespace cullide

@@ -57,6 +57,11 @@ std::uint32_t bitsFor(std::uint32_t maxValue) {
 }
 
 
+/// A timer-query result is plausible when at most this factor times the CPU wall time of the same span plus this
+/// slack (clock-rate differences, timer granularity).
+constexpr double kTimerFactor = 1.02;
+constexpr double kTimerSlackMs = 0.25;
+
 enum Buffer { kPositions, kIndices, kBoxes, kPrims, kOwners, kFlags, kRecords, kCounters, kBufferCount };
 constexpr std::size_t kRecordBytes = 7 * 16;  // PrimRecord in common.glsl
 
@@ -280,6 +285,7 @@ struct VisibilityPass::Impl {
         glDisable(GL_CULL_FACE);
         glBindVertexArray(vao);
 
+        const auto timedSpan = Clock::now();
         if (timer) glBeginQuery(GL_TIME_ELAPSED, timer);
         if (settings.backend == Backend::Raster) {
             reserveBuffer(buffers[kRecords], capacity[kRecords], 3 * primCount * kRecordBytes);
@@ -301,13 +307,39 @@ struct VisibilityPass::Impl {
         glGetNamedBufferSubData(buffers[kFlags], 0, static_cast<GLsizeiptr>(items.size() * 4), flagScratch.data());
         glGetNamedBufferSubData(buffers[kCounters], 0, 4, &overflows);
         stats.bytesReadBack += items.size() * 4 + 4;
-        if (timer) {
-            GLuint64 ns = 0;
-            glGetQueryObjectui64v(timer, GL_QUERY_RESULT, &ns);
-            level.gpuMs += static_cast<double>(ns) * 1e-6;
-            stats.gpuMs += static_cast<double>(ns) * 1e-6;
-        }
+        recordGpuTime(timer ? timerResultMs(timer, msSince(timedSpan)) : -1.0, level, stats);
         checkGlError("a visibility iteration");
+    }
+
+    /// The GPU time of the span just timed by `query`, in ms, or -1 when it is not available or not plausible:
+    /// the GPU cannot have spent longer between glBeginQuery and glEndQuery than the CPU waited from issuing the
+    /// first to holding the result (`wallMs`). llvmpipe (Mesa 22.3) fails this once per context: its first
+    /// TIME_ELAPSED result, with either back-end, is the end time stamp less a start that was never stamped (0),
+    /// i.e. CLOCK_MONOTONIC — the machine's uptime; its later results are plausible.
+    static double timerResultMs(GLuint query, double wallMs) {
+        // The flags were just read back, so waiting for the result costs next to nothing; a driver that still
+        // says it is not available has no trustworthy result.
+        GLuint64 ns = 0;
+        glGetQueryObjectui64v(query, GL_QUERY_RESULT, &ns);
+        GLint available = GL_FALSE;
+        glGetQueryObjectiv(query, GL_QUERY_RESULT_AVAILABLE, &available);
+        const double ms = static_cast<double>(ns) * 1e-6;
+        if (available != GL_TRUE || !std::isfinite(ms) || ms > kTimerFactor * wallMs + kTimerSlackMs) return -1.0;
+        return ms;
+    }
+
+    /// Adds one iteration's GPU time (`ms` < 0: absent) to the level and the frame. One absent iteration makes
+    /// the level's and the frame's timings absent: a partial sum would read as a time.
+    static void recordGpuTime(double ms, LevelStats& level, Stats& stats) {
+        if (ms < 0.0) {
+            level.gpuTimingValid = false;
+            level.gpuMs = 0.0;
+            stats.gpuTimingValid = false;
+            stats.gpuMs = 0.0;
+            return;
+        }
+        if (level.gpuTimingValid) level.gpuMs += ms;
+        if (stats.gpuTimingValid) stats.gpuMs += ms;
     }
 };
 

@@ -1,8 +1,11 @@
 // OFF / OBJ readers, the OFF writer and the cullide-pairs scene reader.
 //
-// All readers are line based and strict: every malformed input ends in ParseError(file, line, message), never in a
-// crash, a hang or a huge allocation. Declared counts are only trusted as far as the input can back them: the
-// reservations are bounded by the number of bytes left in the stream.
+// All readers are strict: every malformed input ends in ParseError(file, line, message), never in a crash, a hang or
+// a huge allocation. The mesh readers take their tokens straight from the stream, one at a time and only as many as
+// the record being parsed needs, so their time is linear in the bytes they read and their memory is the mesh they
+// build plus one token: a hostile 50 MB line is rejected after its first bad token. Declared counts are only trusted
+// as far as the input can back them: the reservations are bounded by the number of bytes left in the stream.
+// Messages are bounded too: names and tokens are shown escaped and shortened.
 #include "cullide/io/MeshIO.h"
 
 #include <nlohmann/json.hpp>
@@ -19,6 +22,7 @@
 #include <map>
 #include <ostream>
 #include <sstream>
+#include <streambuf>
 #include <string_view>
 #include <system_error>
 
@@ -26,14 +30,48 @@ namespace cullide::io {
 
 namespace {
 
+/// Longest name (file path) and message shown in an error, in bytes; longer ones are cut.
+constexpr std::size_t kMaxShownName = 200;
+constexpr std::size_t kMaxShownMessage = 1000;
+
+/// `s` for an error message: control bytes escaped (\0, \n, \t, \xNN), cut after `max` bytes (not inside a UTF-8
+/// sequence) with the full size noted.
+std::string printable(std::string_view s, std::size_t max) {
+    std::size_t n = std::min(s.size(), max);
+    if (n < s.size()) {
+        while (n > 0 && (static_cast<unsigned char>(s[n]) & 0xC0) == 0x80) --n;  // not inside a UTF-8 sequence
+    }
+    std::string out;
+    out.reserve(n + 32);
+    for (std::size_t i = 0; i < n; ++i) {
+        const auto c = static_cast<unsigned char>(s[i]);
+        if (c == 0) {
+            out += "\\0";
+        } else if (c == '\n') {
+            out += "\\n";
+        } else if (c == '\t') {
+            out += "\\t";
+        } else if (c < 0x20 || c == 0x7f) {
+            static const char* hex = "0123456789abcdef";
+            out += "\\x";
+            out += hex[c >> 4];
+            out += hex[c & 15];
+        } else {
+            out += static_cast<char>(c);
+        }
+    }
+    if (n < s.size()) out += "... (" + std::to_string(s.size()) + " bytes)";
+    return out;
+}
+
 std::string formatParseError(const std::string& file, std::size_t line, const std::string& message) {
-    std::string s = file;
+    std::string s = printable(file, kMaxShownName);
     if (line > 0) {
         s += ':';
         s += std::to_string(line);
     }
     s += ": ";
-    s += message;
+    s += printable(message, kMaxShownMessage);
     return s;
 }
 
@@ -47,30 +85,18 @@ namespace {
 constexpr std::uint64_t kMaxVertices = std::numeric_limits<std::uint32_t>::max();
 /// Reservation cap when the stream size is unknown (non-seekable streams): vectors then grow with the input.
 constexpr std::size_t kUnknownSizeReserve = 4096;
+/// Longest mesh path a scene may name (PATH_MAX on Linux).
+constexpr std::size_t kMaxPathBytes = 4096;
 
 // ---------------------------------------------------------------------------------------------------------------
 // Tokens and numbers
 
-bool isSpace(char c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
+bool isSpace(int c) { return c == ' ' || c == '\t' || c == '\r' || c == '\v' || c == '\f'; }
 
 /// Printable text, tabs and line-break characters, and bytes >= 0x80 (UTF-8 in comments and names) are text;
 /// any other control byte means the input is not a text file.
 bool isBinaryByte(unsigned char c) {
     return (c < 0x20 && c != '\t' && c != '\r' && c != '\v' && c != '\f' && c != '\n') || c == 0x7f;
-}
-
-/// Splits `line` into whitespace-separated tokens, ignoring everything from '#' on.
-void tokenize(std::string_view line, std::vector<std::string_view>& tokens) {
-    tokens.clear();
-    const std::size_t hash = line.find('#');
-    if (hash != std::string_view::npos) line = line.substr(0, hash);
-    std::size_t i = 0;
-    while (i < line.size()) {
-        while (i < line.size() && isSpace(line[i])) ++i;
-        const std::size_t start = i;
-        while (i < line.size() && !isSpace(line[i])) ++i;
-        if (i > start) tokens.push_back(line.substr(start, i - start));
-    }
 }
 
 /// Shortens a token for an error message (binary garbage can make tokens arbitrarily long and unprintable).
@@ -136,50 +162,56 @@ bool parseInt(std::string_view s, std::int64_t& out, bool& overflow) {
     return ec == std::errc();
 }
 
+bool isInteger(std::string_view s, std::int64_t& out) {
+    bool overflow = false;
+    return parseInt(s, out, overflow);
+}
+
 // ---------------------------------------------------------------------------------------------------------------
-// Line reading
+// Token reading
 
-class LineReader {
+/// Reads whitespace-separated tokens straight from the stream buffer, a record (one line) at a time and only as
+/// far as the parser asks: nothing is proportional to a line's length. '#' starts a comment that runs to the end of
+/// the line. Every byte consumed is checked for binary data; a UTF-8 byte-order mark at the start is skipped.
+class TokenReader {
 public:
-    LineReader(std::istream& in, const std::string& name) : m_in(in), m_name(name) {}
-
-    /// Next line with at least one token (comments and blank lines skipped); false at end of input.
-    bool nextContent() {
-        while (nextLine()) {
-            tokenize(m_line, m_tokens);
-            if (!m_tokens.empty()) return true;
-        }
-        return false;
+    TokenReader(std::istream& in, const std::string& name) : m_buf(in.rdbuf()), m_name(name) {
+        if (m_buf == nullptr) throw ParseError(name, 0, "read error (the stream has no buffer)");
     }
-    /// Next raw line (binary bytes rejected); false at end of input.
-    bool nextLine() {
-        if (!std::getline(m_in, m_line)) {
-            if (m_in.bad()) throw ParseError(m_name, m_lineNo + 1, "read error");
-            return false;
-        }
-        ++m_lineNo;
-        if (m_lineNo == 1 && m_line.size() >= 3 && m_line.compare(0, 3, "\xEF\xBB\xBF") == 0) m_line.erase(0, 3);
-        for (const char c : m_line) {
-            if (isBinaryByte(static_cast<unsigned char>(c))) {
-                throw ParseError(m_name, m_lineNo, "binary data (control byte " +
-                                                       quote(std::string_view(&c, 1)) + "): not a text file");
+
+    /// Leaves the current record (the rest of its line is skipped) and reads the first token of the next line that
+    /// has one; false at the end of input.
+    bool nextRecord() {
+        if (m_inRecord) skipLine();
+        m_inRecord = false;
+        while (true) {
+            if (readToken()) {
+                m_inRecord = true;
+                return true;
             }
+            if (m_buf->sbumpc() == kEof) return false;  // else it was the '\n'
+            newLine();
         }
-        return true;
     }
+    /// The next token of the current record; false at the end of its line.
+    bool next() { return m_inRecord && readToken(); }
+    /// The current token; valid until the next call to next() or nextRecord().
+    std::string_view token() const { return m_token; }
+    /// 1-based line of the current record.
+    std::size_t line() const { return m_line; }
 
-    const std::vector<std::string_view>& tokens() const { return m_tokens; }
-    std::size_t line() const { return m_lineNo; }
-    [[noreturn]] void fail(const std::string& message) const { throw ParseError(m_name, m_lineNo, message); }
+    /// Appended to every message (context such as "the vertex count may be too small"); empty for none.
+    void setHint(std::string hint) { m_hint = std::move(hint); }
+    [[noreturn]] void fail(const std::string& message) const { throw ParseError(m_name, m_line, message + m_hint); }
     /// For errors at the end of input: the line where the missing record was expected.
     [[noreturn]] void failAtEnd(const std::string& message) const {
-        throw ParseError(m_name, m_lineNo + 1, message);
+        throw ParseError(m_name, m_atLineStart ? m_line : m_line + 1, message + m_hint);
     }
 
-    double number(std::string_view token, const char* what) const {
+    double number(const char* what) const {
         double v = 0.0;
-        if (!parseDouble(token, v)) fail(std::string("invalid ") + what + " " + quote(token));
-        if (!std::isfinite(v)) fail(std::string(what) + " " + quote(token) + " is not a finite number");
+        if (!parseDouble(m_token, v)) fail(std::string("invalid ") + what + " " + quote(m_token));
+        if (!std::isfinite(v)) fail(std::string(what) + " " + quote(m_token) + " is not a finite number");
         return v;
     }
     std::int64_t integer(std::string_view token, const char* what) const {
@@ -191,22 +223,89 @@ public:
         }
         return v;
     }
-    /// Tokens [from, end) must be numbers (optional colour values, normals, w).
-    void checkTrailingNumbers(std::size_t from, const char* what) const {
-        for (std::size_t i = from; i < m_tokens.size(); ++i) {
+    /// The rest of the record must be numbers (optional colour values, normals, w). Returns how many there were;
+    /// `allIntegers` is cleared when one is not an integer.
+    std::size_t trailingNumbers(const char* after, bool& allIntegers) {
+        std::size_t n = 0;
+        while (next()) {
             double v = 0.0;
-            if (!parseDouble(m_tokens[i], v)) {
-                fail(std::string("unexpected token ") + quote(m_tokens[i]) + " after the " + what);
-            }
+            if (!parseDouble(m_token, v)) fail(std::string("unexpected token ") + quote(m_token) + " after the " + after);
+            std::int64_t i = 0;
+            allIntegers = allIntegers && isInteger(m_token, i);
+            ++n;
         }
+        return n;
     }
 
 private:
-    std::istream& m_in;
+    static constexpr int kEof = std::char_traits<char>::eof();
+
+    /// Consumes one byte of a token, a space or a comment (never the '\n'); rejects binary data.
+    void consume(int c) {
+        m_buf->sbumpc();
+        m_atLineStart = false;
+        ++m_offset;
+        if (isBinaryByte(static_cast<unsigned char>(c))) {
+            const char byte = static_cast<char>(c);
+            fail("binary data (control byte " + quote(std::string_view(&byte, 1)) + "): not a text file");
+        }
+    }
+    void newLine() {
+        ++m_line;
+        ++m_offset;
+        m_atLineStart = true;
+    }
+    /// Skips spaces and a comment, then reads a token into m_token; false at the end of the line or of the input
+    /// (the '\n' is left unread).
+    bool readToken() {
+        while (true) {
+            int c = m_buf->sgetc();
+            while (isSpace(c)) {
+                consume(c);
+                c = m_buf->sgetc();
+            }
+            if (c == '#') {
+                while (c != '\n' && c != kEof) {
+                    consume(c);
+                    c = m_buf->sgetc();
+                }
+            }
+            if (c == '\n' || c == kEof) return false;
+            const bool atStart = m_offset == 0;
+            m_token.clear();
+            while (c != '\n' && c != kEof && c != '#' && !isSpace(c)) {
+                consume(c);
+                if (m_token.size() == kMaxMeshTokenBytes) {
+                    fail("token longer than " + std::to_string(kMaxMeshTokenBytes) + " bytes: " + quote(m_token));
+                }
+                m_token += static_cast<char>(c);
+                c = m_buf->sgetc();
+            }
+            if (atStart && m_token.compare(0, 3, "\xEF\xBB\xBF") == 0) m_token.erase(0, 3);  // byte-order mark
+            if (!m_token.empty()) return true;
+        }
+    }
+    /// Skips the rest of the current line, its '\n' included.
+    void skipLine() {
+        int c = m_buf->sgetc();
+        while (c != '\n' && c != kEof) {
+            consume(c);
+            c = m_buf->sgetc();
+        }
+        if (c == '\n') {
+            m_buf->sbumpc();
+            newLine();
+        }
+    }
+
+    std::streambuf* m_buf;
     const std::string& m_name;
-    std::string m_line;
-    std::vector<std::string_view> m_tokens;
-    std::size_t m_lineNo = 0;
+    std::string m_token;
+    std::string m_hint;
+    std::size_t m_line = 1;
+    std::size_t m_offset = 0;
+    bool m_atLineStart = true;
+    bool m_inRecord = false;
 };
 
 /// Bytes left in the stream, or SIZE_MAX when the stream cannot tell (not seekable).
@@ -252,6 +351,101 @@ bool endsWithOff(std::string_view t) {
     return tail == "OFF";
 }
 
+// ---------------------------------------------------------------------------------------------------------------
+// OFF records
+
+struct OffCounts {
+    std::uint64_t vertices = 0;
+    std::uint64_t faces = 0;
+    std::size_t line = 0;  ///< where the counts are
+};
+
+/// "OFF" (or a variant), then "vertices faces [edges]" on the same or a later line.
+OffCounts readOffCounts(TokenReader& r) {
+    if (!r.nextRecord()) r.failAtEnd("empty file: expected the 'OFF' header or the vertex/face counts");
+    bool header = false;
+    if (isOffHeader(r.token())) {
+        header = true;
+        if (!r.next() && !r.nextRecord()) r.failAtEnd("unexpected end of file: expected the vertex/face counts");
+    } else if (endsWithOff(r.token())) {
+        r.fail("unsupported OFF variant " + quote(r.token()) + " (OFF, COFF, NOFF and CNOFF are read)");
+    }
+    std::array<std::int64_t, 3> counts{0, 0, 0};
+    std::size_t n = 0;
+    do {
+        if (n == counts.size()) r.fail("too many values on the counts line (expected 'vertices faces [edges]')");
+        std::int64_t v = 0;
+        bool overflow = false;
+        if (n == 0 && !header && !parseInt(r.token(), v, overflow) && !overflow) {
+            r.fail("expected the 'OFF' header or the vertex/face counts, found " + quote(r.token()));
+        }
+        counts[n] = r.integer(r.token(), "count");
+        if (counts[n] < 0) r.fail("negative count " + quote(r.token()));
+        ++n;
+    } while (r.next());
+    if (n < 2) r.fail("missing counts: expected 'vertices faces [edges]'");
+    OffCounts c;
+    c.vertices = static_cast<std::uint64_t>(counts[0]);
+    c.faces = static_cast<std::uint64_t>(counts[1]);
+    c.line = r.line();
+    if (c.vertices > kMaxVertices) {
+        r.fail("vertex count " + std::to_string(c.vertices) + " is too large (at most " +
+               std::to_string(kMaxVertices) + ")");
+    }
+    return c;
+}
+
+/// Vertex lines that look like faces ("n i1 ... in", all integers, perhaps a colour): evidence that the vertex
+/// count is larger than the vertex lines of the file.
+struct FaceLikeVertices {
+    std::size_t count = 0;
+    std::size_t firstLine = 0;
+    std::uint64_t firstIndex = 0;  ///< vertex lines before the first one
+
+    std::string explain(const OffCounts& c) const {
+        return "line " + std::to_string(firstLine) + " looks like a face, not a vertex: the vertex count " +
+               std::to_string(c.vertices) + " on line " + std::to_string(c.line) +
+               " is probably too large (the file has " + std::to_string(firstIndex) + " vertex lines before it)";
+    }
+};
+
+/// "x y z [colour...]"; `faceLike` says whether the record looks like a face instead.
+Vec3 readOffVertex(TokenReader& r, bool& faceLike) {
+    std::int64_t first = 0;
+    bool allIntegers = isInteger(r.token(), first);
+    Vec3 p;
+    for (int k = 0; k < 3; ++k) {
+        if (k > 0 && !r.next()) r.fail("vertex needs 3 coordinates, found " + std::to_string(k));
+        std::int64_t i = 0;
+        allIntegers = allIntegers && isInteger(r.token(), i);
+        p[k] = r.number("vertex coordinate");
+    }
+    const std::size_t extra = r.trailingNumbers("vertex coordinates", allIntegers);
+    const auto tokens = static_cast<std::int64_t>(3 + extra);
+    // A polygon "n i1 ... in" has n + 1 integers, n + 4 or n + 5 with an RGB(A) colour.
+    faceLike = allIntegers && first >= 3 && (tokens == first + 1 || tokens == first + 4 || tokens == first + 5);
+    return p;
+}
+
+/// "n i1 ... in [colour...]", fanned into `mesh`.
+void readOffFace(TokenReader& r, std::uint64_t nv, std::vector<std::uint32_t>& polygon, TriangleMesh& mesh) {
+    const std::int64_t n = r.integer(r.token(), "face vertex count");
+    if (n < 3) r.fail("face has " + std::to_string(n) + " vertices (at least 3 are needed)");
+    polygon.clear();
+    for (std::int64_t k = 0; k < n; ++k) {
+        if (!r.next()) r.fail("face declares " + std::to_string(n) + " vertices but lists " + std::to_string(k));
+        const std::int64_t idx = r.integer(r.token(), "vertex index");
+        if (idx < 0) r.fail("negative vertex index " + std::to_string(idx));
+        if (static_cast<std::uint64_t>(idx) >= nv) {
+            r.fail("vertex index " + std::to_string(idx) + " out of range (" + std::to_string(nv) + " vertices)");
+        }
+        polygon.push_back(static_cast<std::uint32_t>(idx));
+    }
+    bool allIntegers = true;
+    r.trailingNumbers("face indices (only a colour may follow)", allIntegers);
+    addFan(mesh, polygon);
+}
+
 }  // namespace
 
 // -------------------------------------------------------------------------------------------------------------------
@@ -259,91 +453,55 @@ bool endsWithOff(std::string_view t) {
 
 TriangleMesh readOff(std::istream& in, const std::string& name) {
     const std::size_t remaining = remainingBytes(in);
-    LineReader r(in, name);
+    TokenReader r(in, name);
     TriangleMesh mesh;
 
-    if (!r.nextContent()) r.failAtEnd("empty file: expected the 'OFF' header or the vertex/face counts");
-    std::size_t first = 0;
-    if (isOffHeader(r.tokens()[0])) {
-        first = 1;
-        if (r.tokens().size() == 1) {
-            if (!r.nextContent()) r.failAtEnd("unexpected end of file: expected the vertex/face counts");
-            first = 0;
-        }
-    } else if (endsWithOff(r.tokens()[0])) {
-        r.fail("unsupported OFF variant " + quote(r.tokens()[0]) + " (OFF, COFF, NOFF and CNOFF are read)");
-    }
-
-    // Counts: vertices faces [edges].
-    const auto& ct = r.tokens();
-    const std::size_t nCounts = ct.size() - first;
-    if (nCounts < 2) {
-        std::int64_t dummy = 0;
-        bool overflow = false;
-        if (first == 0 && !parseInt(ct[0], dummy, overflow) && !overflow) {
-            r.fail("expected the 'OFF' header or the vertex/face counts, found " + quote(ct[0]));
-        }
-        r.fail("missing counts: expected 'vertices faces [edges]'");
-    }
-    if (nCounts > 3) r.fail("too many values on the counts line (expected 'vertices faces [edges]')");
-    std::array<std::int64_t, 3> counts{0, 0, 0};
-    for (std::size_t k = 0; k < nCounts; ++k) {
-        counts[k] = r.integer(ct[first + k], "count");
-        if (counts[k] < 0) r.fail("negative count " + quote(ct[first + k]));
-    }
-    const auto nv = static_cast<std::uint64_t>(counts[0]);
-    const auto nf = static_cast<std::uint64_t>(counts[1]);
-    if (nv > kMaxVertices) {
-        r.fail("vertex count " + std::to_string(nv) + " is too large (at most " + std::to_string(kMaxVertices) +
-               ")");
-    }
-
+    const OffCounts c = readOffCounts(r);
     // "0 0 0\n" is the shortest vertex record, "3 0 0 0\n" the shortest face.
-    mesh.vertices.reserve(boundedReserve(nv, remaining, 6));
-    mesh.triangles.reserve(boundedReserve(nf, remaining, 8));
+    mesh.vertices.reserve(boundedReserve(c.vertices, remaining, 6));
+    mesh.triangles.reserve(boundedReserve(c.faces, remaining, 8));
 
-    for (std::uint64_t i = 0; i < nv; ++i) {
-        if (!r.nextContent()) {
-            r.failAtEnd("unexpected end of file: expected " + std::to_string(nv) + " vertices, found " +
-                        std::to_string(i));
+    FaceLikeVertices faceLike;
+    for (std::uint64_t i = 0; i < c.vertices; ++i) {
+        if (!r.nextRecord()) {
+            // The counts line is what is wrong when faces were read as vertices.
+            if (faceLike.count > 0) {
+                throw ParseError(name, c.line,
+                                 "the file ends after " + std::to_string(i) + " of the " +
+                                     std::to_string(c.vertices) + " declared vertices; " + faceLike.explain(c));
+            }
+            r.failAtEnd("unexpected end of file: expected " + std::to_string(c.vertices) + " vertices and " +
+                        std::to_string(c.faces) + " faces (counts on line " + std::to_string(c.line) +
+                        "), found " + std::to_string(i) + " vertices");
         }
-        const auto& t = r.tokens();
-        if (t.size() < 3) r.fail("vertex needs 3 coordinates, found " + std::to_string(t.size()));
-        Vec3 p;
-        for (int k = 0; k < 3; ++k) p[k] = r.number(t[static_cast<std::size_t>(k)], "vertex coordinate");
-        r.checkTrailingNumbers(3, "vertex coordinates");
-        mesh.vertices.push_back(p);
+        bool looksLikeFace = false;
+        mesh.vertices.push_back(readOffVertex(r, looksLikeFace));
+        if (looksLikeFace && faceLike.count++ == 0) {
+            faceLike.firstLine = r.line();
+            faceLike.firstIndex = i;
+        }
     }
 
     std::vector<std::uint32_t> polygon;
-    for (std::uint64_t f = 0; f < nf; ++f) {
-        if (!r.nextContent()) {
-            r.failAtEnd("unexpected end of file: expected " + std::to_string(nf) + " faces, found " +
-                        std::to_string(f));
+    for (std::uint64_t f = 0; f < c.faces; ++f) {
+        if (!r.nextRecord()) {
+            r.failAtEnd("unexpected end of file: expected " + std::to_string(c.faces) + " faces (counts on line " +
+                        std::to_string(c.line) + "), found " + std::to_string(f) +
+                        (faceLike.count > 0 ? "; " + faceLike.explain(c) : std::string()));
         }
-        const auto& t = r.tokens();
-        const std::int64_t n = r.integer(t[0], "face vertex count");
-        if (n < 3) r.fail("face has " + std::to_string(n) + " vertices (at least 3 are needed)");
-        if (static_cast<std::uint64_t>(n) > t.size() - 1) {
-            r.fail("face declares " + std::to_string(n) + " vertices but lists " + std::to_string(t.size() - 1));
-        }
-        polygon.clear();
-        for (std::size_t k = 1; k <= static_cast<std::size_t>(n); ++k) {
-            const std::int64_t idx = r.integer(t[k], "vertex index");
-            if (idx < 0) r.fail("negative vertex index " + std::to_string(idx));
-            if (static_cast<std::uint64_t>(idx) >= nv) {
-                r.fail("vertex index " + std::to_string(idx) + " out of range (" + std::to_string(nv) +
-                       " vertices)");
-            }
-            polygon.push_back(static_cast<std::uint32_t>(idx));
-        }
-        r.checkTrailingNumbers(static_cast<std::size_t>(n) + 1, "face indices (only a colour may follow)");
-        addFan(mesh, polygon);
+        // A first face that is not one is most likely a vertex the vertex count left out.
+        r.setHint(f == 0 && c.vertices > 0 ? " (line " + std::to_string(r.line()) +
+                                                  " should be the first face; if it is a vertex, the vertex count " +
+                                                  std::to_string(c.vertices) + " on line " +
+                                                  std::to_string(c.line) + " is too small)"
+                                            : std::string());
+        readOffFace(r, c.vertices, polygon, mesh);
     }
+    r.setHint("");
 
-    if (r.nextContent()) {
-        r.fail("unexpected data after the last of the " + std::to_string(nf) + " declared faces: " +
-               quote(r.tokens()[0]));
+    if (r.nextRecord()) {
+        r.fail("unexpected data after the last of the " + std::to_string(c.faces) + " declared faces (counts on line " +
+               std::to_string(c.line) + "): " + quote(r.token()));
     }
     return mesh;
 }
@@ -359,88 +517,101 @@ bool isKeyword(std::string_view t) {
     return std::all_of(t.begin(), t.end(), [&](char c) { return alpha(c) || (c >= '0' && c <= '9'); });
 }
 
+/// Faces that name a vertex defined further down (legal in OBJ): checked once all vertices are known.
+struct PendingFace {
+    std::size_t line;
+    std::uint64_t maxIndex;
+};
+
+/// "v x y z [w | colour]".
+Vec3 readObjVertex(TokenReader& r) {
+    Vec3 p;
+    for (int k = 0; k < 3; ++k) {
+        if (!r.next()) r.fail("vertex needs 3 coordinates, found " + std::to_string(k));
+        p[k] = r.number("vertex coordinate");
+    }
+    bool allIntegers = true;
+    r.trailingNumbers("vertex coordinates", allIntegers);
+    return p;
+}
+
+/// One face vertex (v, v/vt, v//vn, v/vt/vn) as a 0-based index; `count` vertices are known so far.
+std::int64_t readObjFaceVertex(const TokenReader& r, std::int64_t count) {
+    const std::string_view ref = r.token();
+    std::array<std::string_view, 3> parts{};
+    std::size_t nParts = 0;
+    std::size_t start = 0;
+    while (true) {
+        const std::size_t slash = ref.find('/', start);
+        if (nParts == 3) r.fail("invalid face vertex " + quote(ref) + " (too many '/')");
+        parts[nParts++] = ref.substr(start, slash == std::string_view::npos ? ref.npos : slash - start);
+        if (slash == std::string_view::npos) break;
+        start = slash + 1;
+    }
+    if (parts[0].empty()) r.fail("invalid face vertex " + quote(ref) + " (missing vertex index)");
+    for (std::size_t p = 1; p < nParts; ++p) {
+        if (parts[p].empty()) continue;
+        if (r.integer(parts[p], "texture/normal index") == 0) {
+            r.fail("invalid face vertex " + quote(ref) + " (index 0)");
+        }
+    }
+    const std::int64_t v = r.integer(parts[0], "vertex index");
+    if (v == 0) r.fail("vertex index 0 is invalid (OBJ indices start at 1)");
+    if (v < 0) {
+        if (count + v < 0) {
+            r.fail("relative vertex index " + std::to_string(v) + " out of range (" + std::to_string(count) +
+                   " vertices so far)");
+        }
+        return count + v;
+    }
+    if (static_cast<std::uint64_t>(v - 1) >= kMaxVertices) r.fail("vertex index " + std::to_string(v) + " out of range");
+    return v - 1;
+}
+
+/// "f v1 v2 v3 ...", fanned into `mesh`; a face naming vertices not read yet goes to `pending`.
+void readObjFace(TokenReader& r, std::vector<std::uint32_t>& polygon, TriangleMesh& mesh,
+                 std::vector<PendingFace>& pending) {
+    polygon.clear();
+    std::uint64_t maxForward = 0;
+    bool forward = false;
+    const auto count = static_cast<std::int64_t>(mesh.vertices.size());
+    while (r.next()) {
+        const std::int64_t idx = readObjFaceVertex(r, count);
+        if (idx >= count) {
+            forward = true;
+            maxForward = std::max(maxForward, static_cast<std::uint64_t>(idx));
+        }
+        polygon.push_back(static_cast<std::uint32_t>(idx));
+    }
+    if (polygon.size() < 3) {
+        r.fail("face has " + std::to_string(polygon.size()) + " vertices (at least 3 are needed)");
+    }
+    if (forward) pending.push_back({r.line(), maxForward});
+    addFan(mesh, polygon);
+}
+
 }  // namespace
 
 TriangleMesh readObj(std::istream& in, const std::string& name) {
-    LineReader r(in, name);
+    TokenReader r(in, name);
     TriangleMesh mesh;
     std::vector<std::uint32_t> polygon;
-    // Faces that name a vertex defined further down (legal in OBJ): checked once all vertices are known.
-    struct Pending {
-        std::size_t line;
-        std::uint64_t maxIndex;
-    };
-    std::vector<Pending> pending;
+    std::vector<PendingFace> pending;
 
-    while (r.nextContent()) {
-        const auto& t = r.tokens();
-        const std::string_view kw = t[0];
+    while (r.nextRecord()) {
+        const std::string_view kw = r.token();
         if (kw == "v") {
-            if (t.size() < 4) r.fail("vertex needs 3 coordinates, found " + std::to_string(t.size() - 1));
             if (mesh.vertices.size() >= kMaxVertices) r.fail("too many vertices");
-            Vec3 p;
-            for (int k = 0; k < 3; ++k) p[k] = r.number(t[static_cast<std::size_t>(k) + 1], "vertex coordinate");
-            r.checkTrailingNumbers(4, "vertex coordinates");
-            mesh.vertices.push_back(p);
+            mesh.vertices.push_back(readObjVertex(r));
         } else if (kw == "f") {
-            if (t.size() < 4) {
-                r.fail("face has " + std::to_string(t.size() - 1) + " vertices (at least 3 are needed)");
-            }
-            polygon.clear();
-            std::uint64_t maxForward = 0;
-            bool forward = false;
-            const auto count = static_cast<std::int64_t>(mesh.vertices.size());
-            for (std::size_t k = 1; k < t.size(); ++k) {
-                const std::string_view ref = t[k];
-                // v, v/vt, v//vn, v/vt/vn
-                std::array<std::string_view, 3> parts{};
-                std::size_t nParts = 0;
-                std::size_t start = 0;
-                while (true) {
-                    const std::size_t slash = ref.find('/', start);
-                    if (nParts == 3) r.fail("invalid face vertex " + quote(ref) + " (too many '/')");
-                    parts[nParts++] = ref.substr(start, slash == std::string_view::npos ? ref.npos : slash - start);
-                    if (slash == std::string_view::npos) break;
-                    start = slash + 1;
-                }
-                if (parts[0].empty()) r.fail("invalid face vertex " + quote(ref) + " (missing vertex index)");
-                for (std::size_t p = 1; p < nParts; ++p) {
-                    if (parts[p].empty()) continue;
-                    if (r.integer(parts[p], "texture/normal index") == 0) {
-                        r.fail("invalid face vertex " + quote(ref) + " (index 0)");
-                    }
-                }
-                const std::int64_t v = r.integer(parts[0], "vertex index");
-                std::int64_t idx = 0;
-                if (v == 0) {
-                    r.fail("vertex index 0 is invalid (OBJ indices start at 1)");
-                } else if (v < 0) {
-                    idx = count + v;
-                    if (idx < 0) {
-                        r.fail("relative vertex index " + std::to_string(v) + " out of range (" +
-                               std::to_string(count) + " vertices so far)");
-                    }
-                } else {
-                    idx = v - 1;
-                    if (static_cast<std::uint64_t>(idx) >= kMaxVertices) {
-                        r.fail("vertex index " + std::to_string(v) + " out of range");
-                    }
-                    if (idx >= count) {
-                        forward = true;
-                        maxForward = std::max(maxForward, static_cast<std::uint64_t>(idx));
-                    }
-                }
-                polygon.push_back(static_cast<std::uint32_t>(idx));
-            }
-            if (forward) pending.push_back({r.line(), maxForward});
-            addFan(mesh, polygon);
+            readObjFace(r, polygon, mesh, pending);
         } else if (!isKeyword(kw)) {
             r.fail("unknown record " + quote(kw));
         }
-        // Other records (vt, vn, g, o, s, usemtl, mtllib, l, ...) are ignored.
+        // Other records (vt, vn, g, o, s, usemtl, mtllib, l, ...) are ignored: nextRecord() skips their line.
     }
 
-    for (const Pending& p : pending) {
+    for (const PendingFace& p : pending) {
         if (p.maxIndex >= mesh.vertices.size()) {
             throw ParseError(name, p.line,
                              "vertex index " + std::to_string(p.maxIndex + 1) + " out of range (" +
@@ -463,11 +634,37 @@ std::string lowerExtension(const std::string& path) {
     return ext;
 }
 
-void openForReading(const std::string& path, std::ifstream& in) {
+/// Why `path` cannot be read as a regular file, or "" when it can. Says what is actually wrong: missing, a dangling
+/// link, a path the system cannot resolve (a symbolic-link loop, a name too long: the system's reason), a directory.
+std::string fileProblem(const std::string& path) {
+    if (path.empty()) return "empty path";
+    if (path.find('\0') != std::string::npos) return "the path contains a NUL byte (\\0)";
     std::error_code ec;
-    const auto status = std::filesystem::status(path, ec);
-    if (ec || !std::filesystem::exists(status)) throw ParseError(path, 0, "file not found");
-    if (!std::filesystem::is_regular_file(status)) throw ParseError(path, 0, "not a regular file");
+    const std::filesystem::file_status status = std::filesystem::status(path, ec);
+    if (status.type() == std::filesystem::file_type::not_found) {
+        std::error_code linkEc;
+        if (std::filesystem::is_symlink(std::filesystem::symlink_status(path, linkEc))) {
+            return "dangling symbolic link (its target does not exist)";
+        }
+        return "file does not exist";
+    }
+    if (ec) return "cannot resolve the path: " + ec.message();
+    if (std::filesystem::is_directory(status)) return "a directory, not a file";
+    if (!std::filesystem::is_regular_file(status)) return "not a regular file";
+    return "";
+}
+
+std::string checkedExtension(const std::string& path, std::string& problem) {
+    const std::string ext = lowerExtension(path);
+    problem.clear();
+    if (ext != ".off" && ext != ".obj") {
+        problem = "unsupported mesh format '" + printable(ext, 32) + "' (.off and .obj are read)";
+    }
+    return ext;
+}
+
+void openForReading(const std::string& path, std::ifstream& in) {
+    if (const std::string problem = fileProblem(path); !problem.empty()) throw ParseError(path, 0, problem);
     in.open(path, std::ios::binary);
     if (!in) throw ParseError(path, 0, "cannot open the file for reading");
 }
@@ -475,10 +672,11 @@ void openForReading(const std::string& path, std::ifstream& in) {
 }  // namespace
 
 TriangleMesh readMesh(const std::string& path) {
-    const std::string ext = lowerExtension(path);
-    if (ext != ".off" && ext != ".obj") {
-        throw ParseError(path, 0, "unsupported mesh format '" + ext + "' (.off and .obj are read)");
-    }
+    // The file first: a missing file is reported as missing whatever its name.
+    if (const std::string problem = fileProblem(path); !problem.empty()) throw ParseError(path, 0, problem);
+    std::string problem;
+    const std::string ext = checkedExtension(path, problem);
+    if (!problem.empty()) throw ParseError(path, 0, problem);
     std::ifstream in;
     openForReading(path, in);
     return ext == ".off" ? readOff(in, path) : readObj(in, path);
@@ -671,11 +869,34 @@ std::string jsonTypeName(const nlohmann::json& j) { return j.type_name(); }
 
 }  // namespace
 
+namespace {
+
+/// The whole scene text, at most kMaxSceneFileBytes.
+std::string readSceneText(std::istream& in, const std::string& name) {
+    std::string text;
+    std::array<char, 1 << 16> chunk{};
+    while (in.read(chunk.data(), static_cast<std::streamsize>(chunk.size())) || in.gcount() > 0) {
+        text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
+        if (text.size() > kMaxSceneFileBytes) {
+            throw ParseError(name, 0, "the scene is larger than " + std::to_string(kMaxSceneFileBytes >> 20) +
+                                          " MiB (a scene lists mesh files and transforms, not geometry)");
+        }
+    }
+    if (in.bad()) throw ParseError(name, 0, "read error");
+    return text;
+}
+
+}  // namespace
+
 std::vector<SceneObject> readSceneFile(const std::string& path) {
     std::ifstream in;
     openForReading(path, in);
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (in.bad()) throw ParseError(path, 0, "read error");
+    return readScene(in, path, std::filesystem::path(path).parent_path());
+}
+
+// `path` names the scene in errors (the file's path for readSceneFile).
+std::vector<SceneObject> readScene(std::istream& in, const std::string& path, const std::filesystem::path& baseDir) {
+    const std::string text = readSceneText(in, path);
 
     const JsonLocator loc(text);
     nlohmann::json doc;
@@ -702,8 +923,7 @@ std::vector<SceneObject> readSceneFile(const std::string& path) {
                          "\"objects\" must be an array, found " + jsonTypeName(*objectsIt));
     }
 
-    const std::filesystem::path baseDir = std::filesystem::path(path).parent_path();
-    std::map<std::string, TriangleMesh> cache;  // a mesh used by several objects is read once
+    std::map<std::string, std::shared_ptr<const TriangleMesh>> cache;  // a mesh used by several objects: read once
     std::vector<SceneObject> scene;
     scene.reserve(objectsIt->size());
     for (std::size_t i = 0; i < objectsIt->size(); ++i) {
@@ -724,6 +944,16 @@ std::vector<SceneObject> readSceneFile(const std::string& path) {
         }
         so.meshPath = meshIt->get<std::string>();
         if (so.meshPath.empty()) throw ParseError(path, loc.lineOf(meshPos), where + ".mesh is empty");
+        if (so.meshPath.size() > kMaxPathBytes) {
+            throw ParseError(path, loc.lineOf(meshPos),
+                             where + ".mesh is " + std::to_string(so.meshPath.size()) + " bytes long (paths have at most " +
+                                 std::to_string(kMaxPathBytes) + "): \"" + printable(so.meshPath, kMaxShownName) + "\"");
+        }
+        if (so.meshPath.find('\0') != std::string::npos) {
+            throw ParseError(path, loc.lineOf(meshPos),
+                             where + ".mesh contains a NUL byte (\\0): \"" + printable(so.meshPath, kMaxShownName) +
+                                 "\"");
+        }
 
         const auto trIt = obj.find("transform");
         const std::size_t trPos = trIt == obj.end() ? objPos : loc.member(objPos, "transform");
@@ -758,31 +988,23 @@ std::vector<SceneObject> readSceneFile(const std::string& path) {
         const std::string meshFileName = meshFile.string();
         auto cached = cache.find(meshFileName);
         if (cached == cache.end()) {
-            // Problems with the reference itself are reported at the scene's line.
-            std::error_code ec;
-            const auto status = std::filesystem::status(meshFile, ec);
-            if (ec || !std::filesystem::exists(status)) {
-                throw ParseError(path, loc.lineOf(meshPos), where + ".mesh: file not found: " + meshFileName);
-            }
-            if (!std::filesystem::is_regular_file(status)) {
-                throw ParseError(path, loc.lineOf(meshPos), where + ".mesh: not a regular file: " + meshFileName);
-            }
-            const std::string ext = lowerExtension(meshFileName);
-            if (ext != ".off" && ext != ".obj") {
+            // Problems with the reference itself are reported at the scene's line (names shown shortened).
+            std::string problem = fileProblem(meshFileName);
+            if (problem.empty()) checkedExtension(meshFileName, problem);
+            if (!problem.empty()) {
                 throw ParseError(path, loc.lineOf(meshPos),
-                                 where + ".mesh: unsupported mesh format '" + ext + "' (.off and .obj are read)");
+                                 where + ".mesh: " + problem + ": " + printable(meshFileName, kMaxShownName));
             }
             // Errors inside the mesh name the mesh file and its line.
-            cached = cache.emplace(meshFileName, readMesh(meshFileName)).first;
+            cached = cache.emplace(meshFileName, std::make_shared<const TriangleMesh>(readMesh(meshFileName))).first;
         }
         so.mesh = cached->second;
+        so.toWorld.linear = so.transform.topLeftCorner<3, 3>();
+        so.toWorld.translation = so.transform.topRightCorner<3, 1>();
 
-        const Eigen::Matrix3d linear = so.transform.topLeftCorner<3, 3>();
-        const Eigen::Vector3d translation = so.transform.topRightCorner<3, 1>();
-        for (std::size_t v = 0; v < so.mesh.vertices.size(); ++v) {
-            Vec3& p = so.mesh.vertices[v];
-            p = linear * p + translation;
-            if (!p.allFinite()) {
+        // Every vertex must land on a finite point (checked, not stored: the culler maps them itself).
+        for (std::size_t v = 0; v < so.mesh->vertices.size(); ++v) {
+            if (!transformPoint(so.toWorld, so.mesh->vertices[v]).allFinite()) {
                 throw ParseError(path, loc.lineOf(trPos),
                                  where + ".transform maps vertex " + std::to_string(v) + " of " + so.meshPath +
                                      " to a non-finite point");
@@ -791,6 +1013,15 @@ std::vector<SceneObject> readSceneFile(const std::string& path) {
         scene.push_back(std::move(so));
     }
     return scene;
+}
+
+TriangleMesh worldMesh(const SceneObject& object) {
+    TriangleMesh world;
+    if (object.mesh == nullptr) return world;
+    world.triangles = object.mesh->triangles;
+    world.vertices.reserve(object.mesh->vertices.size());
+    for (const Vec3& p : object.mesh->vertices) world.vertices.push_back(transformPoint(object.toWorld, p));
+    return world;
 }
 
 }  // namespace cullide::io

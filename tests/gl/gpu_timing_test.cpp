@@ -1,0 +1,124 @@
+// GPU timings are valid or absent (issue 13): a GPU time from timer queries is reported only when the driver's result
+// is available and plausible — the GPU cannot have spent longer on a span than the CPU waited for it. llvmpipe's
+// first timer result in a context is an absolute time (the machine's uptime); such results must be marked absent
+// (gpuTimingValid false, gpuMs 0, JSON null), never passed on.
+#include "Compare.h"
+#include "GlTestSupport.h"
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace cullide::test {
+namespace {
+
+/// A valid GPU time is at most the CPU wall time of the frame plus a little (clock-rate and timer granularity).
+double bound(double cpuMs) { return 1.05 * cpuMs + 2.0; }
+
+void expectValidOrAbsent(const Stats& stats, const std::string& what) {
+    bool allLevelsValid = true;
+    for (const LevelStats& level : stats.levels) {
+        if (level.gpuTimingValid) {
+            EXPECT_GE(level.gpuMs, 0.0) << what << ", level " << level.name;
+            EXPECT_LE(level.gpuMs, bound(level.cpuMs)) << what << ", level " << level.name;
+            EXPECT_LE(level.gpuMs, bound(stats.totalMs)) << what << ", level " << level.name;
+        } else {
+            EXPECT_EQ(level.gpuMs, 0.0) << what << ", level " << level.name << ": an absent time must not read as one";
+            allLevelsValid = false;
+        }
+    }
+    EXPECT_EQ(stats.gpuTimingValid, allLevelsValid) << what;
+    if (stats.gpuTimingValid) {
+        EXPECT_GE(stats.gpuMs, 0.0) << what;
+        EXPECT_LE(stats.gpuMs, bound(stats.totalMs)) << what;
+    } else {
+        EXPECT_EQ(stats.gpuMs, 0.0) << what;
+    }
+}
+
+TEST(GpuTiming, ReportedTimesAreValidOrAbsent) {
+    const auto meshes = randomSoups(11, 40, 100, 0.08);
+    const auto objects = asObjects(meshes);
+    for (Backend backend : {Backend::Compute, Backend::Raster}) {
+        for (Pipeline pipeline : {Pipeline::Auto, Pipeline::Paper}) {
+            Settings settings;
+            settings.gpuLevels = GpuLevels::Always;  // GPU levels also on llvmpipe
+            settings.exactThreshold = 0;
+            settings.resolution = 64;
+            settings.backend = backend;
+            settings.pipeline = pipeline;
+            CULLIDE_GPU_CULLER_OR_SKIP(culler, settings);
+            for (int frame = 0; frame < 2; ++frame) {
+                Result result;
+                culler->run(objects, result);
+                const std::string what = std::string(backend == Backend::Compute ? "compute" : "raster") +
+                                         (pipeline == Pipeline::Auto ? " auto" : " paper") + " frame " +
+                                         std::to_string(frame) + " (" + result.stats.renderer + ")";
+                ASSERT_FALSE(result.stats.levels.empty()) << what << ": the GPU levels must run in this test";
+                EXPECT_EQ(result.stats.gpuFallbacks, 0u) << what << ": " << result.stats.gpuError;
+                expectValidOrAbsent(result.stats, what);
+            }
+        }
+    }
+}
+
+TEST(GpuTiming, FramesWithoutGpuLevelsReportZeroAsValid) {
+    Settings settings;
+    settings.gpuLevels = GpuLevels::Never;
+    CULLIDE_GPU_CULLER_OR_SKIP(culler, settings);
+    const auto meshes = randomSoups(12, 10, 40, 0.3);
+    Result result;
+    culler->run(asObjects(meshes), result);
+    EXPECT_TRUE(result.stats.levels.empty());
+    EXPECT_TRUE(result.stats.gpuTimingValid);
+    EXPECT_EQ(result.stats.gpuMs, 0.0);
+}
+
+/// cullide-pairs prints a GPU time only where it is valid: a number no larger than the frame, else null.
+TEST(GpuTiming, CullidePairsPrintsNullOrAPlausibleTime) {
+    {
+        Settings demanding;  // Settings{} (GpuLevels::Auto) would run without GL: the probe must demand it
+        demanding.gpuLevels = GpuLevels::Always;
+        CULLIDE_GPU_CULLER_OR_SKIP(probe, demanding);  // GL policy: skip outside CI only
+    }
+    namespace fs = std::filesystem;
+    const fs::path dir = fs::temp_directory_path() / ("cullide_gpu_timing_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    std::ofstream(dir / "a.off") << "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    std::ofstream(dir / "b.off") << "OFF\n3 1 0\n0.2 0.2 -0.5\n0.2 0.2 0.5\n0.9 0.9 0\n3 0 1 2\n";
+    std::ofstream(dir / "scene.json") << "{\"objects\": [{\"mesh\": \"a.off\"}, {\"mesh\": \"b.off\"}]}";
+    for (const char* backend : {"compute", "raster"}) {
+        const std::string command = std::string(CULLIDE_PAIRS_EXE) + " " + (dir / "scene.json").string() +
+                                    " --gpu-levels always --pipeline paper --resolution 64 --backend " + backend +
+                                    " > " + (dir / "out.json").string();
+        const int raw = std::system(command.c_str());
+        ASSERT_TRUE(WIFEXITED(raw) && WEXITSTATUS(raw) == 0) << command;
+        std::ifstream in(dir / "out.json");
+        std::stringstream text;
+        text << in.rdbuf();
+        const auto stats = nlohmann::json::parse(text.str())["stats"];
+        const double total = stats["total_ms"].get<double>();
+        ASSERT_FALSE(stats["levels"].empty()) << text.str();
+        for (const auto& level : stats["levels"]) {
+            ASSERT_TRUE(level["gpu_ms"].is_null() || level["gpu_ms"].is_number()) << level.dump();
+            if (level["gpu_ms"].is_number()) {
+                EXPECT_LE(level["gpu_ms"].get<double>(), bound(total)) << level.dump();
+            }
+        }
+        ASSERT_TRUE(stats["gpu_ms"].is_null() || stats["gpu_ms"].is_number()) << stats.dump();
+        if (stats["gpu_ms"].is_number()) {
+            EXPECT_LE(stats["gpu_ms"].get<double>(), bound(total)) << stats.dump();
+        }
+    }
+    fs::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace cullide::test

@@ -1,0 +1,127 @@
+// The CPU path needs no GL (issue 13, items 5 and 6): with GpuLevels::Never the GPU culler opens no GL context,
+// with GpuLevels::Auto it runs the CPU path (with a notice) when there is no usable GL device, and only where GPU
+// levels are demanded (GpuLevels::Always, Pipeline::Paper) does a missing device throw GlUnavailableError. The
+// device is made unusable with a device preference that cannot exist ("99"), which the EGL code refuses.
+#include "Compare.h"
+
+#include <gtest/gtest.h>
+
+#include <cstddef>
+#include <memory>
+#include <stdexcept>
+#include <string>
+
+namespace cullide::test {
+namespace {
+
+constexpr const char* kNoSuchDevice = "99";
+
+Settings withoutDevice(GpuLevels levels, Pipeline pipeline = Pipeline::Auto) {
+    Settings s;
+    s.gpuLevels = levels;
+    s.pipeline = pipeline;
+    s.resolution = 64;
+    s.device = kNoSuchDevice;
+    return s;
+}
+
+/// Runs `culler` on a small soup scene and expects exactly the reference's pairs.
+Result expectSameAsReference(Culler& culler, std::uint64_t seed) {
+    const auto meshes = randomSoups(seed, 12, 60, 0.2);
+    const auto objects = asObjects(meshes);
+    Result reference, result;
+    createReferenceCuller(culler.settings())->run(objects, reference);
+    culler.run(objects, result);
+    const Comparison c = compare(reference, result);
+    EXPECT_GT(c.expected, 0u) << "scene too sparse to test anything";
+    EXPECT_EQ(c.missed, 0u) << c.firstMissed;
+    EXPECT_EQ(c.spurious, 0u);
+    EXPECT_TRUE(c.objectPairsEqual);
+    return result;
+}
+
+void expectNoGlInStats(const Stats& stats) {
+    EXPECT_EQ(stats.device, "none");
+    EXPECT_EQ(stats.renderer, "");
+    EXPECT_FALSE(stats.gpuUnavailable.empty());
+    EXPECT_TRUE(stats.levels.empty());
+    EXPECT_EQ(stats.draws, 0u);
+    EXPECT_EQ(stats.bytesUploaded, 0u);
+    EXPECT_EQ(stats.gpuDeviceBytes, 0u);
+    EXPECT_EQ(stats.gpuFallbacks, 0u);
+}
+
+TEST(NoGl, NeverOpensNoContextAndMatchesTheReference) {
+    testing::internal::CaptureStderr();
+    std::unique_ptr<Culler> culler;
+    ASSERT_NO_THROW(culler = createGpuCuller(withoutDevice(GpuLevels::Never)));
+    for (std::uint64_t seed : {1u, 2u}) {
+        const Result r = expectSameAsReference(*culler, seed);
+        expectNoGlInStats(r.stats);
+        EXPECT_NE(r.stats.gpuUnavailable.find("Never"), std::string::npos) << r.stats.gpuUnavailable;
+    }
+    EXPECT_EQ(testing::internal::GetCapturedStderr(), "") << "GpuLevels::Never is no reason for a notice";
+}
+
+/// The notice lines ("cullide: ...") in captured standard error; lines of the EGL/Mesa libraries are not counted.
+std::size_t noticeLines(const std::string& text) {
+    std::size_t lines = 0;
+    for (std::size_t at = text.find("cullide:"); at != std::string::npos; at = text.find("cullide:", at + 1)) ++lines;
+    return lines;
+}
+
+TEST(NoGl, AutoRunsTheCpuPathWithOneNotice) {
+    // A device index no run of this test used before in this process (--gtest_repeat): the notice names it, and a
+    // notice is given once per process and reason.
+    static int run = 0;
+    Settings settings = withoutDevice(GpuLevels::Auto);
+    settings.device = std::to_string(900 + run++);
+    testing::internal::CaptureStderr();
+    std::unique_ptr<Culler> culler;
+    ASSERT_NO_THROW(culler = createGpuCuller(settings));
+    const Result first = expectSameAsReference(*culler, 3);
+    const Result second = expectSameAsReference(*culler, 4);
+    const std::string notice = testing::internal::GetCapturedStderr();
+    expectNoGlInStats(first.stats);
+    expectNoGlInStats(second.stats);
+    // One line (not one per frame), naming what is missing: the GlUnavailableError's message.
+    EXPECT_EQ(noticeLines(notice), 1u) << notice;
+    EXPECT_NE(notice.find("CPU path"), std::string::npos) << notice;
+    EXPECT_NE(notice.find(first.stats.gpuUnavailable), std::string::npos) << notice;
+    EXPECT_NE(first.stats.gpuUnavailable.find(settings.device), std::string::npos) << first.stats.gpuUnavailable;
+    EXPECT_EQ(second.stats.gpuUnavailable, first.stats.gpuUnavailable);
+
+    // A second culler for the same reason (the Bullet adapter re-creates its culler as its margin grows) says why
+    // in its stats, but does not repeat the notice.
+    testing::internal::CaptureStderr();
+    ASSERT_NO_THROW(culler = createGpuCuller(settings));
+    const Result again = expectSameAsReference(*culler, 5);
+    EXPECT_EQ(noticeLines(testing::internal::GetCapturedStderr()), 0u);
+    EXPECT_EQ(again.stats.gpuUnavailable, first.stats.gpuUnavailable);
+}
+
+TEST(NoGl, DemandedGpuLevelsStillThrow) {
+    EXPECT_THROW(createGpuCuller(withoutDevice(GpuLevels::Always)), GlUnavailableError);
+    EXPECT_THROW(createGpuCuller(withoutDevice(GpuLevels::Auto, Pipeline::Paper)), GlUnavailableError);
+    EXPECT_THROW(createGpuCuller(withoutDevice(GpuLevels::Always, Pipeline::Paper)), GlUnavailableError);
+}
+
+TEST(Settings, PaperWithNeverIsRejected) {
+    Settings s;
+    s.pipeline = Pipeline::Paper;
+    s.gpuLevels = GpuLevels::Never;
+    const std::string error = s.validate();
+    EXPECT_NE(error.find("Paper"), std::string::npos) << error;
+    EXPECT_NE(error.find("Never"), std::string::npos) << error;
+    EXPECT_THROW(createGpuCuller(s), std::invalid_argument);
+    for (GpuLevels levels : {GpuLevels::Auto, GpuLevels::Always}) {
+        s.gpuLevels = levels;
+        EXPECT_EQ(s.validate(), "");
+    }
+    s.pipeline = Pipeline::Auto;
+    s.gpuLevels = GpuLevels::Never;
+    EXPECT_EQ(s.validate(), "");
+}
+
+}  // namespace
+}  // namespace cullide::test
