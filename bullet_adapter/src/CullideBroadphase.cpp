@@ -15,6 +15,7 @@
 
 #include <algorithm>
 #include <limits>
+#include <map>
 #include <cmath>
 #include <cstdio>
 #include <new>
@@ -60,6 +61,7 @@ struct Proxy : btBroadphaseProxy {
     // Per-frame scratch.
     Role role = Role::Invalid;
     std::uint64_t nearFrame = 0;
+    bool pairsWithStatics = false;  ///< static, and its filter admits some other static object (every step)
 };
 
 btCollisionObject* objectOf(const btBroadphaseProxy* p) { return static_cast<btCollisionObject*>(p->m_clientObject); }
@@ -146,6 +148,7 @@ struct CullideBroadphase::Impl {
     std::vector<Proxy*> objectProxy;
     Result result;
     std::vector<std::pair<Proxy*, Proxy*>> desired;
+    std::map<std::pair<int, int>, std::size_t> filterCounts;  ///< static objects per (group, mask)
     std::vector<std::uint64_t> desiredKeys;
     std::vector<std::pair<btBroadphaseProxy*, btBroadphaseProxy*>> toRemove;
 
@@ -487,7 +490,33 @@ struct CullideBroadphase::Impl {
         return std::max(d, 1e-9);
     }
 
-    /// Static objects are handed to the culler only where a moving object's box comes within the margin.
+    /// Whether static objects can pair with each other. Bullet's broadphases pair static objects like any others:
+    /// only the filter (group/mask, the pair cache's overlap filter callback) decides, and the static flag does not
+    /// (btDiscreteDynamicsWorld::addRigidBody gives static bodies the StaticFilter group and a mask without it:
+    /// that is why dynamics worlds have no static-static pairs, while a btCollisionWorld of plain, static-flagged
+    /// btCollisionObjects has them). A static object whose group/mask admits another static one's is handed to the
+    /// culler every step; the others only where a moving object comes near (markStaticsNearDynamics). With an
+    /// overlap filter callback (it may admit anything) or a pair cache of unknown kind, every static object is.
+    void markStaticsPairingStatics() {
+        auto* hashed = dynamic_cast<btHashedOverlappingPairCache*>(cache);
+        const bool anything = hashed == nullptr || hashed->getOverlapFilterCallback() != nullptr;
+        filterCounts.clear();
+        for (const Proxy* p : proxies)
+            if (p->role == Role::Static) ++filterCounts[{p->m_collisionFilterGroup, p->m_collisionFilterMask}];
+        for (Proxy* p : proxies) {
+            if (p->role != Role::Static) continue;
+            p->pairsWithStatics = anything;
+            for (const auto& [filter, count] : filterCounts) {
+                if (p->pairsWithStatics) break;
+                const bool self = filter.first == p->m_collisionFilterGroup && filter.second == p->m_collisionFilterMask;
+                p->pairsWithStatics = (count > 1 || !self) && (p->m_collisionFilterGroup & filter.second) != 0 &&
+                                      (filter.first & p->m_collisionFilterMask) != 0;
+            }
+        }
+    }
+
+    /// Static objects that cannot pair with other static ones are handed to the culler only where a moving
+    /// object's box comes within the margin.
     void markStaticsNearDynamics() {
         if (tree.m_root == nullptr) return;
         const btScalar grow = btScalar(margin);
@@ -505,7 +534,8 @@ struct CullideBroadphase::Impl {
         objects.clear();
         objectProxy.clear();
         for (Proxy* p : proxies) {
-            const bool include = p->role == Role::Dynamic || (p->role == Role::Static && p->nearFrame == frame);
+            const bool include = p->role == Role::Dynamic ||
+                                 (p->role == Role::Static && (p->nearFrame == frame || p->pairsWithStatics));
             if (!include) {
                 if (p->role == Role::Static) ++stats.staticObjectsSkipped;
                 continue;
@@ -671,8 +701,7 @@ struct CullideBroadphase::Impl {
         for (const ObjectPair& op : result.pairs) {
             Proxy* pa = objectProxy[op.a];
             Proxy* pb = objectProxy[op.b];
-            if (pa->role == Role::Static && pb->role == Role::Static) continue;
-            addDesired(pa, pb);
+            addDesired(pa, pb);  // the pair cache applies the filter (static-static pairs too, as Bullet's do)
             ++stats.cullerPairs;
             if (op.hasTriangles) makeRecord(pa, pb, op);
         }
@@ -704,7 +733,6 @@ struct CullideBroadphase::Impl {
             for (Proxy* q : proxies) {
                 if (q == inf || q->role == Role::Invalid || q->role == Role::Ghost) continue;
                 if (q->role == Role::Infinite && q->m_uniqueId < inf->m_uniqueId) continue;  // once per pair
-                if (isStatic(inf) && isStatic(q)) continue;
                 if (!infiniteTouches(inf, q)) continue;
                 addDesired(inf, q);
                 ++stats.infinitePairs;
@@ -780,6 +808,7 @@ struct CullideBroadphase::Impl {
             if (cullerUsable) shrinkFailed = true;
         }
         stats.margin = margin;
+        markStaticsPairingStatics();
         markStaticsNearDynamics();
         buildObjects();
         stats.buildMs = build.ms();

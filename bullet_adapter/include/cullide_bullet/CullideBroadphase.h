@@ -89,11 +89,12 @@ struct CullideFrameStats {
     std::size_t culledObjects = 0;       ///< objects handed to the culler
     std::size_t meshObjects = 0;         ///< ... of which with triangle geometry
     std::size_t triangles = 0;           ///< triangles handed to the culler
-    std::size_t staticObjectsSkipped = 0;  ///< static objects far from every moving object (not handed over)
+    /// Static objects not handed over: far from every moving object, and no other static one passes their filter.
+    std::size_t staticObjectsSkipped = 0;
     std::size_t infiniteObjects = 0;
     std::size_t ghostObjects = 0;
     std::size_t rejectedObjects = 0;     ///< invalid AABBs or geometry this frame
-    std::size_t cullerPairs = 0;         ///< object pairs reported by the culler (static-static excluded)
+    std::size_t cullerPairs = 0;         ///< object pairs reported by the culler (before the pair cache's filter)
     std::size_t infinitePairs = 0;       ///< pairs with planes / infinite boxes
     std::size_t ghostPairs = 0;
     std::size_t pairs = 0;               ///< pairs in the cache after the update
@@ -115,7 +116,8 @@ public:
     /// Creates the culler for `settings` (createGpuCuller unless another factory is given).
     using CullerFactory = std::function<std::unique_ptr<Culler>(const Settings&)>;
 
-    /// Throws GlUnavailableError without GL, std::invalid_argument for invalid settings. `pairCache` (optional,
+    /// Like createGpuCuller: without a usable GL device the culler runs its CPU path (a one-line notice), unless the
+    /// settings demand GPU levels (then GlUnavailableError); std::invalid_argument for invalid settings. `pairCache` (optional,
     /// not owned) replaces the internal btHashedOverlappingPairCache, like btDbvtBroadphase(btOverlappingPairCache*).
     explicit CullideBroadphase(const Settings& settings = Settings{}, btOverlappingPairCache* pairCache = nullptr)
         : CullideBroadphase(detail::checkBulletPrecision(), settings, pairCache, CullerFactory{}) {}
