@@ -1,0 +1,109 @@
+#!/usr/bin/env bash
+# The benchmark run list (issue #5), shared by scripts/bench.sh and the GPU bundle's run.sh (scripts/gpu-run.sh):
+#   scripts/bench-runs.sh RUN OUT [--quick]
+# RUN is cullide-bench-run; OUT gets results.jsonl (one record per run), truth/*.bin (the exact answers the other
+# engines' errors are measured against), failures.txt (failing runs; a failing run is listed, not fatal) and
+# stderr.txt. Each (scene, engine) runs as its own process, so its peak memory is its own.
+# Environment: BENCH_RUN_TIMEOUT (seconds per run, default 900); BENCH_DEADLINE (epoch seconds, optional): runs
+# that would start after it are skipped and listed in failures.txt, so a time-limited caller still gets a report.
+set -euo pipefail
+usage() { echo "usage: scripts/bench-runs.sh RUN OUT [--quick]" >&2; exit 2; }
+[ $# -ge 2 ] || usage
+run=$1 out=$2
+shift 2
+quick=0
+for a in "$@"; do
+  case "$a" in
+    --quick) quick=1 ;;
+    *) usage ;;
+  esac
+done
+run_timeout=${BENCH_RUN_TIMEOUT:-900}
+deadline=${BENCH_DEADLINE:-}
+
+mkdir -p "$out/truth"
+rm -f "$out/results.jsonl" "$out"/truth/*.bin "$out/failures.txt"
+
+# One record: bench TAG SCENE ENGINE FRAMES [more cullide-bench-run flags]. A failing run is listed, not fatal.
+bench() {
+  local tag=$1 scene=$2 engine=$3 frames=$4
+  shift 4
+  local t=$(date +%s)
+  local rc=0
+  if [ -n "$deadline" ] && [ "$t" -ge "$deadline" ]; then
+    echo "$tag $scene $engine $* : skipped (time budget spent)" | tee -a "$out/failures.txt"
+    return 0
+  fi
+  timeout "$run_timeout" "$run" --tag "$tag" --scene "$scene" --engine "$engine" --frames "$frames" \
+    --out "$out/results.jsonl" "$@" 2>>"$out/stderr.txt" || rc=$?
+  if [ $rc -ne 0 ]; then
+    echo "$tag $scene $engine $* : exit $rc" | tee -a "$out/failures.txt"
+  else
+    printf '  %-12s %-12s %-16s %-28s %4d s\n' "$tag" "$scene" "$engine" "$*" $(( $(date +%s) - t ))
+  fi
+}
+
+has_engine() { "$run" --list-engines | grep -x "$1" >/dev/null; }
+engines="exact cullide cullide-1t cullide-gpu cullide-sampled bullet-dbvt bullet-sap"
+for e in fcl fcl-aabb; do has_engine $e && engines="$engines $e"; done
+peers="bullet-dbvt bullet-sap"
+for e in fcl fcl-aabb; do has_engine $e && peers="$peers $e"; done
+
+if [ $quick -eq 1 ]; then
+  side_scenes="env1:3 env3:1"
+  steps=20
+  sweep="env1:64:1 env1:256:1"
+  objects="25 100 250"; tris="200 2000"; scale_frames=2
+  scale_engines="cullide bullet-dbvt"
+  breakable_steps=10; breakable_sample=5
+else
+  side_scenes="env1:20 env2:8 env3:8 env3-deform:8"
+  steps=300
+  # Every resolution of a scene on the same frames (error sums comparable along the sweep).
+  sweep=""
+  for r in 32 64 128 256 512 1024 2048; do sweep="$sweep env1:$r:3"; done
+  for r in 32 64 128 256 512 1024 2048; do sweep="$sweep env3-deform:$r:2"; done
+  objects="25 50 100 250 500 1000"; tris="200 1000 2000 5000 10000 20000"; scale_frames=5
+  scale_engines="cullide cullide-gpu bullet-dbvt"
+  breakable_steps=300; breakable_sample=30
+fi
+for e in fcl-aabb fcl; do has_engine $e && scale_engines="$scale_engines $e"; done
+
+# 1. Side by side: the exact answer first (its truth file gives the others' errors), then every engine.
+for sf in $side_scenes; do
+  scene=${sf%%:*}; frames=${sf##*:}
+  for e in $engines; do bench side "$scene" "$e" "$frames" --truth "$out/truth/$scene.bin"; done
+done
+for scene in stack landscape; do
+  for e in cullide $peers; do
+    case $e in fcl*) continue ;; esac
+    bench side $scene $e $steps
+  done
+done
+if "$run" --list-scenes | grep -x breakable >/dev/null; then
+  for e in cullide cullide-fast bullet-dbvt bullet-sap; do
+    bench side breakable $e $breakable_steps --sample-every $breakable_sample
+  done
+else
+  echo "bench: the breakable scene is not built (no cullide_demo_scene target): no breakable rows" \
+    | tee -a "$out/failures.txt"
+fi
+
+# 2. Speed against error: GPU levels forced, both modes, the side-by-side truth files.
+for item in $sweep; do
+  IFS=: read -r scene res frames <<<"$item"
+  [ -f "$out/truth/$scene.bin" ] || bench side "$scene" exact 4 --truth "$out/truth/$scene.bin"
+  for e in cullide-gpu cullide-sampled; do
+    bench sweep "$scene" $e "$frames" --resolution "$res" --truth "$out/truth/$scene.bin"
+  done
+done
+
+# 3. Scaling: objects (env1, 200 triangles each) and triangles per object (env2, 6 tori).
+for n in $objects; do
+  f=$scale_frames; [ "$n" -ge 1000 ] && f=3
+  for e in $scale_engines; do bench scale-objects env1 $e $f --objects "$n"; done
+done
+for n in $tris; do
+  for e in $scale_engines; do bench scale-triangles env2 $e $scale_frames --tris "$n"; done
+done
+exit 0

@@ -1,0 +1,173 @@
+#!/usr/bin/env bash
+# The GPU bundle's one command (made by scripts/gpu-run.sh; docs/benchmarks.md, "Running on a GPU machine"):
+#   run.sh [--quick] [--device hardware|software|surfaceless|N] OUTDIR
+# 1. prints the machine, the driver and the EGL device/renderer CULLIDE picks (cullide-bench-run --probe);
+# 2. runs the GL tests (CI=true: a missing device fails) -> OUTDIR/gl-tests.json, the Bullet adapter tests ->
+#    OUTDIR/bullet-tests.json, and a short headless demo -> OUTDIR/demo/;
+# 3. runs the benchmarks: bench-runs.sh, the same run list as scripts/bench.sh (--quick: its quick list);
+# 4. cullide-bench-report: OUTDIR/results-gpu.json (results + machine, device, renderer, driver), OUTDIR/benchmarks.md,
+#    OUTDIR/plotdata/ (gnuplot scripts; PNGs in OUTDIR/plots/ only where gnuplot is installed);
+# 5. OUTDIR/log.txt holds everything printed. A failing step is logged and the next one still runs; the exit status
+#    is 0 only when every step passed.
+# The device is CULLIDE_GL_DEVICE (default hardware; --device overrides). EGL vendor: an existing
+# __EGL_VENDOR_LIBRARY_FILENAMES, else /usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json if present (hardware
+# device only), else libglvnd's defaults. Time: everything ends within GPU_RUN_BUDGET_S (default 500 s; benchmark runs
+# that would start later are skipped and listed as failures), each benchmark run within BENCH_RUN_TIMEOUT (90 s).
+set -uo pipefail
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
+usage() { echo "usage: run.sh [--quick] [--device hardware|software|surfaceless|N] OUTDIR" >&2; exit 2; }
+quick=0 device="" outdir=""
+while [ $# -gt 0 ]; do
+  case "$1" in
+    --quick) quick=1 ;;
+    --device) [ $# -ge 2 ] || usage; device=$2; shift ;;
+    --device=*) device=${1#--device=} ;;
+    -h|--help) usage ;;
+    -*) usage ;;
+    *) [ -z "$outdir" ] || usage; outdir=$1 ;;
+  esac
+  shift
+done
+[ -n "$outdir" ] || usage
+mkdir -p "$outdir" || exit 2
+out=$(cd "$outdir" && pwd)
+rm -rf "$out/bench" "$out/demo" "$out/plots" "$out/plotdata" "$out/cache" "$out/tmp" "$out/results-gpu.json" \
+  "$out/gl-tests.json" "$out/bullet-tests.json" "$out/benchmarks.md" "$out/log.txt"
+exec > >(tee "$out/log.txt") 2>&1
+tee_pid=$!
+t0=$(date +%s)
+budget=${GPU_RUN_BUDGET_S:-500}
+mode=$([ $quick -eq 1 ] && echo quick || echo full)
+
+export PATH="$here/bin:$PATH"           # the GL tests run cullide-pairs by its bare name
+export CULLIDE_DATA_DIR="$here/data/meshes"
+export CULLIDE_GL_DEVICE=${device:-${CULLIDE_GL_DEVICE:-hardware}}
+export CI=true
+nvidia_json=/usr/local/nvidia/share/glvnd/egl_vendor.d/10_nvidia.json
+if [ -z "${__EGL_VENDOR_LIBRARY_FILENAMES:-}" ] && [ -f $nvidia_json ] && [ "$CULLIDE_GL_DEVICE" != software ] &&
+   [ "$CULLIDE_GL_DEVICE" != surfaceless ]; then
+  export __EGL_VENDOR_LIBRARY_FILENAMES=$nvidia_json
+fi
+mkdir -p "$out/cache"
+export __GL_SHADER_DISK_CACHE_PATH="$out/cache" MESA_SHADER_CACHE_DIR="$out/cache"
+
+failed=()
+steps_json=""
+# step NAME TIMEOUT COMMAND...: runs it (logged), records its status; never stops the script.
+step() {
+  local name=$1 limit=$2
+  shift 2
+  local t=$(date +%s) rc=0
+  echo
+  echo "=== $name ($(( t - t0 )) s in)"
+  timeout "$limit" "$@" || rc=$?
+  local took=$(( $(date +%s) - t ))
+  if [ $rc -eq 0 ]; then echo "=== $name: ok ($took s)"
+  else
+    [ $rc -eq 124 ] && echo "=== $name: timed out after $limit s" || echo "=== $name: FAILED, exit $rc ($took s)"
+    failed+=("$name")
+  fi
+  steps_json="$steps_json${steps_json:+, }\"$name\": {\"exit\": $rc, \"seconds\": $took}"
+}
+esc() { printf '%s' "$1" | sed 's/\\/\\\\/g; s/"/\\"/g'; }
+
+echo "run.sh $mode: bundle $here, out $out"
+cat "$here/BUNDLE-INFO" 2>/dev/null | sed 's/^/  /'
+echo "machine: $(uname -srm), $(nproc) cores, glibc $(getconf GNU_LIBC_VERSION 2>/dev/null | cut -d' ' -f2)"
+echo "CULLIDE_GL_DEVICE=$CULLIDE_GL_DEVICE __EGL_VENDOR_LIBRARY_FILENAMES=${__EGL_VENDOR_LIBRARY_FILENAMES:-(libglvnd defaults)}"
+
+# 1. Device, driver, renderer; and where each library comes from (only glibc and the EGL vendor's from the system).
+driver="" gpu="" driver_version=""
+if command -v nvidia-smi >/dev/null 2>&1; then
+  nvidia-smi -L || true
+  driver=$(nvidia-smi --query-gpu=name,driver_version --format=csv,noheader 2>/dev/null | head -1)
+  gpu=${driver%,*}; driver_version=${driver##*, }
+  echo "driver: $driver"
+else
+  echo "driver: no nvidia-smi"
+fi
+probe_file="$out/cache/probe.json"
+mkdir -p "$out/cache/ld-debug"
+step probe 120 bash -c 'LD_DEBUG=libs LD_DEBUG_OUTPUT="$3" "$1" --probe >"$2"; rc=$?; cat "$2"; exit $rc' _ \
+  "$here/bin/cullide-bench-run" "$probe_file" "$out/cache/ld-debug/probe"
+# What the probe loaded (dlopen'ed GL libraries and the EGL vendor's included), by where it came from.
+loaded=$(cat "$out"/cache/ld-debug/probe.* 2>/dev/null | sed -n 's/.*calling init: //p' | sort -u)
+echo "probe loaded from the bundle: $(printf '%s\n' "$loaded" | grep "^$here/" | sed 's,.*/,,' | tr '\n' ' ')"
+echo "probe loaded from the system (glibc, the EGL vendor and its own libraries): $(printf '%s\n' "$loaded" |
+  grep -v "^$here/" | sed 's,.*/,,' | tr '\n' ' ')"
+probe=$(cat "$probe_file" 2>/dev/null)
+[ -n "$probe" ] || probe='{"renderer":"","device":"none"}'
+case "$probe" in
+  *llvmpipe*|*softpipe*|*'"renderer":""'*) class=cpu ;;
+  *) class=gpu ;;
+esac
+renderer=$(printf '%s' "$probe" | sed -n 's/.*"renderer": *"\([^"]*\)".*/\1/p')
+egl_device=$(printf '%s' "$probe" | sed -n 's/.*"device": *"\([^"]*\)".*/\1/p')
+
+# 2. Tests on the device, and the demo.
+mkdir -p "$out/tmp"
+export TMPDIR="$out/tmp"
+if [ $quick -eq 1 ]; then tests_limit=150; demo_frames=30; else tests_limit=240; demo_frames=120; fi
+step gl-tests $tests_limit "$here/bin/cullide_gl_tests" --gtest_output=json:"$out/gl-tests.json"
+step bullet-tests $tests_limit "$here/bin/cullide_bullet_tests" --gtest_output=json:"$out/bullet-tests.json"
+step demo 120 "$here/bin/cullide-demo" --frames $demo_frames --check-every 15 --snapshot-every $demo_frames --quiet \
+  --out "$out/demo"
+
+# 3. The benchmarks: the run list of scripts/bench.sh.
+t_bench=$(date +%s)
+load_before=$(cut -d' ' -f1-3 /proc/loadavg)
+left=$(( t0 + budget - t_bench - 20 ))
+[ $left -gt 30 ] || left=30
+export BENCH_RUN_TIMEOUT=${BENCH_RUN_TIMEOUT:-90} BENCH_DEADLINE=$(( t_bench + left - ${BENCH_RUN_TIMEOUT:-90} ))
+[ $BENCH_DEADLINE -gt $t_bench ] || BENCH_DEADLINE=$(( t_bench + 10 ))
+echo "benchmark runs start until $(( BENCH_DEADLINE - t0 )) s in, each within $BENCH_RUN_TIMEOUT s"
+step bench $(( left + 30 )) bash "$here/bench-runs.sh" "$here/bin/cullide-bench-run" "$out/bench" \
+  $([ $quick -eq 1 ] && echo --quick)
+if [ -s "$out/bench/failures.txt" ]; then
+  echo "bench: failing or skipped runs:"; sed 's/^/  /' "$out/bench/failures.txt"
+  case " ${failed[*]} " in *" bench "*) ;; *) failed+=(bench-runs) ;; esac
+fi
+[ -s "$out/bench/stderr.txt" ] && { echo "bench: stderr (last 10 lines):"; tail -10 "$out/bench/stderr.txt"; }
+
+# 4. results-gpu.json (results + machine) and the report.
+mem_kb=0
+while read -r k v _; do [ "$k" = MemTotal: ] && mem_kb=$v; done </proc/meminfo
+steps_json="$steps_json${steps_json:+, }\"bench-runs\": {\"failed_runs\": $(cat "$out/bench/failures.txt" 2>/dev/null |
+  wc -l)}"
+cat >"$out/bench/machine.json" <<JSON
+{"class": "$class", "quick": $([ $quick -eq 1 ] && echo true || echo false), "bundle": true,
+ "date": "$(date -u +%FT%TZ)", "cpu": "$(esc "$(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | sed 's/^ *//')")",
+ "cores": $(nproc), "memory_gib": $(( mem_kb / 1048576 )).$(( mem_kb * 10 / 1048576 % 10 )),
+ "kernel": "$(uname -r)", "mesa_package": "", "nvidia": "$(esc "$driver")",
+ "gpu": "$(esc "$gpu")", "driver_version": "$(esc "$driver_version")",
+ "device": "$(esc "$egl_device")", "renderer": "$(esc "$renderer")", "gl_device_setting": "$(esc "$CULLIDE_GL_DEVICE")",
+ "probe": $probe, "load_before": "$load_before", "load_after": "$(cut -d' ' -f1-3 /proc/loadavg)",
+ "commit": "$(esc "$(sed -n 's/^commit: //p' "$here/BUNDLE-INFO" 2>/dev/null)")",
+ "runtime_s": $(( $(date +%s) - t_bench )), "build_s": 0, "steps": {$steps_json}}
+JSON
+report() {
+  "$here/bin/cullide-bench-report" combine --records "$out/bench/results.jsonl" --machine "$out/bench/machine.json" \
+    --out "$out/results-gpu.json" || return 1
+  mkdir -p "$out/plots" "$out/plotdata"
+  "$here/bin/cullide-bench-report" render --docs "$out/benchmarks.md" --plots "$out/plots" --data "$out/plotdata" \
+    "$out/results-gpu.json" || return 1
+  if command -v gnuplot >/dev/null 2>&1; then
+    # A plot without data (runs skipped) is a warning: the results and the report are what count.
+    for gp in "$out"/plotdata/*.gp; do gnuplot "$gp" || echo "warning: gnuplot $gp failed"; done
+  else
+    echo "no gnuplot here: the plots' data and scripts are in plotdata/ (run gnuplot on them elsewhere)"
+  fi
+}
+export -f report
+export here out
+step report 60 bash -c report
+
+# 5. Summary.
+echo
+echo "run.sh $mode: done in $(( $(date +%s) - t0 )) s; device: ${egl_device:-none}; renderer: ${renderer:-none}"
+echo "  $out/results-gpu.json, $out/gl-tests.json, $out/benchmarks.md, $out/log.txt"
+status=0
+if [ ${#failed[@]} -gt 0 ]; then echo "FAILED: ${failed[*]}"; status=1; else echo "all steps passed"; fi
+exec >&- 2>&-
+wait $tee_pid
+exit $status
