@@ -51,8 +51,10 @@ struct Proxy : btBroadphaseProxy {
     bool reported = false;
     std::uint64_t key = 0;  ///< staticKey for the culler (never reused)
 
-    // Triangle geometry (shared per shape) and its world-space copy.
+    // Triangle geometry (shared per shape), the transform that places it for the culler (moving objects) and a
+    // world-space copy (static objects, and pairs whose triangles the broadphase itself tests: built on demand).
     std::shared_ptr<bullet::ShapeTriangles> geometry;
+    Transform toWorld;
     TriangleMesh world;
     btTransform worldFrom;
     bool worldValid = false;
@@ -377,6 +379,19 @@ struct CullideBroadphase::Impl {
         return built;
     }
 
+    /// A btTransform as the culler's Transform. transformPoint then computes ((l0 v0 + l1 v1) + l2 v2) + t in double
+    /// from the float (or double) inputs: the same operations in the same order as updateWorld below, so the culler
+    /// sees bit-identical world vertices either way.
+    static Transform toTransform(const btTransform& t) {
+        Transform out;
+        const btMatrix3x3& basis = t.getBasis();
+        for (int r = 0; r < 3; ++r) {
+            for (int c = 0; c < 3; ++c) out.linear(r, c) = double(basis[r][c]);
+            out.translation[r] = double(t.getOrigin()[r]);
+        }
+        return out;
+    }
+
     void updateWorld(Proxy* p, const btTransform& t) {
         const bullet::ShapeTriangles& g = *p->geometry;
         if (p->worldValid && p->worldFrom == t && p->world.vertices.size() == g.vertices.size()) return;
@@ -544,10 +559,19 @@ struct CullideBroadphase::Impl {
             const btCollisionShape* shape = obj != nullptr ? obj->getCollisionShape() : nullptr;
             Object o;
             if (geometryFor(p, shape)) {
-                updateWorld(p, obj->getWorldTransform());
-                o.mesh = &p->world;
+                if (p->role == Role::Static) {
+                    // World-space, kept between steps with the culler's static cache (staticKey below).
+                    updateWorld(p, obj->getWorldTransform());
+                    o.mesh = &p->world;
+                } else {
+                    // The shape's local mesh and this step's transform: the culler maps the vertices only if the
+                    // object comes near another one (bit-identical to updateWorld's arithmetic, see toTransform).
+                    p->toWorld = toTransform(obj->getWorldTransform());
+                    o.mesh = &p->geometry->local;
+                    o.transform = &p->toWorld;
+                }
                 ++stats.meshObjects;
-                stats.triangles += p->world.triangles.size();
+                stats.triangles += p->geometry->triangles.size();
             } else {
                 o.box.min = toVec(p->m_aabbMin);
                 o.box.max = toVec(p->m_aabbMax);
@@ -638,6 +662,8 @@ struct CullideBroadphase::Impl {
                 return b.inflated(grow);
             };
             rec.triangles.pairs.reserve(op.triangles.size());
+            updateWorld(pa, objectOf(pa)->getWorldTransform());  // no-op where it is up to date (static objects)
+            updateWorld(pb, objectOf(pb)->getWorldTransform());
             bool intersecting = false;
             for (const TrianglePair& tp : op.triangles) {
                 if (!box(pa->world, tp.a, ma).overlaps(box(pb->world, tp.b, mb))) continue;

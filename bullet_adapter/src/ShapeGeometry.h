@@ -37,6 +37,9 @@ struct ShapeTriangles {
     std::vector<TriangleIndices> triangles;
     std::vector<BulletTriangle> refs;  ///< Bullet's (part, index) of each triangle
     btScalar margin = 0;               ///< largest collision margin Bullet uses for these triangles
+    /// `vertices` (exactly, in double) and `triangles` as the culler's local mesh: every moving body with this shape
+    /// hands it over with its world transform (Object::transform), so the mesh is held once per shape.
+    TriangleMesh local;
 };
 
 /// Content hash of the data a shape's triangles are built from (vertex/index data, hull points): detects in-place
