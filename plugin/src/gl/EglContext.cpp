@@ -2,6 +2,9 @@
 
 #include "cullide/Culler.h"
 
+#include <dlfcn.h>
+#include <link.h>
+
 #include <cstdio>
 #include <map>
 #include <mutex>
@@ -42,6 +45,24 @@ std::map<EGLDisplay, int>& displayUsers() {
     static std::map<EGLDisplay, int> users;
     return users;
 }
+/// Keeps the GL driver that EGL loaded (Mesa's *_dri.so / libgallium, the vendor's libEGL_*) loaded for the rest of
+/// the process (RTLD_NODELETE). Without this, eglTerminate of the last display unloads it: every culler created
+/// afterwards (tests, the Bullet adapter's culler re-created for a larger margin) pays for loading and initialising
+/// the driver again, and leak checkers cannot name the module of the driver's own allocations (LSan then reports
+/// them from an "unknown module" that no suppression matches).
+void pinGlDrivers() {
+    dl_iterate_phdr(
+        [](dl_phdr_info* info, std::size_t, void*) {
+            const char* name = info->dlpi_name;
+            if (name == nullptr || *name == '\0') return 0;
+            const bool driver = std::strstr(name, "_dri.so") != nullptr || std::strstr(name, "libgallium") != nullptr ||
+                                std::strstr(name, "libEGL_") != nullptr;
+            if (driver) dlopen(name, RTLD_LAZY | RTLD_NOLOAD | RTLD_NODELETE);  // a reference never dropped
+            return 0;
+        },
+        nullptr);
+}
+
 /// eglInitialize + one more user, atomically with respect to releaseDisplay's eglTerminate.
 bool retainDisplay(EGLDisplay d) {
     std::lock_guard<std::mutex> lock(displayMutex());
@@ -49,6 +70,7 @@ bool retainDisplay(EGLDisplay d) {
     EGLint minor = 0;
     if (!eglInitialize(d, &major, &minor)) return false;
     ++displayUsers()[d];
+    pinGlDrivers();
     return true;
 }
 void releaseDisplay(EGLDisplay d) {
