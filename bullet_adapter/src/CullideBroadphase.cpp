@@ -523,7 +523,8 @@ struct CullideBroadphase::Impl {
             p->pairsWithStatics = anything;
             for (const auto& [filter, count] : filterCounts) {
                 if (p->pairsWithStatics) break;
-                const bool self = filter.first == p->m_collisionFilterGroup && filter.second == p->m_collisionFilterMask;
+                const bool self =
+                    filter.first == p->m_collisionFilterGroup && filter.second == p->m_collisionFilterMask;
                 p->pairsWithStatics = (count > 1 || !self) && (p->m_collisionFilterGroup & filter.second) != 0 &&
                                       (filter.first & p->m_collisionFilterMask) != 0;
             }

@@ -359,7 +359,8 @@ std::shared_ptr<ShapeTriangles> buildShapeTriangles(const btCollisionShape* shap
     if (out->triangles.empty()) return nullptr;
     out->local.triangles = out->triangles;
     out->local.vertices.reserve(out->vertices.size());
-    for (const btVector3& v : out->vertices) out->local.vertices.emplace_back(double(v.x()), double(v.y()), double(v.z()));
+    for (const btVector3& v : out->vertices)
+        out->local.vertices.emplace_back(double(v.x()), double(v.y()), double(v.z()));
     return out;
 }
 

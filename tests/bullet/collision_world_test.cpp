@@ -155,8 +155,8 @@ Counts runScene(bool filterCallback) {
 
 TEST(CollisionWorld, PlainCollisionObjectsPairAsInBullet) {
     const Counts c = runScene(false);
-    std::printf("[ measure  ] collision world: %zu pair-steps with contacts (%zu static-static), missing %zu, extra %zu, "
-                "convex pair-steps %zu with %zu point mismatches, mesh pairs' deepest points within %.3g\n",
+    std::printf("[ measure  ] collision world: %zu pair-steps with contacts (%zu static-static), missing %zu, "
+                "extra %zu, convex pair-steps %zu with %zu point mismatches, mesh pairs' deepest points within %.3g\n",
                 c.pairSteps, c.staticStatic, c.missing, c.extra, c.convexPairSteps, c.pointMismatches,
                 c.maxMeshDepthDifference);
     EXPECT_GT(c.convexPairSteps, 100u);

@@ -117,8 +117,8 @@ public:
     using CullerFactory = std::function<std::unique_ptr<Culler>(const Settings&)>;
 
     /// Like createGpuCuller: without a usable GL device the culler runs its CPU path (a one-line notice), unless the
-    /// settings demand GPU levels (then GlUnavailableError); std::invalid_argument for invalid settings. `pairCache` (optional,
-    /// not owned) replaces the internal btHashedOverlappingPairCache, like btDbvtBroadphase(btOverlappingPairCache*).
+    /// settings demand GPU levels (then GlUnavailableError); std::invalid_argument for invalid settings. `pairCache`
+    /// (optional, not owned) replaces the internal btHashedOverlappingPairCache, like btDbvtBroadphase(btOverlappingPairCache*).
     explicit CullideBroadphase(const Settings& settings = Settings{}, btOverlappingPairCache* pairCache = nullptr)
         : CullideBroadphase(detail::checkBulletPrecision(), settings, pairCache, CullerFactory{}) {}
     /// Same, with a custom culler factory (e.g. createReferenceCuller for tests without GL).

@@ -14,8 +14,8 @@ struct Object {
     /// Optional (meshes only): the mesh is in its own frame and this maps it to world space, vertex by vertex as
     /// transformPoint() rounds it. Many objects can share one mesh, each with its own transform: the culler builds
     /// world-space vertices only for objects whose world box (the box of the transformed corners of the mesh box,
-    /// exact for transformPoint's rounding) comes within the margin of another object, so far-apart instances cost a box each. nullptr:
-    /// the mesh is already in world space. An object is rejected when its transform is not finite or maps the mesh
+    /// exact for transformPoint's rounding) comes within the margin of another object, so far-apart instances cost
+    /// a box each. nullptr: the mesh is already in world space. An object is rejected when its transform is not finite or maps the mesh
     /// box beyond the double range. Ignored for box-only proxies (their box is in world space).
     const Transform* transform = nullptr;
     /// Box-only proxy (used when mesh == nullptr). Must be finite.
@@ -23,8 +23,8 @@ struct Object {
     /// Non-zero: a caller-chosen identity for a mesh that does not change between frames (static geometry), with
     /// `version` changed by the caller whenever its vertices or triangles do. The culler keeps what it derives from
     /// such a mesh (its validation, its triangle boxes) between frames and recomputes it only when (staticKey,
-    /// version, vertex count, triangle count, transform) differ: changing the mesh without changing `version` is an error
-    /// (stale boxes can miss contacts). Entries unused for 240 frames are dropped. A key used by two objects of
+    /// version, vertex count, triangle count, transform) differ: changing the mesh without changing `version` is an
+    /// error (stale boxes can miss contacts). Entries unused for 240 frames are dropped. A key used by two objects of
     /// one frame is cached for the first only. When GPU levels run, such a mesh is sent to the device once and
     /// kept there while the scene stays around the same place (see docs/architecture.md).
     std::uint64_t staticKey = 0;
