@@ -379,9 +379,9 @@ struct CullideBroadphase::Impl {
         return built;
     }
 
-    /// A btTransform as the culler's Transform. transformPoint then computes ((l0 v0 + l1 v1) + l2 v2) + t in double
-    /// from the float (or double) inputs: the same operations in the same order as updateWorld below, so the culler
-    /// sees bit-identical world vertices either way.
+    /// A btTransform as the culler's Transform. World vertices are transformPoint(toTransform(t), local vertex)
+    /// everywhere (the culler for moving objects, updateWorld below for static ones and the broadphase's own
+    /// triangle test), so both sides see bit-identical triangles.
     static Transform toTransform(const btTransform& t) {
         Transform out;
         const btMatrix3x3& basis = t.getBasis();
@@ -394,19 +394,13 @@ struct CullideBroadphase::Impl {
 
     void updateWorld(Proxy* p, const btTransform& t) {
         const bullet::ShapeTriangles& g = *p->geometry;
-        if (p->worldValid && p->worldFrom == t && p->world.vertices.size() == g.vertices.size()) return;
+        if (p->worldValid && p->worldFrom == t && p->world.vertices.size() == g.local.vertices.size()) return;
         // worldValid is cleared whenever the geometry changes: a valid world mesh only needs new vertices.
         if (!p->worldValid || p->world.triangles.size() != g.triangles.size()) p->world.triangles = g.triangles;
-        p->world.vertices.resize(g.vertices.size());
-        const btMatrix3x3& basis = t.getBasis();
-        const btVector3& origin = t.getOrigin();
-        for (std::size_t i = 0; i < g.vertices.size(); ++i) {
-            const btVector3& v = g.vertices[i];
-            Vec3& w = p->world.vertices[i];
-            for (int r = 0; r < 3; ++r)
-                w[r] = double(basis[r].x()) * double(v.x()) + double(basis[r].y()) * double(v.y()) +
-                       double(basis[r].z()) * double(v.z()) + double(origin[r]);
-        }
+        p->world.vertices.resize(g.local.vertices.size());
+        const Transform toWorld = toTransform(t);  // the culler's own mapping: the same vertices as it builds
+        for (std::size_t i = 0; i < g.local.vertices.size(); ++i)
+            p->world.vertices[i] = transformPoint(toWorld, g.local.vertices[i]);
         p->worldFrom = t;
         p->worldValid = true;
         ++p->version;
@@ -566,7 +560,7 @@ struct CullideBroadphase::Impl {
                     o.mesh = &p->world;
                 } else {
                     // The shape's local mesh and this step's transform: the culler maps the vertices only if the
-                    // object comes near another one (bit-identical to updateWorld's arithmetic, see toTransform).
+                    // object comes near another one (the same arithmetic as updateWorld, see toTransform).
                     p->toWorld = toTransform(obj->getWorldTransform());
                     o.mesh = &p->geometry->local;
                     o.transform = &p->toWorld;
