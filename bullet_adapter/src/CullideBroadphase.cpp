@@ -1,6 +1,7 @@
 #include "cullide_bullet/CullideBroadphase.h"
 #include "cullide/Timer.h"
 
+#include "CullingPolicy.h"
 #include "ShapeGeometry.h"
 #include "cullide/Result.h"
 #include "cullide/TriangleTest.h"
@@ -40,12 +41,19 @@ constexpr double kDefaultMargin = 0.12;
 
 enum class Role : std::uint8_t { Invalid, Infinite, Ghost, Dynamic, Static };
 
+/// The two query trees, as btDbvtBroadphase's two sets: moving objects (not static-flagged) and the rest.
+enum TreeId : int { kNoTree = -1, kMovingTree = 0, kRestingTree = 1 };
+
+/// Not handed to the culler this frame.
+constexpr std::uint32_t kNotCulled = ~std::uint32_t(0);
+
 struct Proxy : btBroadphaseProxy {
     Proxy(const btVector3& aabbMin, const btVector3& aabbMax, void* userPtr, int group, int mask, int type)
         : btBroadphaseProxy(aabbMin, aabbMax, userPtr, group, mask), shapeType(type) {}
 
     int shapeType;
     btDbvtNode* leaf = nullptr;
+    int treeId = kNoTree;  ///< the tree holding `leaf`
     std::size_t slot = 0;
     bool valid = true;
     bool reported = false;
@@ -62,7 +70,8 @@ struct Proxy : btBroadphaseProxy {
 
     // Per-frame scratch.
     Role role = Role::Invalid;
-    std::uint64_t nearFrame = 0;
+    bullet::GeometryKind kind = bullet::GeometryKind::None;
+    std::uint32_t cullIndex = kNotCulled;  ///< index in the culling frame's objects
     bool pairsWithStatics = false;  ///< static, and its filter admits some other static object (every step)
 };
 
@@ -111,6 +120,20 @@ LeafVisitor<F> visitLeaves(F f) {
     return LeafVisitor<F>(std::move(f));
 }
 
+template <typename F>
+struct LeafPairVisitor : btDbvt::ICollide {
+    explicit LeafPairVisitor(F f) : fn(std::move(f)) {}
+    using btDbvt::ICollide::Process;
+    void Process(const btDbvtNode* a, const btDbvtNode* b) override {
+        fn(static_cast<Proxy*>(a->data), static_cast<Proxy*>(b->data));
+    }
+    F fn;
+};
+template <typename F>
+LeafPairVisitor<F> visitLeafPairs(F f) {
+    return LeafPairVisitor<F>(std::move(f));
+}
+
 }  // namespace
 
 struct CullideBroadphase::Impl {
@@ -123,7 +146,7 @@ struct CullideBroadphase::Impl {
     btOverlappingPairCache* cache = nullptr;
     bool ownsCache = false;
 
-    btDbvt tree;
+    btDbvt trees[2];  ///< kMovingTree, kRestingTree: the object level (leaves fattened like btDbvtBroadphase's)
     btAlignedObjectArray<const btDbvtNode*> rayStack;
     std::vector<Proxy*> proxies;
     int nextUid = 0;
@@ -139,6 +162,8 @@ struct CullideBroadphase::Impl {
     /// btKinematicCharacterController sweeps only against its ghost's pairs and relies on that slack).
     btScalar ghostMargin = btScalar(0.1);
     bool deepPenetrationFallback = true;
+    /// Hulls and compounds against triangle meshes go through the culler's levels (see trianglesConsumed).
+    bool convexMeshCulling = false;
     std::vector<Proxy*> ghosts;  ///< proxies of ghost objects (eager pairing)
 
     CullideFrameStats stats;
@@ -148,6 +173,9 @@ struct CullideBroadphase::Impl {
     // Per-frame scratch (members to reuse allocations).
     std::vector<Object> objects;
     std::vector<Proxy*> objectProxy;
+    std::vector<bullet::MarginEntry> marginEntries;
+    std::vector<std::pair<Proxy*, Proxy*>> candidates;  ///< object-level pairs whose triangles are read: culled
+    std::vector<ObjectIndexPair> candidateIndices;
     Result result;
     std::vector<std::pair<Proxy*, Proxy*>> desired;
     std::map<std::pair<int, int>, std::size_t> filterCounts;  ///< static objects per (group, mask)
@@ -216,10 +244,7 @@ struct CullideBroadphase::Impl {
 
     void reject(Proxy* p, const char* where, const std::string& why) {
         ++rejectedTotal;
-        if (p->leaf != nullptr) {
-            tree.remove(p->leaf);
-            p->leaf = nullptr;
-        }
+        removeFromTree(p);
         p->valid = false;
         if (p->reported) return;
         p->reported = true;
@@ -238,12 +263,34 @@ struct CullideBroadphase::Impl {
         return buf;
     }
 
+    static int treeFor(const Proxy* p) { return isStatic(p) ? kRestingTree : kMovingTree; }
+
+    void removeFromTree(Proxy* p) {
+        if (p->leaf != nullptr) trees[p->treeId].remove(p->leaf);
+        p->leaf = nullptr;
+        p->treeId = kNoTree;
+    }
+
+    /// Inserts or updates the proxy's leaf (fattened by kTreeMargin when it leaves its volume, as btDbvtBroadphase),
+    /// in the tree of its current static flag.
     void placeInTree(Proxy* p) {
         btDbvtVolume volume = btDbvtVolume::FromMM(p->m_aabbMin, p->m_aabbMax);
-        if (p->leaf == nullptr)
-            p->leaf = tree.insert(volume, p);
-        else
-            tree.update(p->leaf, volume, kTreeMargin);
+        const int id = treeFor(p);
+        if (p->leaf != nullptr && p->treeId != id) removeFromTree(p);
+        if (p->leaf == nullptr) {
+            p->leaf = trees[id].insert(volume, p);
+            p->treeId = id;
+        } else {
+            trees[id].update(p->leaf, volume, kTreeMargin);
+        }
+    }
+
+    /// Calls f(proxy) for every leaf of both trees whose volume overlaps `volume`.
+    template <typename F>
+    void forLeavesIn(const btDbvtVolume& volume, F f) {
+        auto visitor = visitLeaves(std::move(f));
+        for (btDbvt& t : trees)
+            if (t.m_root != nullptr) t.collideTV(t.m_root, volume, visitor);
     }
 
     static bool isGhost(const Proxy* p) {
@@ -275,12 +322,10 @@ struct CullideBroadphase::Impl {
     /// Ghost objects keep Bullet's semantics (pairs = AABB overlaps, filters only; Bullet creates ghosts with the
     /// static flag, so no static-static rule here) and, like btDbvtBroadphase, get new pairs at once.
     void addGhostPairs(Proxy* ghost) {
-        if (tree.m_root == nullptr) return;
-        auto visitor = visitLeaves([&](Proxy* q) {
+        forLeavesIn(ghostVolume(ghost), [&](Proxy* q) {
             if (q == ghost || !q->valid || !boxesOverlap(ghost, q, ghostMargin)) return;
             cache->addOverlappingPair(ghost, q);
         });
-        tree.collideTV(tree.m_root, ghostVolume(ghost), visitor);
     }
 
     btBroadphaseProxy* createProxy(const btVector3& mn, const btVector3& mx, int shapeType, void* userPtr, int group,
@@ -314,7 +359,7 @@ struct CullideBroadphase::Impl {
     void destroyProxy(btBroadphaseProxy* abs, btDispatcher* dispatcher) {
         auto* p = static_cast<Proxy*>(abs);
         cache->removeOverlappingPairsContainingProxy(p, dispatcher);
-        if (p->leaf != nullptr) tree.remove(p->leaf);
+        removeFromTree(p);
         ghosts.erase(std::remove(ghosts.begin(), ghosts.end(), p), ghosts.end());
         Proxy* last = proxies.back();
         proxies[p->slot] = last;
@@ -408,8 +453,11 @@ struct CullideBroadphase::Impl {
 
     // ---- the frame ----
 
+    /// Every proxy's role this frame; a proxy whose static flag changed moves to the other tree.
     void classify() {
         for (Proxy* p : proxies) {
+            p->cullIndex = kNotCulled;
+            p->pairsWithStatics = false;
             if (!p->valid)
                 p->role = Role::Invalid;
             else if (isInfinite(p))
@@ -420,98 +468,25 @@ struct CullideBroadphase::Impl {
                 p->role = Role::Static;
             else
                 p->role = Role::Dynamic;
-        }
-    }
-
-    /// d must cover every triangle pair Bullet's narrow phase can turn into a contact point, or keep one alive:
-    /// both collision margins plus the contact breaking threshold t (with CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD,
-    /// Bullet's default, t = gContactBreakingThreshold * the smaller angular motion disc of the two shapes).
-    /// Algorithms with a persistent manifold (convex vs mesh, convex vs convex) keep a point while its refreshed
-    /// normal distance and its tangential drift both stay within t, i.e. up to sqrt(2) t apart: 1.5 t for those.
-    /// GImpact rebuilds its manifold every frame: t. Box proxies already carry Bullet's AABB padding.
-    double requiredMargin(btDispatcher* dispatcher) const {
-        const auto* collisionDispatcher = dynamic_cast<const btCollisionDispatcher*>(dispatcher);
-        const bool relative = collisionDispatcher == nullptr ||
-                              (collisionDispatcher->getDispatcherFlags() &
-                               btCollisionDispatcher::CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD) != 0;
-        double gimpact = -1.0, hull = -1.0, mesh = -1.0;  // largest margin per kind (-1: none in the frame)
-        double coordinate = 0.0;  // largest finite |AABB coordinate| of a triangle-geometry object
-        bool boxes = false;  // objects culled as their AABB (primitives, compounds, soft bodies)
-        double largest = 0.0, second = 0.0, largestDynamic = 0.0;
-        for (const Proxy* p : proxies) {
-            if (p->role != Role::Dynamic && p->role != Role::Static) continue;
+            if (p->leaf != nullptr && p->treeId != treeFor(p)) placeInTree(p);
             const btCollisionObject* obj = objectOf(p);
-            const btCollisionShape* shape = obj != nullptr ? obj->getCollisionShape() : nullptr;
-            if (shape == nullptr) continue;
-            if (relative) {
-                const double disc = double(shape->getAngularMotionDisc());
-                if (disc > largest) {
-                    second = largest;
-                    largest = disc;
-                } else {
-                    second = std::max(second, disc);
-                }
-                if (p->role == Role::Dynamic) largestDynamic = std::max(largestDynamic, disc);
-            }
-            const bullet::GeometryKind kind = bullet::geometryKindOf(shape);
-            if (kind != bullet::GeometryKind::None && p->role == Role::Dynamic)
-                for (int k = 0; k < 3; ++k)
-                    coordinate = std::max({coordinate, std::fabs(double(p->m_aabbMin[k])),
-                                           std::fabs(double(p->m_aabbMax[k]))});
-            switch (kind) {
-                case bullet::GeometryKind::GImpactMesh:
-                    gimpact = std::max(gimpact, double(bullet::triangleMarginOf(shape)));
-                    break;
-                case bullet::GeometryKind::ConvexHull:
-                    hull = std::max(hull, double(shape->getMargin()));
-                    break;
-                case bullet::GeometryKind::Compound:
-                    // Hull children go through the hull rules; other children are boxes that include their margin.
-                    hull = std::max(hull, double(bullet::triangleMarginOf(shape)));
-                    boxes = true;
-                    break;
-                case bullet::GeometryKind::TriangleMesh:
-                    mesh = std::max(mesh, double(shape->getMargin()));
-                    break;
-                case bullet::GeometryKind::None:
-                    boxes = true;
-                    break;
-            }
+            p->kind = obj != nullptr ? bullet::geometryKindOf(obj->getCollisionShape()) : bullet::GeometryKind::None;
         }
-        double t = double(gContactBreakingThreshold);
-        if (relative) t *= std::max(1.0, std::min(second, largestDynamic));
-        // Box proxies against each other and against meshes (Bullet pads their AABBs by the shapes' margins).
-        double d = boxes ? 1.5 * t : 0.0;
-        // GImpact-GImpact: Bullet's triangle routine (btPrimitiveTriangle's clip method) reports a point only where
-        // the triangles come within the sum of their margins, and GImpact rebuilds its manifold every frame: 2 g,
-        // plus slack for Bullet's arithmetic in btScalar at these coordinates (and 10% of the margin).
-        // (A Bullet built with BULLET_TRIANGLE_COLLISION uses GJK on triangle pairs instead, within 2 g + t: not
-        // Debian's build; such an application sets Settings::margin to 2 g + t.)
-        const double slack = 8.0 * double(std::numeric_limits<btScalar>::epsilon()) * coordinate;
-        if (gimpact >= 0) d = std::max(d, 2.2 * gimpact + slack);
-        // GImpact against box proxies (primitives, compounds): Bullet's convex algorithms keep points within t.
-        if (gimpact >= 0 && boxes) d = std::max(d, gimpact + t);
-        // GImpact against a hull or a static mesh goes through convex algorithms that keep points within t.
-        if (gimpact >= 0 && hull >= 0) d = std::max(d, gimpact + hull + t);
-        if (gimpact >= 0 && mesh >= 0) d = std::max(d, gimpact + mesh + t);
-        if (hull >= 0) d = std::max({d, 2 * hull + 1.5 * t, hull + std::max(mesh, 0.0) + 1.5 * t});
-        if (mesh >= 0) d = std::max(d, mesh + 1.5 * t);
-        return std::max(d, 1e-9);
     }
 
     /// Whether static objects can pair with each other. Bullet's broadphases pair static objects like any others:
     /// only the filter (group/mask, the pair cache's overlap filter callback) decides, and the static flag does not
     /// (btDiscreteDynamicsWorld::addRigidBody gives static bodies the StaticFilter group and a mask without it:
     /// that is why dynamics worlds have no static-static pairs, while a btCollisionWorld of plain, static-flagged
-    /// btCollisionObjects has them). A static object whose group/mask admits another static one's is handed to the
-    /// culler every step; the others only where a moving object comes near (markStaticsNearDynamics). With an
-    /// overlap filter callback (it may admit anything) or a pair cache of unknown kind, every static object is.
-    void markStaticsPairingStatics() {
+    /// btCollisionObjects has them). With an overlap filter callback (it may admit anything) or a pair cache of
+    /// unknown kind, every static object may. Returns whether any static object does.
+    bool markStaticsPairingStatics() {
         auto* hashed = dynamic_cast<btHashedOverlappingPairCache*>(cache);
         const bool anything = hashed == nullptr || hashed->getOverlapFilterCallback() != nullptr;
         filterCounts.clear();
         for (const Proxy* p : proxies)
             if (p->role == Role::Static) ++filterCounts[{p->m_collisionFilterGroup, p->m_collisionFilterMask}];
+        bool any = false;
         for (Proxy* p : proxies) {
             if (p->role != Role::Static) continue;
             p->pairsWithStatics = anything;
@@ -522,86 +497,129 @@ struct CullideBroadphase::Impl {
                 p->pairsWithStatics = (count > 1 || !self) && (p->m_collisionFilterGroup & filter.second) != 0 &&
                                       (filter.first & p->m_collisionFilterMask) != 0;
             }
+            any = any || p->pairsWithStatics;
         }
+        return any;
     }
 
-    /// Static objects that cannot pair with other static ones are handed to the culler only where a moving
-    /// object's box comes within the margin.
-    void markStaticsNearDynamics() {
-        if (tree.m_root == nullptr) return;
-        const btScalar grow = btScalar(margin);
-        const btVector3 g(grow, grow, grow);
-        for (Proxy* p : proxies) {
-            if (p->role != Role::Dynamic) continue;
-            auto visitor = visitLeaves([&](Proxy* q) {
-                if (q->role == Role::Static) q->nearFrame = frame;
-            });
-            tree.collideTV(tree.m_root, btDbvtVolume::FromMM(p->m_aabbMin - g, p->m_aabbMax + g), visitor);
-        }
+    static bool pairable(const Proxy* p) { return p->role == Role::Dynamic || p->role == Role::Static; }
+
+    /// The object level: pairs of overlapping tree leaves (fattened boxes, as btDbvtBroadphase pairs them) that the
+    /// pair cache's filter admits. Moving objects against both trees; static objects against each other only where
+    /// their filters allow it (markStaticsPairingStatics). Pairs whose narrow phase reads triangles become culling
+    /// candidates; every other pair goes to Bullet's algorithms as it is.
+    void collectObjectPairs(bool staticsPair) {
+        auto visitor = visitLeafPairs([&](Proxy* a, Proxy* b) {
+            if (!pairable(a) || !pairable(b)) return;
+            if (a->role == Role::Static && b->role == Role::Static && !(a->pairsWithStatics && b->pairsWithStatics))
+                return;
+            if (!cache->needsBroadphaseCollision(a, b)) return;
+            ++stats.objectPairs;
+            if (bullet::trianglesConsumed(a->kind, b->kind, convexMeshCulling))
+                candidates.emplace_back(a, b);
+            else
+                addDesired(a, b);
+        });
+        btDbvt& moving = trees[kMovingTree];
+        btDbvt& resting = trees[kRestingTree];
+        moving.collideTTpersistentStack(moving.m_root, moving.m_root, visitor);
+        moving.collideTTpersistentStack(moving.m_root, resting.m_root, visitor);
+        if (staticsPair) resting.collideTTpersistentStack(resting.m_root, resting.m_root, visitor);
     }
 
-    void buildObjects() {
+    /// The culling frame: the objects of the candidate pairs (meshes in their own frame with their transform, or
+    /// world-space for static ones, kept between steps), the candidate pairs by object index, and what the margin
+    /// rule needs of each object.
+    void buildCullFrame() {
         objects.clear();
         objectProxy.clear();
-        for (Proxy* p : proxies) {
-            const bool include = p->role == Role::Dynamic ||
-                                 (p->role == Role::Static && (p->nearFrame == frame || p->pairsWithStatics));
-            if (!include) {
-                if (p->role == Role::Static) ++stats.staticObjectsSkipped;
-                continue;
-            }
-            const btCollisionObject* obj = objectOf(p);
-            const btCollisionShape* shape = obj != nullptr ? obj->getCollisionShape() : nullptr;
-            Object o;
-            if (geometryFor(p, shape)) {
-                if (p->role == Role::Static) {
-                    // World-space, kept between steps with the culler's static cache (staticKey below).
-                    updateWorld(p, obj->getWorldTransform());
-                    o.mesh = &p->world;
-                } else {
-                    // The shape's local mesh and this step's transform: the culler maps the vertices only if the
-                    // object comes near another one (the same arithmetic as updateWorld, see toTransform).
-                    p->toWorld = toTransform(obj->getWorldTransform());
-                    o.mesh = &p->geometry->local;
-                    o.transform = &p->toWorld;
-                }
-                ++stats.meshObjects;
-                stats.triangles += p->geometry->triangles.size();
-            } else {
-                o.box.min = toVec(p->m_aabbMin);
-                o.box.max = toVec(p->m_aabbMax);
-            }
-            if (p->role == Role::Static) {
-                o.staticKey = p->key;
-                o.version = p->version;
-            }
-            objects.push_back(o);
-            objectProxy.push_back(p);
+        marginEntries.clear();
+        candidateIndices.clear();
+        for (auto& [a, b] : candidates) {
+            for (Proxy* p : {a, b})
+                if (p->cullIndex == kNotCulled) addCulled(p);
+            candidateIndices.emplace_back(std::min(a->cullIndex, b->cullIndex), std::max(a->cullIndex, b->cullIndex));
         }
+        std::sort(candidateIndices.begin(), candidateIndices.end());
+        candidateIndices.erase(std::unique(candidateIndices.begin(), candidateIndices.end()), candidateIndices.end());
         stats.culledObjects = objects.size();
+        stats.culledPairs = candidateIndices.size();
+        for (const Proxy* p : proxies)
+            if (p->role == Role::Static && p->cullIndex == kNotCulled) ++stats.staticObjectsSkipped;
     }
 
-    /// Without a working culler: conservative AABB pairs (the dispatcher then runs Bullet's full algorithms).
-    void boxPairsFallback() {
-        result.clear();
-        for (std::uint32_t i = 0; i < objectProxy.size(); ++i)
-            for (std::uint32_t j = i + 1; j < objectProxy.size(); ++j)
-                if (boxesOverlap(objectProxy[i], objectProxy[j])) {
-                    ObjectPair pair;
-                    pair.a = i;
-                    pair.b = j;
-                    result.pairs.push_back(pair);
-                }
+    void addCulled(Proxy* p) {
+        const btCollisionObject* obj = objectOf(p);
+        const btCollisionShape* shape = obj->getCollisionShape();
+        Object o;
+        bullet::MarginEntry entry;
+        entry.kind = p->kind;
+        // Every pair has a moving member, or two static ones whose filters admit each other.
+        entry.moving = p->role == Role::Dynamic || p->pairsWithStatics;
+        entry.motionDisc = double(shape->getAngularMotionDisc());
+        if (geometryFor(p, shape)) {
+            if (p->role == Role::Static) {
+                // World-space, kept between steps with the culler's static cache (staticKey below).
+                updateWorld(p, obj->getWorldTransform());
+                o.mesh = &p->world;
+            } else {
+                // The shape's local mesh and this step's transform: the culler maps the vertices only if the
+                // object comes near another one (the same arithmetic as updateWorld, see toTransform).
+                p->toWorld = toTransform(obj->getWorldTransform());
+                o.mesh = &p->geometry->local;
+                o.transform = &p->toWorld;
+                for (int k = 0; k < 3; ++k)
+                    entry.coordinate = std::max({entry.coordinate, std::fabs(double(p->m_aabbMin[k])),
+                                                 std::fabs(double(p->m_aabbMax[k]))});
+            }
+            ++stats.meshObjects;
+            stats.triangles += p->geometry->triangles.size();
+        } else {
+            entry.kind = bullet::GeometryKind::None;
+            o.box.min = toVec(p->m_aabbMin);
+            o.box.max = toVec(p->m_aabbMax);
+        }
+        switch (entry.kind) {
+            case bullet::GeometryKind::GImpactMesh:
+            case bullet::GeometryKind::Compound: entry.margin = double(bullet::triangleMarginOf(shape)); break;
+            default: entry.margin = double(shape->getMargin()); break;
+        }
+        if (p->role == Role::Static) {
+            o.staticKey = p->key;
+            o.version = p->version;
+        }
+        p->cullIndex = static_cast<std::uint32_t>(objects.size());
+        objects.push_back(o);
+        objectProxy.push_back(p);
+        marginEntries.push_back(entry);
     }
 
-    void runCuller() {
+    bullet::BreakingRule breakingRule(btDispatcher* dispatcher) const {
+        const auto* collisionDispatcher = dynamic_cast<const btCollisionDispatcher*>(dispatcher);
+        bullet::BreakingRule rule;
+        rule.threshold = double(gContactBreakingThreshold);
+        rule.relative = collisionDispatcher == nullptr ||
+                        (collisionDispatcher->getDispatcherFlags() &
+                         btCollisionDispatcher::CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD) != 0;
+        rule.epsilon = double(std::numeric_limits<btScalar>::epsilon());
+        return rule;
+    }
+
+    /// Without a working culler: every candidate pair, no triangles (the dispatcher runs Bullet's full algorithms).
+    void candidatesWithoutCulling() {
+        for (const auto& [a, b] : candidates) addDesired(a, b);
+    }
+
+    /// The culler over the candidate pairs; false when it failed (reported once).
+    bool runCuller() {
         result.clear();
-        if (objects.size() < 2) return;
+        if (candidateIndices.empty()) return true;
         try {
-            culler->run(objects, result);
+            culler->run(objects, candidateIndices, result);
+            return true;
         } catch (const std::exception& e) {
             reportCullerFailure(e);
-            boxPairsFallback();
+            return false;
         }
     }
 
@@ -705,6 +723,8 @@ struct CullideBroadphase::Impl {
         records[pairKey(pa, pb)] = std::move(rec);
     }
 
+    /// Candidate pairs the culler kept (with their surviving triangles for the dispatcher); the others are provably
+    /// farther apart than the margin: no pair. Objects the culler rejected lose every pair this frame.
     void collectCullerPairs() {
         for (const ObjectDiagnostic& d : result.rejected) {
             Proxy* p = objectProxy[d.object];
@@ -719,13 +739,21 @@ struct CullideBroadphase::Impl {
                              static_cast<const void*>(objectOf(p)), p->m_uniqueId, d.message.c_str());
             }
         }
+        if (!result.rejected.empty())
+            desired.erase(std::remove_if(desired.begin(), desired.end(),
+                                         [](const auto& pair) {
+                                             return pair.first->role == Role::Invalid ||
+                                                    pair.second->role == Role::Invalid;
+                                         }),
+                          desired.end());
         for (const ObjectPair& op : result.pairs) {
             Proxy* pa = objectProxy[op.a];
             Proxy* pb = objectProxy[op.b];
-            addDesired(pa, pb);  // the pair cache applies the filter (static-static pairs too, as Bullet's do)
+            addDesired(pa, pb);
             ++stats.cullerPairs;
             if (op.hasTriangles) makeRecord(pa, pb, op);
         }
+        stats.prunedPairs = stats.culledPairs - std::min(stats.culledPairs, result.pairs.size());
     }
 
     /// Planes pair by a half-space test, other infinite boxes by plain AABB overlap. Never rasterised.
@@ -762,17 +790,15 @@ struct CullideBroadphase::Impl {
     }
 
     void collectGhostPairs() {
-        if (tree.m_root == nullptr) return;
         for (Proxy* g : proxies) {
             if (g->role != Role::Ghost) continue;
             ++stats.ghostObjects;
-            auto visitor = visitLeaves([&](Proxy* q) {
+            forLeavesIn(ghostVolume(g), [&](Proxy* q) {
                 if (q == g || q->role == Role::Invalid || !boxesOverlap(g, q, ghostMargin)) return;
                 if (q->role == Role::Ghost && q->m_uniqueId < g->m_uniqueId) return;  // once per pair
                 addDesired(g, q);
                 ++stats.ghostPairs;
             });
-            tree.collideTV(tree.m_root, ghostVolume(g), visitor);
         }
     }
 
@@ -812,39 +838,41 @@ struct CullideBroadphase::Impl {
         hashThisFrame.clear();
         records.clear();
         desired.clear();
+        candidates.clear();
 
         cullide::Timer build;
         classify();
         for (const Proxy* p : proxies)
             if (p->role == Role::Invalid) ++stats.rejectedObjects;
-        bool cullerUsable = true;
-        const double required = requiredMargin(dispatcher);
-        try {
-            ensureMargin(required);
-        } catch (const std::exception& e) {
-            reportCullerFailure(e);
-            // A culler that could not be made smaller is still sound; one whose margin is too small for this scene
-            // is not: conservative AABB pairs instead.
-            cullerUsable = culler != nullptr && required <= margin;
-            if (cullerUsable) shrinkFailed = true;
+        collectObjectPairs(markStaticsPairingStatics());
+        buildCullFrame();
+        bool cullerUsable = !candidateIndices.empty();
+        if (cullerUsable) {
+            const double required = bullet::requiredCullingMargin(marginEntries, breakingRule(dispatcher));
+            try {
+                ensureMargin(required);
+            } catch (const std::exception& e) {
+                reportCullerFailure(e);
+                // A culler that could not be made smaller is still sound; one whose margin is too small for this
+                // scene is not: the candidates go to Bullet's full algorithms instead.
+                cullerUsable = culler != nullptr && required <= margin;
+                if (cullerUsable) shrinkFailed = true;
+            }
         }
         stats.margin = margin;
-        markStaticsPairingStatics();
-        markStaticsNearDynamics();
-        buildObjects();
         stats.buildMs = build.ms();
 
         cullide::Timer cull;
-        if (cullerUsable)
-            runCuller();
-        else
-            boxPairsFallback();
+        if (cullerUsable) cullerUsable = runCuller();
         stats.cullMs = cull.ms();
         stats.culler = result.stats;
         for (const auto& list : result.pcsTriangles) stats.pcsTriangles += list.size();
 
         cullide::Timer sync;
-        collectCullerPairs();
+        if (cullerUsable)
+            collectCullerPairs();
+        else
+            candidatesWithoutCulling();
         collectInfinitePairs();
         collectGhostPairs();
         syncPairCache(dispatcher);
@@ -920,16 +948,14 @@ void CullideBroadphase::getAabb(btBroadphaseProxy* proxy, btVector3& aabbMin, bt
 void CullideBroadphase::rayTest(const btVector3& rayFrom, const btVector3& rayTo, btBroadphaseRayCallback& rayCallback,
                                 const btVector3& aabbMin, const btVector3& aabbMax) {
     auto visitor = visitLeaves([&](Proxy* p) { rayCallback.process(p); });
-    btDbvt& tree = m_impl->tree;
-    tree.rayTestInternal(tree.m_root, rayFrom, rayTo, rayCallback.m_rayDirectionInverse, rayCallback.m_signs,
-                         rayCallback.m_lambda_max, aabbMin, aabbMax, m_impl->rayStack, visitor);
+    for (btDbvt& tree : m_impl->trees)
+        tree.rayTestInternal(tree.m_root, rayFrom, rayTo, rayCallback.m_rayDirectionInverse, rayCallback.m_signs,
+                             rayCallback.m_lambda_max, aabbMin, aabbMax, m_impl->rayStack, visitor);
 }
 
 void CullideBroadphase::aabbTest(const btVector3& aabbMin, const btVector3& aabbMax,
                                  btBroadphaseAabbCallback& callback) {
-    auto visitor = visitLeaves([&](Proxy* p) { callback.process(p); });
-    btDbvt& tree = m_impl->tree;
-    tree.collideTV(tree.m_root, btDbvtVolume::FromMM(aabbMin, aabbMax), visitor);
+    m_impl->forLeavesIn(btDbvtVolume::FromMM(aabbMin, aabbMax), [&](Proxy* p) { callback.process(p); });
 }
 
 void CullideBroadphase::calculateOverlappingPairs(btDispatcher* dispatcher) {
@@ -940,11 +966,19 @@ btOverlappingPairCache* CullideBroadphase::getOverlappingPairCache() { return m_
 const btOverlappingPairCache* CullideBroadphase::getOverlappingPairCache() const { return m_impl->cache; }
 
 void CullideBroadphase::getBroadphaseAabb(btVector3& aabbMin, btVector3& aabbMax) const {
-    const btDbvt& tree = m_impl->tree;
-    if (tree.m_root != nullptr) {
-        aabbMin = tree.m_root->volume.Mins();
-        aabbMax = tree.m_root->volume.Maxs();
-    } else {
+    bool any = false;
+    for (const btDbvt& tree : m_impl->trees) {
+        if (tree.m_root == nullptr) continue;
+        if (!any) {
+            aabbMin = tree.m_root->volume.Mins();
+            aabbMax = tree.m_root->volume.Maxs();
+        } else {
+            aabbMin.setMin(tree.m_root->volume.Mins());
+            aabbMax.setMax(tree.m_root->volume.Maxs());
+        }
+        any = true;
+    }
+    if (!any) {
         aabbMin.setValue(0, 0, 0);
         aabbMax.setValue(0, 0, 0);
     }
@@ -952,7 +986,7 @@ void CullideBroadphase::getBroadphaseAabb(btVector3& aabbMin, btVector3& aabbMax
 
 void CullideBroadphase::resetPool(btDispatcher* /*dispatcher*/) {
     if (!m_impl->proxies.empty()) return;
-    m_impl->tree.clear();
+    for (btDbvt& tree : m_impl->trees) tree.clear();
     m_impl->records.clear();
     m_impl->shapeCache.clear();
     m_impl->nextUid = 0;
@@ -961,10 +995,10 @@ void CullideBroadphase::resetPool(btDispatcher* /*dispatcher*/) {
 void CullideBroadphase::printStats() {
     const CullideFrameStats& s = m_impl->stats;
     std::printf(
-        "CullideBroadphase: %zu proxies, %zu culled (%zu meshes, %zu triangles, %zu static skipped), %zu infinite, "
+        "CullideBroadphase: %zu proxies, %zu object pairs (%zu culled, %zu pruned), %zu culled objects (%zu meshes, %zu triangles, %zu static skipped), %zu infinite, "
         "%zu ghosts, %zu rejected; pairs %zu (culler %zu, infinite %zu, ghost %zu; +%zu -%zu), %zu triangle pairs, "
         "margin %.4g; build %.3f ms, cull %.3f ms, sync %.3f ms, total %.3f ms\n",
-        s.proxies, s.culledObjects, s.meshObjects, s.triangles, s.staticObjectsSkipped, s.infiniteObjects,
+        s.proxies, s.objectPairs, s.culledPairs, s.prunedPairs, s.culledObjects, s.meshObjects, s.triangles, s.staticObjectsSkipped, s.infiniteObjects,
         s.ghostObjects, s.rejectedObjects, s.pairs, s.cullerPairs, s.infinitePairs, s.ghostPairs, s.pairsAdded,
         s.pairsRemoved, s.trianglePairs, s.margin, s.buildMs, s.cullMs, s.syncMs, s.totalMs);
 }
@@ -989,6 +1023,9 @@ void CullideBroadphase::setGhostPairMargin(btScalar margin) { m_impl->ghostMargi
 btScalar CullideBroadphase::getGhostPairMargin() const { return m_impl->ghostMargin; }
 void CullideBroadphase::setDeepPenetrationFallback(bool enable) { m_impl->deepPenetrationFallback = enable; }
 bool CullideBroadphase::getDeepPenetrationFallback() const { return m_impl->deepPenetrationFallback; }
+
+void CullideBroadphase::setConvexMeshCulling(bool enable) { m_impl->convexMeshCulling = enable; }
+bool CullideBroadphase::getConvexMeshCulling() const { return m_impl->convexMeshCulling; }
 
 const CullideFrameStats& CullideBroadphase::getLastFrameStats() const { return m_impl->stats; }
 std::size_t CullideBroadphase::getRejectedCount() const { return m_impl->rejectedTotal; }

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstdint>
 #include <numeric>
+#include <stdexcept>
 #include <string>
 
 namespace cullide {
@@ -207,6 +208,31 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> overlappingPairs(const std:
         }
     }
     std::sort(pairs.begin(), pairs.end());
+    return pairs;
+}
+
+void checkPairList(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& only, std::size_t objectCount) {
+    for (std::size_t i = 0; i < only.size(); ++i) {
+        const auto [a, b] = only[i];
+        if (a >= b || b >= objectCount || (i > 0 && !(only[i - 1] < only[i]))) {
+            throw std::invalid_argument("cullide::Culler::run: pair list entry " + std::to_string(i) + " (" +
+                                        std::to_string(a) + ", " + std::to_string(b) + ") of " +
+                                        std::to_string(only.size()) + " for " + std::to_string(objectCount) +
+                                        " objects: pairs must be sorted, without repeats, first < second < the "
+                                        "object count");
+        }
+    }
+}
+
+std::vector<std::pair<std::uint32_t, std::uint32_t>> listedOverlappingPairs(
+    const std::vector<ValidatedObject>& objects, const std::vector<std::pair<std::uint32_t, std::uint32_t>>& only) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+    for (const auto& [a, b] : only) {
+        const ValidatedObject& x = objects[a];
+        const ValidatedObject& y = objects[b];
+        if (x.valid && y.valid && !x.box.isEmpty() && !y.box.isEmpty() && x.box.overlaps(y.box))
+            pairs.emplace_back(a, b);
+    }
     return pairs;
 }
 

@@ -34,6 +34,14 @@ std::vector<ValidatedObject> validateObjects(const std::vector<Object>& objects,
 /// All pairs (a < b) of valid objects whose boxes overlap, sorted: sweep and prune along the widest axis.
 std::vector<std::pair<std::uint32_t, std::uint32_t>> overlappingPairs(const std::vector<ValidatedObject>& objects);
 
+/// The pairs of `only` (see Culler::run: sorted, first < second < objects.size(), else std::invalid_argument) whose
+/// objects are both valid and whose boxes overlap: overlappingPairs() restricted to them, sorted.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> listedOverlappingPairs(
+    const std::vector<ValidatedObject>& objects, const std::vector<std::pair<std::uint32_t, std::uint32_t>>& only);
+
+/// Throws std::invalid_argument unless `only` is sorted, without repeats, each first < second < objectCount.
+void checkPairList(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& only, std::size_t objectCount);
+
 /// True when some triangle's box, inflated by margin / 2, overlaps `box` (already inflated by margin / 2): the
 /// deterministic test for pairs with a box-only proxy (their narrow phase is the caller's).
 bool meshTouchesBox(const TriangleMesh& mesh, const Aabb& box, double margin);

@@ -49,7 +49,16 @@ public:
 
     const Settings& settings() const override { return m_settings; }
 
-    void run(const std::vector<Object>& objects, Result& result) override {
+    void run(const std::vector<Object>& objects, Result& result) override { runFrame(objects, nullptr, result); }
+
+    void run(const std::vector<Object>& objects, const std::vector<ObjectIndexPair>& only, Result& result) override {
+        checkPairList(only, objects.size());
+        runFrame(objects, &only, result);
+    }
+
+private:
+    /// One frame: every overlapping pair, or only those listed in `only`.
+    void runFrame(const std::vector<Object>& objects, const std::vector<ObjectIndexPair>* only, Result& result) {
         Timer total;
         result.clear();
         Stats& stats = result.stats;
@@ -71,7 +80,7 @@ public:
             if (m_valid[i].valid) ++stats.prepassObjectsIn;
         }
         const bool paper = m_settings.pipeline == Pipeline::Paper;
-        m_pairs = overlappingPairs(m_valid);
+        m_pairs = only != nullptr ? listedOverlappingPairs(m_valid, *only) : overlappingPairs(m_valid);
         m_partners.assign(objects.size(), {});
         for (const auto& [a, b] : m_pairs) {
             m_partners[a].push_back(b);
@@ -124,7 +133,6 @@ public:
         m_objects = nullptr;
     }
 
-private:
     /// The GL side (context and visibility pass), unless GPU levels are off (GpuLevels::Never: no EGL at all). Without
     /// a usable GL device the CPU path runs instead, with a one-line notice — unless GPU levels were demanded
     /// (GpuLevels::Always, Pipeline::Paper): then GlUnavailableError.

@@ -18,7 +18,15 @@ public:
 
     const Settings& settings() const override { return m_settings; }
 
-    void run(const std::vector<Object>& input, Result& result) override {
+    void run(const std::vector<Object>& input, Result& result) override { runFrame(input, nullptr, result); }
+
+    void run(const std::vector<Object>& input, const std::vector<ObjectIndexPair>& only, Result& result) override {
+        checkPairList(only, input.size());
+        runFrame(input, &only, result);
+    }
+
+private:
+    void runFrame(const std::vector<Object>& input, const std::vector<ObjectIndexPair>* only, Result& result) {
         Timer total;
         result.clear();
         Stats& stats = result.stats;
@@ -27,7 +35,7 @@ public:
         const auto valid = validateObjects(input, margin, result.rejected);
         stats.objects = input.size();
         stats.rejectedObjects = result.rejected.size();
-        const auto pairs = overlappingPairs(valid);
+        const auto pairs = only != nullptr ? listedOverlappingPairs(valid, *only) : overlappingPairs(valid);
         std::vector<std::uint8_t> paired(input.size(), 0);
         for (const auto& [a, b] : pairs) paired[a] = paired[b] = 1;
         const std::vector<Object>& objects = m_world.resolve(input, paired, &m_pool);  // world-space meshes
@@ -94,7 +102,6 @@ public:
         stats.totalMs = total.ms();
     }
 
-private:
     Settings m_settings;
     TaskPool m_pool;
     WorldMeshes m_world;

@@ -83,6 +83,7 @@ TEST(BulletCcd, FastHullStopsAtATriangleMeshLikeWithBullet) {
     ShapeStore shapes;
     TestWorld a(PipelineKind::Default);
     TestWorld b(PipelineKind::Cullide);
+    b.cullideBroadphase()->setConvexMeshCulling(true);  // the hull-mesh triangle path (off by default)
     addHullAndMesh(a, shapes, true);
     addHullAndMesh(b, shapes, true);
     MirrorOptions options;
@@ -112,6 +113,7 @@ TEST(BulletCompound, CompoundBreaksIntoBodiesMirrored) {
     }
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide);
+    cullide.cullideBroadphase()->setConvexMeshCulling(true);  // the compound-mesh triangle path (off by default)
     for (TestWorld* w : {&reference, &cullide}) {
         w->addBody(floor, 0, btTransform(btQuaternion::getIdentity(), btVector3(0, -1, 0)));
         w->addBody(&compound, 4,
@@ -170,6 +172,7 @@ TEST(BulletCompound, CompoundsOfHullsOnALandscapeMirrored) {
     chain.addChildShape(btTransform(btQuaternion::getIdentity(), btVector3(btScalar(1.0), btScalar(0.1), 0)), hullA);
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide);
+    cullide.cullideBroadphase()->setConvexMeshCulling(true);  // the compound-mesh triangle path (off by default)
     for (TestWorld* w : {&reference, &cullide}) {
         w->addBody(ground, 0, btTransform::getIdentity());
         for (int k = 0; k < 12; ++k)

@@ -130,6 +130,7 @@ TEST(BulletContract, NonFiniteAabbRejectedOnceOthersUnaffected) {
     };
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide, referenceFactory());
+    cullide.cullideBroadphase()->setConvexMeshCulling(true);  // the hull-mesh triangle path (off by default)
     populate(reference);
     populate(cullide);
     testing::internal::CaptureStderr();
@@ -180,6 +181,7 @@ TEST(BulletContract, AlgorithmsFitThePoolAndCustomRegistrationsWin) {
     btCollisionShape* hull = shapes.hull(btVector3(btScalar(0.5), btScalar(0.5), btScalar(0.5)), 16, 4);
     btEmptyAlgorithm::CreateFunc empty;  // registered below; outlives the world
     TestWorld w(PipelineKind::Cullide, referenceFactory());
+    w.cullideBroadphase()->setConvexMeshCulling(true);  // hull-ground through CULLIDE too
     btGImpactCollisionAlgorithm::registerAlgorithm(&w.dispatcher());
     w.addBody(ground, 0, btTransform::getIdentity());
     w.addBody(torus, 1, btTransform(btQuaternion::getIdentity(), btVector3(0, 3, 0)));
@@ -296,6 +298,7 @@ TEST(BulletContract, LandscapeWithReferenceCuller) {
     };
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide, referenceFactory());
+    cullide.cullideBroadphase()->setConvexMeshCulling(true);  // the hull-mesh triangle path (off by default)
     populate(reference);
     populate(cullide);
     MirrorOptions options;

@@ -53,6 +53,7 @@ TEST(BulletLandscape, NoContactMissingAndContactsAgree) {
     LandscapeScene scene;
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide);
+    cullide.cullideBroadphase()->setConvexMeshCulling(true);  // the hull-mesh triangle path (off by default)
     scene.populate(reference);
     scene.populate(cullide);
     MirrorOptions options;

@@ -42,6 +42,7 @@ TEST(BulletScale, ManyObjectsOnLandscape) {
     };
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide);
+    cullide.cullideBroadphase()->setConvexMeshCulling(true);  // the convex-mesh triangle path (off by default)
     populate(reference);
     populate(cullide);
     MirrorOptions options;

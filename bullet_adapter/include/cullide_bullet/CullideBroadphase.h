@@ -86,15 +86,20 @@ struct PairTriangles {
 /// Statistics of the last calculateOverlappingPairs().
 struct CullideFrameStats {
     std::size_t proxies = 0;
-    std::size_t culledObjects = 0;       ///< objects handed to the culler
+    /// Object level: pairs of overlapping (fattened) boxes that the pair cache's filter admits.
+    std::size_t objectPairs = 0;
+    /// ... of which went through the culler (their narrow phase reads triangles: GImpact-GImpact, GImpact-mesh).
+    std::size_t culledPairs = 0;
+    /// ... of which the culler proved farther apart than the margin: no pair.
+    std::size_t prunedPairs = 0;
+    std::size_t culledObjects = 0;       ///< objects handed to the culler (those of culled pairs)
     std::size_t meshObjects = 0;         ///< ... of which with triangle geometry
     std::size_t triangles = 0;           ///< triangles handed to the culler
-    /// Static objects not handed over: far from every moving object, and no other static one passes their filter.
-    std::size_t staticObjectsSkipped = 0;
+    std::size_t staticObjectsSkipped = 0;  ///< static objects not handed to the culler
     std::size_t infiniteObjects = 0;
     std::size_t ghostObjects = 0;
     std::size_t rejectedObjects = 0;     ///< invalid AABBs or geometry this frame
-    std::size_t cullerPairs = 0;         ///< object pairs reported by the culler (before the pair cache's filter)
+    std::size_t cullerPairs = 0;         ///< culled pairs the culler kept
     std::size_t infinitePairs = 0;       ///< pairs with planes / infinite boxes
     std::size_t ghostPairs = 0;
     std::size_t pairs = 0;               ///< pairs in the cache after the update
@@ -104,7 +109,7 @@ struct CullideFrameStats {
     std::size_t trianglePairs = 0;       ///< surviving triangle pairs kept for the dispatcher
     std::size_t interpenetratingPairs = 0;  ///< GImpact pairs whose meshes intersect (see setDeepPenetrationFallback)
     double margin = 0.0;                 ///< the culler's distance margin d this frame
-    double buildMs = 0.0;                ///< building the culling frame (world-space triangles, boxes)
+    double buildMs = 0.0;                ///< object level and the culling frame
     double cullMs = 0.0;                 ///< culler run
     double syncMs = 0.0;                 ///< pair cache update
     double totalMs = 0.0;
@@ -176,6 +181,14 @@ public:
     /// the deepest penetration can be under-reported). Resting contacts within the margins are not affected.
     void setDeepPenetrationFallback(bool enable);
     bool getDeepPenetrationFallback() const;
+
+    /// Convex hulls and compounds against triangle meshes through the culler's levels (default: off). On, the
+    /// dispatcher's convex-concave algorithm reads only the mesh triangles CULLIDE kept near the hull; off, such
+    /// pairs go from the object level straight to Bullet's algorithm, whose own BVH query of the mesh is already
+    /// cheap: measured on 1,000 hulls over a 32K-triangle landscape (docs/benchmarks.md, cullide-swap-bench), the
+    /// culling costs more than the narrow phase it saves on the CPU path. GImpact pairs are always culled.
+    void setConvexMeshCulling(bool enable);
+    bool getConvexMeshCulling() const;
 
     const CullideFrameStats& getLastFrameStats() const;
     /// Number of rejected non-finite AABBs (createProxy/setAabb calls) and geometry since construction.

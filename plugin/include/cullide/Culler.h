@@ -6,9 +6,11 @@
 #include "cullide/Result.h"
 #include "cullide/Settings.h"
 
+#include <cstdint>
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace cullide {
@@ -18,6 +20,9 @@ class GlUnavailableError : public std::runtime_error {
 public:
     using std::runtime_error::runtime_error;
 };
+
+/// Two objects of a frame by index, first < second.
+using ObjectIndexPair = std::pair<std::uint32_t, std::uint32_t>;
 
 class Culler {
 public:
@@ -29,6 +34,13 @@ public:
     /// Runs one frame. Object i of `objects` is object i of the result. Invalid objects (non-finite coordinates or
     /// boxes, out-of-range indices) are listed in Result::rejected and take part in nothing.
     virtual void run(const std::vector<Object>& objects, Result& result) = 0;
+    /// Runs one frame over the listed object pairs only: for a caller with an object level of its own (a
+    /// broadphase that knows which pairs read triangles). A pair not listed is neither tested nor reported; a listed
+    /// pair is reported exactly as run(objects, result) would report it. An object in no listed pair costs its
+    /// validation only (its world vertices are never built). `only` must be sorted, without repeats, each
+    /// first < second < objects.size(): std::invalid_argument otherwise (nothing is run).
+    virtual void run(const std::vector<Object>& objects, const std::vector<ObjectIndexPair>& only,
+                     Result& result) = 0;
     virtual const Settings& settings() const = 0;
 };
 

@@ -1,0 +1,540 @@
+// cullide-swap-bench: typical Bullet scenes stepped with Bullet's default pipeline (btDbvtBroadphase +
+// btCollisionDispatcher), with btAxisSweep3, and with the README's two-line swap (CullideBroadphase +
+// CullideCollisionDispatcher), side by side in one process (issue #12, item 7).
+//
+//   cullide-swap-bench [--steps N] [--scene NAME]... [--json FILE]
+//
+// The worlds run in lockstep: every step each world is stepped once (timed, the order rotating), then the default
+// world's body states are copied into the others, so all three detect collisions on identical states every step.
+// Their timings are comparable step by step, and "lost pairs" are exact: object pairs with contact points after the
+// default world's step but not after the CULLIDE world's (on the same state). Prints one table row per scene;
+// --json writes the figures (docs/benchmarks.md, scripts/bench.sh).
+#include "cullide/Timer.h"
+#include "cullide/TriangleTest.h"
+#include "cullide_bullet/CullideBroadphase.h"
+#include "cullide_bullet/CullideCollisionDispatcher.h"
+
+#include <BulletCollision/CollisionShapes/btConvexHullShape.h>
+#include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
+#include <BulletCollision/Gimpact/btGImpactShape.h>
+#include <btBulletDynamicsCommon.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <functional>
+#include <memory>
+#include <random>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace {
+
+using cullide::Timer;
+
+enum class Pipeline { Dbvt, Sap, Cullide };
+constexpr Pipeline kPipelines[] = {Pipeline::Dbvt, Pipeline::Sap, Pipeline::Cullide};
+
+/// Uniform doubles from mt19937_64 with our own mapping (the std distributions differ between libraries).
+class Random {
+public:
+    explicit Random(std::uint64_t seed) : m_gen(seed) {}
+    btScalar uniform(double lo, double hi) {
+        const double u = static_cast<double>(m_gen() >> 11) * (1.0 / 9007199254740992.0);
+        return static_cast<btScalar>(lo + (hi - lo) * u);
+    }
+
+private:
+    std::mt19937_64 m_gen;
+};
+
+/// Shapes and mesh data shared by the three worlds of a scene (one set, as an application would share them).
+struct Shapes {
+    std::vector<std::unique_ptr<btCollisionShape>> owned;
+    std::vector<std::unique_ptr<btTriangleIndexVertexArray>> arrays;
+    std::vector<std::vector<btScalar>> vertexData;
+    std::vector<std::vector<int>> indexData;
+
+    template <typename T>
+    T* own(T* shape) {
+        owned.emplace_back(shape);
+        return shape;
+    }
+
+    btTriangleIndexVertexArray* mesh(std::vector<btScalar> vertices, std::vector<int> indices) {
+        vertexData.push_back(std::move(vertices));
+        indexData.push_back(std::move(indices));
+        btIndexedMesh part;
+        part.m_numTriangles = static_cast<int>(indexData.back().size() / 3);
+        part.m_triangleIndexBase = reinterpret_cast<const unsigned char*>(indexData.back().data());
+        part.m_triangleIndexStride = 3 * static_cast<int>(sizeof(int));
+        part.m_numVertices = static_cast<int>(vertexData.back().size() / 3);
+        part.m_vertexBase = reinterpret_cast<const unsigned char*>(vertexData.back().data());
+        part.m_vertexStride = 3 * static_cast<int>(sizeof(btScalar));
+        arrays.push_back(std::make_unique<btTriangleIndexVertexArray>());
+        arrays.back()->addIndexedMesh(part, PHY_INTEGER);
+        return arrays.back().get();
+    }
+
+    /// A height-field patch of cells x cells quads as a static BVH mesh, origin at its corner.
+    btBvhTriangleMeshShape* landscape(int cells, double cell, double x0, double z0) {
+        std::vector<btScalar> v;
+        std::vector<int> idx;
+        for (int z = 0; z <= cells; ++z)
+            for (int x = 0; x <= cells; ++x) {
+                const double wx = x0 + x * cell, wz = z0 + z * cell;
+                const double h = 1.5 * std::sin(0.21 * wx) * std::cos(0.17 * wz) + 0.6 * std::sin(0.5 * wx + 0.3 * wz);
+                v.insert(v.end(), {btScalar(wx), btScalar(h), btScalar(wz)});
+            }
+        for (int z = 0; z < cells; ++z)
+            for (int x = 0; x < cells; ++x) {
+                const int a = z * (cells + 1) + x;
+                idx.insert(idx.end(), {a, a + cells + 1, a + 1, a + 1, a + cells + 1, a + cells + 2});
+            }
+        return own(new btBvhTriangleMeshShape(mesh(std::move(v), std::move(idx)), true));
+    }
+
+    btGImpactMeshShape* torus(double R, double r, int segments, int sides) {
+        std::vector<btScalar> v;
+        std::vector<int> idx;
+        for (int i = 0; i < segments; ++i)
+            for (int j = 0; j < sides; ++j) {
+                const double u = 2 * M_PI * i / segments, w = 2 * M_PI * j / sides;
+                v.insert(v.end(), {btScalar((R + r * std::cos(w)) * std::cos(u)), btScalar(r * std::sin(w)),
+                                   btScalar((R + r * std::cos(w)) * std::sin(u))});
+            }
+        for (int i = 0; i < segments; ++i)
+            for (int j = 0; j < sides; ++j) {
+                const int a = i * sides + j, b = ((i + 1) % segments) * sides + j;
+                const int c = ((i + 1) % segments) * sides + (j + 1) % sides, d = i * sides + (j + 1) % sides;
+                idx.insert(idx.end(), {a, b, c, a, c, d});
+            }
+        auto* shape = own(new btGImpactMeshShape(mesh(std::move(v), std::move(idx))));
+        shape->setMargin(btScalar(0.02));
+        shape->updateBound();
+        return shape;
+    }
+
+    btConvexHullShape* hull(Random& rng, int points, double sx, double sy, double sz) {
+        auto* h = own(new btConvexHullShape());
+        for (int p = 0; p < points; ++p) {
+            // Points on a rough ellipsoid: polyhedral features, no degenerate slivers.
+            const double a = rng.uniform(0, 2 * M_PI), c = rng.uniform(-1, 1), s = std::sqrt(1 - c * c);
+            h->addPoint(btVector3(btScalar(sx * s * std::cos(a)), btScalar(sy * c), btScalar(sz * s * std::sin(a))),
+                        p == points - 1);
+        }
+        h->optimizeConvexHull();
+        return h;
+    }
+};
+
+/// What a scene puts in a world: bodies (shape, mass, transform) and, optionally, ray tests per step.
+struct BodySpec {
+    btCollisionShape* shape;
+    btScalar mass;
+    btTransform transform;
+};
+struct SceneSpec {
+    std::string name;
+    std::string what;
+    std::vector<BodySpec> bodies;
+    int raysPerStep = 0;
+    bool gimpact = false;
+};
+
+btTransform at(double x, double y, double z) {
+    return btTransform(btQuaternion::getIdentity(), btVector3(btScalar(x), btScalar(y), btScalar(z)));
+}
+
+SceneSpec boxesFalling(Shapes& s) {
+    SceneSpec sc{"boxes-3000", "3,000 boxes falling on a ground box", {}};
+    sc.bodies.push_back({s.own(new btBoxShape(btVector3(40, 1, 40))), 0, at(0, -1, 0)});
+    btCollisionShape* box = s.own(new btBoxShape(btVector3(btScalar(0.4), btScalar(0.4), btScalar(0.4))));
+    for (int i = 0; i < 3000; ++i)
+        sc.bodies.push_back({box, 1, at(-14 + (i % 15) * 2.0, 1 + (i / 225) * 1.2, -14 + ((i / 15) % 15) * 2.0)});
+    return sc;
+}
+
+SceneSpec pyramidWallsTower(Shapes& s) {
+    SceneSpec sc{"pyramid-walls", "~1,000 boxes: a pyramid, two walls and a tower", {}};
+    sc.bodies.push_back({s.own(new btBoxShape(btVector3(50, 1, 50))), 0, at(0, -1, 0)});
+    btCollisionShape* box = s.own(new btBoxShape(btVector3(btScalar(0.5), btScalar(0.5), btScalar(0.5))));
+    for (int level = 0; level < 20; ++level)  // pyramid: 210 boxes
+        for (int i = 0; i < 20 - level; ++i) sc.bodies.push_back({box, 1, at(i - 0.5 * (19 - level), 0.5 + level, -10)});
+    for (int wall = 0; wall < 2; ++wall)  // walls: 2 x 300
+        for (int row = 0; row < 15; ++row)
+            for (int i = 0; i < 20; ++i)
+                sc.bodies.push_back({box, 1, at(-10 + i * 1.0 + (row % 2) * 0.5, 0.5 + row, 2 + wall * 6)});
+    for (int level = 0; level < 50; ++level)  // tower: 50 x 4
+        for (int k = 0; k < 4; ++k) sc.bodies.push_back({box, 1, at(20 + (k % 2) * 1.0, 0.5 + level, (k / 2) * 1.0)});
+    return sc;
+}
+
+SceneSpec hullStack(Shapes& s) {
+    SceneSpec sc{"hulls-1000", "1,000 convex hulls (40 points) stacked in 10 columns", {}};
+    sc.bodies.push_back({s.own(new btBoxShape(btVector3(40, 1, 40))), 0, at(0, -1, 0)});
+    Random rng(11);
+    std::vector<btCollisionShape*> hulls;
+    for (int k = 0; k < 8; ++k) hulls.push_back(s.hull(rng, 40, 0.5, 0.4, 0.45));
+    for (int i = 0; i < 1000; ++i)
+        sc.bodies.push_back({hulls[static_cast<std::size_t>(i) % hulls.size()], 1,
+                             at(-9 + (i % 10) * 2.0, 0.5 + (i / 100) * 0.9, -9 + ((i / 10) % 10) * 2.0)});
+    return sc;
+}
+
+/// ~32K triangles of static BVH landscape in 4 parts, ~1,000 bodies of `kinds` dropped on it.
+SceneSpec overLandscape(Shapes& s, std::string name, std::string what, const std::vector<btCollisionShape*>& kinds) {
+    SceneSpec sc{std::move(name), std::move(what), {}};
+    for (int p = 0; p < 4; ++p)  // 4 parts of 64 x 64 cells (8,192 triangles each)
+        sc.bodies.push_back({s.landscape(64, 0.75, -48 + (p % 2) * 48.0, -48 + (p / 2) * 48.0), 0, at(0, 0, 0)});
+    Random rng(5);
+    for (int i = 0; i < 1000; ++i)
+        sc.bodies.push_back({kinds[static_cast<std::size_t>(i) % kinds.size()], 1,
+                             at(rng.uniform(-44, 44), rng.uniform(3, 9), rng.uniform(-44, 44))});
+    return sc;
+}
+
+SceneSpec primitivesOnLandscape(Shapes& s) {
+    return overLandscape(s, "landscape-prims", "1,000 boxes/spheres/capsules over 4 BVH parts (32K triangles)",
+                         {s.own(new btBoxShape(btVector3(btScalar(0.4), btScalar(0.3), btScalar(0.35)))),
+                          s.own(new btSphereShape(btScalar(0.4))),
+                          s.own(new btCapsuleShape(btScalar(0.25), btScalar(0.6)))});
+}
+
+SceneSpec hullsOnLandscape(Shapes& s) {
+    Random rng(3);
+    std::vector<btCollisionShape*> kinds;
+    for (int k = 0; k < 6; ++k) kinds.push_back(s.hull(rng, 40, 0.5, 0.4, 0.45));
+    return overLandscape(s, "landscape-hulls", "1,000 hulls (40 points) over 4 BVH parts (32K triangles)", kinds);
+}
+
+SceneSpec hullsOnLandscapeRays(Shapes& s) {
+    SceneSpec sc = hullsOnLandscape(s);
+    sc.name = "landscape-rays";
+    sc.what = "landscape-hulls + 500 long ray tests a step";
+    sc.raysPerStep = 500;
+    return sc;
+}
+
+SceneSpec toriPile(Shapes& s) {
+    SceneSpec sc{"tori-pile", "120 GImpact tori (1,024 triangles each) piling on a ground box", {}};
+    sc.gimpact = true;
+    sc.bodies.push_back({s.own(new btBoxShape(btVector3(20, 1, 20))), 0, at(0, -1, 0)});
+    btCollisionShape* torus = s.torus(1.0, 0.3, 32, 16);
+    Random rng(9);
+    for (int i = 0; i < 120; ++i) {
+        btTransform t = at(-6 + (i % 5) * 3.0, 1.5 + (i / 25) * 3.0, -6 + ((i / 5) % 5) * 3.0);
+        t.setRotation(btQuaternion(btVector3(rng.uniform(-1, 1), 1, rng.uniform(-1, 1)).normalized(),
+                                   rng.uniform(0, 3)));
+        sc.bodies.push_back({torus, 1, t});
+    }
+    return sc;
+}
+
+struct SceneFactory {
+    const char* name;
+    SceneSpec (*make)(Shapes&);
+};
+const SceneFactory kScenes[] = {{"boxes-3000", boxesFalling},      {"pyramid-walls", pyramidWallsTower},
+                                {"hulls-1000", hullStack},         {"landscape-prims", primitivesOnLandscape},
+                                {"landscape-hulls", hullsOnLandscape}, {"landscape-rays", hullsOnLandscapeRays},
+                                {"tori-pile", toriPile}};
+
+/// A dynamics world that times the parts of its step.
+class TimedWorld final : public btDiscreteDynamicsWorld {
+public:
+    using btDiscreteDynamicsWorld::btDiscreteDynamicsWorld;
+    void performDiscreteCollisionDetection() override {
+        Timer t;
+        updateAabbs();
+        computeOverlappingPairs();
+        broadphaseMs += t.ms();
+        t = Timer();
+        if (btDispatcher* d = getDispatcher())
+            d->dispatchAllCollisionPairs(getBroadphase()->getOverlappingPairCache(), getDispatchInfo(), d);
+        narrowMs += t.ms();
+    }
+    double broadphaseMs = 0, narrowMs = 0;
+};
+
+/// One pipeline's world of a scene.
+struct World {
+    Pipeline pipeline;
+    btDefaultCollisionConfiguration config;
+    std::unique_ptr<btBroadphaseInterface> broadphase;
+    std::unique_ptr<btCollisionDispatcher> dispatcher;
+    btSequentialImpulseConstraintSolver solver;
+    std::unique_ptr<TimedWorld> world;
+    std::vector<std::unique_ptr<btRigidBody>> bodies;
+    std::vector<std::unique_ptr<btDefaultMotionState>> motion;
+    double stepMs = 0, rayMs = 0;
+    std::size_t narrowPairs = 0;  ///< pairs in the pair cache after each step, summed
+    std::size_t rayHits = 0;
+
+    World(Pipeline p, const SceneSpec& scene) : pipeline(p) {
+        if (p == Pipeline::Cullide) {
+            auto bp = std::make_unique<cullide::CullideBroadphase>();
+            if (std::getenv("SWAP_BENCH_CONVEX_MESH") != nullptr) bp->setConvexMeshCulling(true);
+            dispatcher = std::make_unique<cullide::CullideCollisionDispatcher>(&config, bp.get());
+            broadphase = std::move(bp);
+        } else {
+            dispatcher = std::make_unique<btCollisionDispatcher>(&config);
+            if (p == Pipeline::Dbvt)
+                broadphase = std::make_unique<btDbvtBroadphase>();
+            else
+                broadphase = std::make_unique<btAxisSweep3>(btVector3(-120, -60, -120), btVector3(120, 200, 120));
+        }
+        if (scene.gimpact) btGImpactCollisionAlgorithm::registerAlgorithm(dispatcher.get());
+        world = std::make_unique<TimedWorld>(dispatcher.get(), broadphase.get(), &solver, &config);
+        world->setGravity(btVector3(0, -10, 0));
+        for (const BodySpec& b : scene.bodies) {
+            btVector3 inertia(0, 0, 0);
+            if (b.mass > 0) b.shape->calculateLocalInertia(b.mass, inertia);
+            motion.push_back(std::make_unique<btDefaultMotionState>(b.transform));
+            btRigidBody::btRigidBodyConstructionInfo info(b.mass, motion.back().get(), b.shape, inertia);
+            bodies.push_back(std::make_unique<btRigidBody>(info));
+            bodies.back()->setUserIndex(static_cast<int>(bodies.size() - 1));
+            world->addRigidBody(bodies.back().get());
+        }
+    }
+    ~World() {
+        for (auto& b : bodies) world->removeRigidBody(b.get());
+    }
+
+    void step(int raysPerStep, int stepIndex) {
+        Timer t;
+        world->stepSimulation(btScalar(1.0 / 60.0), 0);
+        Timer r;
+        for (int i = 0; i < raysPerStep; ++i) {  // long rays across the landscape, a new fan every step
+            const double a = 2 * M_PI * (i + 0.37 * stepIndex) / raysPerStep;
+            const btVector3 from(btScalar(60 * std::cos(a)), 12, btScalar(60 * std::sin(a)));
+            const btVector3 to(btScalar(-60 * std::cos(a + 0.5)), -4, btScalar(-60 * std::sin(a + 0.5)));
+            btCollisionWorld::ClosestRayResultCallback hit(from, to);
+            world->rayTest(from, to, hit);
+            rayHits += hit.hasHit() ? 1 : 0;
+        }
+        rayMs += r.ms();
+        stepMs += t.ms();
+        narrowPairs += static_cast<std::size_t>(broadphase->getOverlappingPairCache()->getNumOverlappingPairs());
+    }
+
+    std::set<std::pair<int, int>> contactPairs() const {
+        std::set<std::pair<int, int>> out;
+        for (int k = 0; k < dispatcher->getNumManifolds(); ++k) {
+            const btPersistentManifold* m = dispatcher->getManifoldByIndexInternal(k);
+            if (m->getNumContacts() == 0) continue;
+            const int a = m->getBody0()->getUserIndex(), b = m->getBody1()->getUserIndex();
+            out.emplace(std::min(a, b), std::max(a, b));
+        }
+        return out;
+    }
+
+    /// Takes over another world's body states (lockstep).
+    void copyStatesFrom(const World& from) {
+        for (std::size_t i = 0; i < bodies.size(); ++i) {
+            const btRigidBody& src = *from.bodies[i];
+            btRigidBody& dst = *bodies[i];
+            if (dst.isStaticObject()) continue;
+            dst.setWorldTransform(src.getWorldTransform());
+            dst.setInterpolationWorldTransform(src.getInterpolationWorldTransform());
+            dst.setLinearVelocity(src.getLinearVelocity());
+            dst.setAngularVelocity(src.getAngularVelocity());
+            dst.setInterpolationLinearVelocity(src.getInterpolationLinearVelocity());
+            dst.setInterpolationAngularVelocity(src.getInterpolationAngularVelocity());
+            dst.forceActivationState(src.getActivationState());
+            dst.setDeactivationTime(src.getDeactivationTime());
+            motion[i]->setWorldTransform(src.getWorldTransform());
+        }
+    }
+};
+
+struct Row {
+    std::string scene, what;
+    std::size_t bodies = 0;
+    int steps = 0;
+    double ms[3] = {0, 0, 0}, broadphaseMs[3] = {0, 0, 0}, narrowMs[3] = {0, 0, 0};
+    double pairs[3] = {0, 0, 0};
+    std::size_t contactPairSteps = 0, lost = 0, extra = 0;
+    cullide::CullideFrameStats last;
+    double cullidePairs = 0, fallbackPairs = 0, penetrationPairs = 0;  ///< dispatcher, per step
+    /// Lost pairs explained (explainLost, the first kLostChecks), and of those the meshes farther apart than the
+    /// culling margin.
+    std::size_t lostChecked = 0, lostApart = 0;
+};
+
+constexpr std::size_t kLostChecks = 8;
+
+/// World-space triangles of a concave shape (GImpact or BVH mesh) as Bullet's processAllTriangles yields them.
+struct TriangleCollector : btTriangleCallback {
+    const btTransform* placement = nullptr;
+    std::vector<std::array<cullide::Vec3, 3>> triangles;
+    void processTriangle(btVector3* t, int, int) override {
+        std::array<cullide::Vec3, 3> w;
+        for (int k = 0; k < 3; ++k) {
+            const btVector3 v = *placement * t[k];
+            w[std::size_t(k)] = cullide::Vec3(double(v.x()), double(v.y()), double(v.z()));
+        }
+        triangles.push_back(w);
+    }
+};
+
+std::vector<std::array<cullide::Vec3, 3>> worldTriangles(const btCollisionObject& o) {
+    TriangleCollector c;
+    c.placement = &o.getWorldTransform();
+    const btVector3 big(btScalar(1e9), btScalar(1e9), btScalar(1e9));
+    static_cast<const btConcaveShape*>(o.getCollisionShape())->processAllTriangles(&c, -big, big);
+    return c.triangles;
+}
+
+/// A lost pair, explained on stderr: whether the CULLIDE world still had the object pair, Bullet's deepest point,
+/// and for two concave shapes the exact distance of their triangles (brute force): farther apart than the culling
+/// margin means Bullet's contacts there are not between touching triangles (GImpact's clip method makes penetration
+/// points from triangle pairs whose boxes overlap).
+void explainLost(const World& reference, World& cullideWorld, const std::pair<int, int>& p, int step, Row& row) {
+    ++row.lostChecked;
+    btCollisionObject* a = cullideWorld.bodies[std::size_t(p.first)].get();
+    btCollisionObject* b = cullideWorld.bodies[std::size_t(p.second)].get();
+    const bool inCache = cullideWorld.broadphase->getOverlappingPairCache()->findPair(a->getBroadphaseHandle(),
+                                                                                        b->getBroadphaseHandle());
+    double deepest = 1e30;
+    for (int k = 0; k < reference.dispatcher->getNumManifolds(); ++k) {
+        const btPersistentManifold* m = reference.dispatcher->getManifoldByIndexInternal(k);
+        const int x = m->getBody0()->getUserIndex(), y = m->getBody1()->getUserIndex();
+        if (std::min(x, y) != p.first || std::max(x, y) != p.second) continue;
+        for (int c = 0; c < m->getNumContacts(); ++c)
+            deepest = std::min(deepest, double(m->getContactPoint(c).getDistance()));
+    }
+    double gap = -1;
+    const double margin = static_cast<cullide::CullideBroadphase*>(cullideWorld.broadphase.get())->getCullingMargin();
+    if (a->getCollisionShape()->isConcave() && b->getCollisionShape()->isConcave()) {
+        const auto ta = worldTriangles(*a), tb = worldTriangles(*b);
+        gap = 1e30;
+        for (const auto& x : ta)
+            for (const auto& y : tb) gap = std::min(gap, cullide::triangleDistance(x[0], x[1], x[2], y[0], y[1], y[2]));
+        if (gap > margin) ++row.lostApart;
+    }
+    std::fprintf(stderr,
+                 "%s: step %d lost pair %d-%d (%s): Bullet's deepest point %.4g; %s\n", row.scene.c_str(), step,
+                 p.first, p.second, inCache ? "in the pair cache" : "pruned by the culler", deepest,
+                 gap < 0 ? "not two meshes"
+                         : (gap > margin ? "meshes " + std::to_string(gap) + " apart, beyond the margin " +
+                                               std::to_string(margin)
+                                         : "meshes " + std::to_string(gap) + " apart, WITHIN the margin")
+                               .c_str());
+}
+
+Row runScene(const SceneFactory& factory, int steps) {
+    Shapes shapes;
+    const SceneSpec scene = factory.make(shapes);
+    std::vector<std::unique_ptr<World>> worlds;
+    for (Pipeline p : kPipelines) worlds.push_back(std::make_unique<World>(p, scene));
+    Row row;
+    row.scene = scene.name;
+    row.what = scene.what;
+    row.bodies = scene.bodies.size();
+    row.steps = steps;
+    for (int s = 0; s < steps; ++s) {
+        for (std::size_t k = 0; k < worlds.size(); ++k) worlds[(k + static_cast<std::size_t>(s)) % worlds.size()]
+                                                               ->step(scene.raysPerStep, s);
+        const auto want = worlds[0]->contactPairs();
+        const auto got = worlds[2]->contactPairs();
+        row.contactPairSteps += want.size();
+        for (const auto& p : want) {
+            if (got.count(p)) continue;
+            ++row.lost;
+            if (row.lostChecked < kLostChecks) explainLost(*worlds[0], *worlds[2], p, s, row);
+        }
+        for (const auto& p : got) row.extra += want.count(p) ? 0 : 1;
+        const auto& d = static_cast<cullide::CullideCollisionDispatcher*>(worlds[2]->dispatcher.get())->getLastStepStats();
+        row.cullidePairs += double(d.cullidePairs) / steps;
+        row.fallbackPairs += double(d.fallbackPairs) / steps;
+        row.penetrationPairs += double(d.penetrationPairs) / steps;
+        for (std::size_t k = 1; k < worlds.size(); ++k) worlds[k]->copyStatesFrom(*worlds[0]);
+    }
+    for (std::size_t k = 0; k < worlds.size(); ++k) {
+        row.ms[k] = worlds[k]->stepMs / steps;
+        row.broadphaseMs[k] = worlds[k]->world->broadphaseMs / steps;
+        row.narrowMs[k] = worlds[k]->world->narrowMs / steps;
+        row.pairs[k] = double(worlds[k]->narrowPairs) / steps;
+    }
+    row.last = static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get())->getLastFrameStats();
+    return row;
+}
+
+void printRow(const Row& r) {
+    const double best = std::min(r.ms[0], r.ms[1]);
+    std::printf("%-16s %6zu %5d | %8.2f %8.2f %8.2f | %5.2fx | bp %6.2f/%6.2f nar %7.2f/%7.2f | pairs %8.0f/%8.0f | "
+                "lost %zu of %zu (checked %zu: %zu apart) extra %zu | dispatcher: culled %.1f, full %.1f "
+                "(penetrating %.1f)\n",
+                r.scene.c_str(), r.bodies, r.steps, r.ms[0], r.ms[1], r.ms[2], r.ms[2] / best, r.broadphaseMs[0],
+                r.broadphaseMs[2], r.narrowMs[0], r.narrowMs[2], r.pairs[0], r.pairs[2], r.lost, r.contactPairSteps,
+                r.lostChecked, r.lostApart, r.extra, r.cullidePairs, r.fallbackPairs, r.penetrationPairs);
+    std::fflush(stdout);
+}
+
+void writeJson(const std::string& path, const std::vector<Row>& rows) {
+    std::ofstream out(path);
+    out << "[\n";
+    for (std::size_t i = 0; i < rows.size(); ++i) {
+        const Row& r = rows[i];
+        char buf[1024];
+        std::snprintf(buf, sizeof buf,
+                      "  {\"scene\": \"%s\", \"what\": \"%s\", \"bodies\": %zu, \"steps\": %d, \"dbvt_ms\": %.4f, "
+                      "\"sap_ms\": %.4f, \"cullide_ms\": %.4f, \"ratio\": %.4f, \"dbvt_broadphase_ms\": %.4f, "
+                      "\"cullide_broadphase_ms\": %.4f, \"dbvt_narrow_ms\": %.4f, \"cullide_narrow_ms\": %.4f, "
+                      "\"dbvt_pairs\": %.1f, \"cullide_pairs\": %.1f, \"contact_pair_steps\": %zu, \"lost\": %zu, "
+                      "\"lost_checked\": %zu, \"lost_apart\": %zu, \"extra\": %zu, \"culled_pairs\": %zu, "
+                      "\"pruned_pairs\": %zu}%s\n",
+                      r.scene.c_str(), r.what.c_str(), r.bodies, r.steps, r.ms[0], r.ms[1], r.ms[2],
+                      r.ms[2] / std::min(r.ms[0], r.ms[1]), r.broadphaseMs[0], r.broadphaseMs[2], r.narrowMs[0],
+                      r.narrowMs[2], r.pairs[0], r.pairs[2], r.contactPairSteps, r.lost, r.lostChecked, r.lostApart,
+                      r.extra, r.last.culledPairs, r.last.prunedPairs, i + 1 < rows.size() ? "," : "");
+        out << buf;
+    }
+    out << "]\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    int steps = 120;
+    std::vector<std::string> only;
+    std::string json;
+    for (int i = 1; i < argc; ++i) {
+        const std::string a = argv[i];
+        if (a == "--steps" && i + 1 < argc) {
+            steps = std::max(1, std::atoi(argv[++i]));
+        } else if (a == "--scene" && i + 1 < argc) {
+            only.emplace_back(argv[++i]);
+        } else if (a == "--json" && i + 1 < argc) {
+            json = argv[++i];
+        } else {
+            std::fprintf(stderr, "usage: cullide-swap-bench [--steps N] [--scene NAME]... [--json FILE]\nscenes:");
+            for (const SceneFactory& f : kScenes) std::fprintf(stderr, " %s", f.name);
+            std::fprintf(stderr, "\n");
+            return 2;
+        }
+    }
+    for (const std::string& name : only) {
+        if (std::none_of(std::begin(kScenes), std::end(kScenes), [&](const SceneFactory& f) { return name == f.name; })) {
+            std::fprintf(stderr, "cullide-swap-bench: unknown scene '%s'\n", name.c_str());
+            return 2;
+        }
+    }
+    std::printf("%-16s %6s %5s | %8s %8s %8s | %6s | step ms per world (lockstep, same states, order rotating)\n",
+                "scene", "bodies", "steps", "dbvt", "sap", "cullide", "ratio");
+    std::vector<Row> rows;
+    for (const SceneFactory& f : kScenes) {
+        if (!only.empty() && std::find(only.begin(), only.end(), f.name) == only.end()) continue;
+        rows.push_back(runScene(f, steps));
+        printRow(rows.back());
+    }
+    if (!json.empty()) writeJson(json, rows);
+    return 0;
+}

@@ -1,0 +1,56 @@
+#include "CullingPolicy.h"
+
+#include <algorithm>
+
+namespace cullide::bullet {
+
+bool trianglesConsumed(GeometryKind a, GeometryKind b, bool convexVsMesh) {
+    if (a > b) std::swap(a, b);  // enum order: None, GImpactMesh, TriangleMesh, ConvexHull, Compound
+    if (a == GeometryKind::GImpactMesh) return b == GeometryKind::GImpactMesh || b == GeometryKind::TriangleMesh;
+    if (a == GeometryKind::TriangleMesh)
+        return convexVsMesh && (b == GeometryKind::ConvexHull || b == GeometryKind::Compound);
+    return false;
+}
+
+double requiredCullingMargin(const std::vector<MarginEntry>& objects, const BreakingRule& rule) {
+    double gimpact = -1.0, hull = -1.0, mesh = -1.0;  // largest margin per kind (-1: none in the frame)
+    double coordinate = 0.0;
+    bool boxes = false;
+    double largest = 0.0, second = 0.0, largestMoving = 0.0;  // motion discs
+    for (const MarginEntry& o : objects) {
+        if (o.motionDisc > largest) {
+            second = largest;
+            largest = o.motionDisc;
+        } else {
+            second = std::max(second, o.motionDisc);
+        }
+        if (o.moving) largestMoving = std::max(largestMoving, o.motionDisc);
+        coordinate = std::max(coordinate, o.coordinate);
+        switch (o.kind) {
+            case GeometryKind::GImpactMesh: gimpact = std::max(gimpact, o.margin); break;
+            case GeometryKind::ConvexHull: hull = std::max(hull, o.margin); break;
+            case GeometryKind::Compound:
+                // Hull children go through the hull rules; other children are boxes that include their margin.
+                hull = std::max(hull, o.margin);
+                boxes = true;
+                break;
+            case GeometryKind::TriangleMesh: mesh = std::max(mesh, o.margin); break;
+            case GeometryKind::None: boxes = true; break;
+        }
+    }
+    double t = rule.threshold;
+    if (rule.relative) t *= std::max(1.0, std::min(second, largestMoving));
+    double d = boxes ? 1.5 * t : 0.0;
+    // (A Bullet built with BULLET_TRIANGLE_COLLISION uses GJK on GImpact triangle pairs instead, within 2 g + t: not
+    // Debian's build; such an application sets Settings::margin to 2 g + t.)
+    const double slack = 8.0 * rule.epsilon * coordinate;
+    if (gimpact >= 0) d = std::max(d, 2.2 * gimpact + slack);
+    if (gimpact >= 0 && boxes) d = std::max(d, gimpact + t);
+    if (gimpact >= 0 && hull >= 0) d = std::max(d, gimpact + hull + t);
+    if (gimpact >= 0 && mesh >= 0) d = std::max(d, gimpact + mesh + t);
+    if (hull >= 0) d = std::max({d, 2 * hull + 1.5 * t, hull + std::max(mesh, 0.0) + 1.5 * t});
+    if (mesh >= 0) d = std::max(d, mesh + 1.5 * t);
+    return std::max(d, 1e-9);
+}
+
+}  // namespace cullide::bullet

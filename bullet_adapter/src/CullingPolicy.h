@@ -1,0 +1,47 @@
+// What the broadphase hands to the culler, as pure functions of the shapes: which object pairs go through the
+// CULLIDE levels, and the distance margin d those pairs need. Unit-tested without Bullet worlds (tests/unit).
+#pragma once
+
+#include "ShapeGeometry.h"
+
+#include <vector>
+
+namespace cullide::bullet {
+
+/// Whether the pair's narrow phase reads the culler's surviving triangles (CullideCollisionDispatcher), so that the
+/// CULLIDE levels run for it: GImpact against GImpact or against a triangle mesh, and, when `convexVsMesh` is set,
+/// convex hulls and compounds against a triangle mesh. Every other pair (primitives, hull-hull, hull-GImpact, ...)
+/// goes from the object level straight to Bullet's algorithms: nobody would read its triangles.
+bool trianglesConsumed(GeometryKind a, GeometryKind b, bool convexVsMesh);
+
+/// One object of the culling frame as the margin rule sees it.
+struct MarginEntry {
+    GeometryKind kind = GeometryKind::None;
+    /// The collision margin of its triangles: GImpact and compounds triangleMarginOf, hulls and meshes getMargin.
+    double margin = 0.0;
+    double motionDisc = 0.0;  ///< btCollisionShape::getAngularMotionDisc()
+    /// Not static, or static and pairing with other static objects: every pair has a member with this set.
+    bool moving = false;
+    /// Largest |AABB coordinate| (moving objects with triangle geometry; 0 otherwise): float slack of GImpact.
+    double coordinate = 0.0;
+};
+
+/// How the dispatcher breaks contacts: gContactBreakingThreshold, scaled per pair by the smaller angular motion disc
+/// when CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD is set (Bullet's default). `epsilon`: btScalar's.
+struct BreakingRule {
+    double threshold = 0.02;
+    bool relative = true;
+    double epsilon = 1.1920928955078125e-07;
+};
+
+/// The culler's distance margin d for a frame of these objects: every triangle pair that Bullet's narrow phase can
+/// turn into a contact point, or keep one alive, is within d. Both collision margins plus the contact breaking
+/// threshold t (relative: t times the smaller motion disc of the pair, bounded here by the frame's second-largest
+/// disc and its largest disc of a `moving` entry). Algorithms with a persistent manifold (convex against mesh or convex) keep a
+/// point while its normal distance and its tangential drift both stay within t, i.e. up to sqrt(2) t apart: 1.5 t.
+/// GImpact rebuilds its manifold every frame; its triangle routine (btPrimitiveTriangle's clip method) reports
+/// points within the sum of the two margins: 2.2 g plus float slack at the objects' coordinates. Box proxies carry
+/// Bullet's AABB padding: 1.5 t among themselves. Never below 1e-9. Pure: the same entries give the same d.
+double requiredCullingMargin(const std::vector<MarginEntry>& objects, const BreakingRule& rule);
+
+}  // namespace cullide::bullet

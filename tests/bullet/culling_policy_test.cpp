@@ -1,0 +1,95 @@
+// The broadphase's culling policy as pure functions: which pairs go through the CULLIDE levels, and the margin rule.
+#include "CullingPolicy.h"
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+namespace cullide::test {
+namespace {
+
+using bullet::GeometryKind;
+using bullet::MarginEntry;
+
+TEST(CullingPolicy, OnlyPairsWhoseTrianglesAreReadAreCulled) {
+    const GeometryKind all[] = {GeometryKind::None, GeometryKind::GImpactMesh, GeometryKind::TriangleMesh,
+                                GeometryKind::ConvexHull, GeometryKind::Compound};
+    for (GeometryKind a : all)
+        for (GeometryKind b : all)
+            for (bool convex : {false, true}) {
+                const bool gimpact = (a == GeometryKind::GImpactMesh &&
+                                      (b == GeometryKind::GImpactMesh || b == GeometryKind::TriangleMesh)) ||
+                                     (b == GeometryKind::GImpactMesh && a == GeometryKind::TriangleMesh);
+                auto convexSide = [](GeometryKind k) {
+                    return k == GeometryKind::ConvexHull || k == GeometryKind::Compound;
+                };
+                const bool convexMesh = convex && ((convexSide(a) && b == GeometryKind::TriangleMesh) ||
+                                                   (convexSide(b) && a == GeometryKind::TriangleMesh));
+                EXPECT_EQ(bullet::trianglesConsumed(a, b, convex), gimpact || convexMesh)
+                    << int(a) << " " << int(b) << " " << convex;
+                EXPECT_EQ(bullet::trianglesConsumed(a, b, convex), bullet::trianglesConsumed(b, a, convex));
+            }
+}
+
+MarginEntry entry(GeometryKind kind, double margin, double disc, bool moving, double coordinate = 0.0) {
+    MarginEntry e;
+    e.kind = kind;
+    e.margin = margin;
+    e.motionDisc = disc;
+    e.moving = moving;
+    e.coordinate = coordinate;
+    return e;
+}
+
+TEST(CullingPolicy, MarginCoversEachRule) {
+    bullet::BreakingRule fixed;
+    fixed.relative = false;
+    fixed.threshold = 0.02;
+    // GImpact pair: 2.2 g.
+    EXPECT_DOUBLE_EQ(bullet::requiredCullingMargin({entry(GeometryKind::GImpactMesh, 0.05, 1, true),
+                                                    entry(GeometryKind::GImpactMesh, 0.05, 1, true)},
+                                                   fixed),
+                     2.2 * 0.05);
+    // GImpact against a mesh: g + m + t.
+    EXPECT_DOUBLE_EQ(bullet::requiredCullingMargin({entry(GeometryKind::GImpactMesh, 0.01, 1, true),
+                                                    entry(GeometryKind::TriangleMesh, 0.04, 50, false)},
+                                                   fixed),
+                     0.01 + 0.04 + 0.02);
+    // Hull against a mesh: persistent manifold, 1.5 t.
+    EXPECT_DOUBLE_EQ(bullet::requiredCullingMargin({entry(GeometryKind::ConvexHull, 0.04, 1, true),
+                                                    entry(GeometryKind::TriangleMesh, 0.0, 50, false)},
+                                                   fixed),
+                     2 * 0.04 + 1.5 * 0.02);
+    // Float slack at large coordinates for GImpact.
+    const double far = bullet::requiredCullingMargin({entry(GeometryKind::GImpactMesh, 0.05, 1, true, 1e4),
+                                                      entry(GeometryKind::GImpactMesh, 0.05, 1, true, 1e4)},
+                                                     fixed);
+    EXPECT_DOUBLE_EQ(far, 2.2 * 0.05 + 8.0 * fixed.epsilon * 1e4);
+    EXPECT_GE(bullet::requiredCullingMargin({}, fixed), 1e-9);
+}
+
+TEST(CullingPolicy, RelativeThresholdUsesTheSmallerDiscOfAPossiblePair) {
+    bullet::BreakingRule relative;
+    relative.threshold = 0.02;
+    // A landscape (disc 50) and a moving GImpact body (disc 3): t = 0.02 * 3, not 0.02 * 50. The mesh rule (m + 1.5 t,
+    // persistent manifolds against it) is the largest term.
+    const double d = bullet::requiredCullingMargin({entry(GeometryKind::GImpactMesh, 0.01, 3, true),
+                                                    entry(GeometryKind::TriangleMesh, 0.04, 50, false),
+                                                    entry(GeometryKind::TriangleMesh, 0.04, 40, false)},
+                                                   relative);
+    EXPECT_DOUBLE_EQ(d, 0.04 + 1.5 * 0.02 * 3);
+    // Two static objects that pair with each other (a collision world) are both `moving` entries: their pair's
+    // threshold counts (the case that lost a contact when only non-static objects bounded t).
+    const double statics = bullet::requiredCullingMargin({entry(GeometryKind::GImpactMesh, 0.01, 1.16, true),
+                                                          entry(GeometryKind::TriangleMesh, 0.04, 11, true)},
+                                                         relative);
+    EXPECT_DOUBLE_EQ(statics, 0.04 + 1.5 * 0.02 * 1.16);
+    // Discs below 1 never shrink t below the absolute threshold (conservative).
+    EXPECT_DOUBLE_EQ(bullet::requiredCullingMargin({entry(GeometryKind::ConvexHull, 0.04, 0.5, true),
+                                                    entry(GeometryKind::TriangleMesh, 0.0, 0.5, false)},
+                                                   relative),
+                     2 * 0.04 + 1.5 * 0.02);
+}
+
+}  // namespace
+}  // namespace cullide::test
