@@ -363,6 +363,7 @@ struct Row {
     std::size_t contactPairSteps = 0, lost = 0, extra = 0;
     cullide::CullideFrameStats last;
     double cullidePairs = 0, fallbackPairs = 0, penetrationPairs = 0;  ///< dispatcher, per step
+    double buildMs = 0, cullMs = 0, syncMs = 0;  ///< CullideBroadphase's stages, per step
     /// Lost pairs explained (explainLost, the first kLostChecks), and of those the meshes farther apart than the
     /// culling margin.
     std::size_t lostChecked = 0, lostApart = 0;
@@ -455,6 +456,10 @@ Row runScene(const SceneFactory& factory, int steps) {
         row.cullidePairs += double(d.cullidePairs) / steps;
         row.fallbackPairs += double(d.fallbackPairs) / steps;
         row.penetrationPairs += double(d.penetrationPairs) / steps;
+        const auto& b = static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get())->getLastFrameStats();
+        row.buildMs += b.buildMs / steps;
+        row.cullMs += b.cullMs / steps;
+        row.syncMs += b.syncMs / steps;
         for (std::size_t k = 1; k < worlds.size(); ++k) worlds[k]->copyStatesFrom(*worlds[0]);
     }
     for (std::size_t k = 0; k < worlds.size(); ++k) {
@@ -471,10 +476,12 @@ void printRow(const Row& r) {
     const double best = std::min(r.ms[0], r.ms[1]);
     std::printf("%-16s %6zu %5d | %8.2f %8.2f %8.2f | %5.2fx | bp %6.2f/%6.2f nar %7.2f/%7.2f | pairs %8.0f/%8.0f | "
                 "lost %zu of %zu (checked %zu: %zu apart) extra %zu | dispatcher: culled %.1f, full %.1f "
-                "(penetrating %.1f)\n",
+                "(penetrating %.1f) | object level %.2f ms, culler %.2f, pair sync %.2f; last step: %zu object pairs, "
+                "%zu carried\n",
                 r.scene.c_str(), r.bodies, r.steps, r.ms[0], r.ms[1], r.ms[2], r.ms[2] / best, r.broadphaseMs[0],
                 r.broadphaseMs[2], r.narrowMs[0], r.narrowMs[2], r.pairs[0], r.pairs[2], r.lost, r.contactPairSteps,
-                r.lostChecked, r.lostApart, r.extra, r.cullidePairs, r.fallbackPairs, r.penetrationPairs);
+                r.lostChecked, r.lostApart, r.extra, r.cullidePairs, r.fallbackPairs, r.penetrationPairs, r.buildMs, r.cullMs, r.syncMs, r.last.objectPairs,
+                r.last.carriedPairs);
     std::fflush(stdout);
 }
 

@@ -41,8 +41,10 @@ constexpr double kDefaultMargin = 0.12;
 
 enum class Role : std::uint8_t { Invalid, Infinite, Ghost, Dynamic, Static };
 
-/// The two query trees, as btDbvtBroadphase's two sets: moving objects (not static-flagged) and the rest.
+/// The object level's two trees, as btDbvtBroadphase's two sets: proxies whose leaf moved in the last
+/// kSettleFrames frames, and the others (static, sleeping, or moving within their fattened leaf).
 enum TreeId : int { kNoTree = -1, kMovingTree = 0, kRestingTree = 1 };
+constexpr std::uint64_t kSettleFrames = 2;
 
 /// Not handed to the culler this frame.
 constexpr std::uint32_t kNotCulled = ~std::uint32_t(0);
@@ -54,6 +56,7 @@ struct Proxy : btBroadphaseProxy {
     int shapeType;
     btDbvtNode* leaf = nullptr;
     int treeId = kNoTree;  ///< the tree holding `leaf`
+    std::uint64_t movedFrame = 0;  ///< the frame in which its leaf last moved (or its role or kind changed)
     std::size_t slot = 0;
     bool valid = true;
     bool reported = false;
@@ -71,6 +74,8 @@ struct Proxy : btBroadphaseProxy {
     // Per-frame scratch.
     Role role = Role::Invalid;
     bullet::GeometryKind kind = bullet::GeometryKind::None;
+    Role lastRole = Role::Invalid;
+    bullet::GeometryKind lastKind = bullet::GeometryKind::None;
     std::uint32_t cullIndex = kNotCulled;  ///< index in the culling frame's objects
     bool pairsWithStatics = false;  ///< static, and its filter admits some other static object (every step)
 };
@@ -174,12 +179,23 @@ struct CullideBroadphase::Impl {
     std::vector<Object> objects;
     std::vector<Proxy*> objectProxy;
     std::vector<bullet::MarginEntry> marginEntries;
+    /// Object-level pairs of the last frame (carried over where both leaves rest) and of this one.
+    std::vector<std::pair<Proxy*, Proxy*>> lastObjectPairs, objectPairsNow;
+    const btOverlapFilterCallback* lastCallback = nullptr;
+    bool lastConvexMeshCulling = false;
+    std::map<std::pair<int, int>, std::size_t> lastFilterCounts;
     std::vector<std::pair<Proxy*, Proxy*>> candidates;  ///< object-level pairs whose triangles are read: culled
     std::vector<ObjectIndexPair> candidateIndices;
     Result result;
-    std::vector<std::pair<Proxy*, Proxy*>> desired;
+    /// The pairs the cache must hold after this frame, with their key (pairKey).
+    struct Wanted {
+        std::uint64_t key;
+        Proxy* a;
+        Proxy* b;
+    };
+    std::vector<Wanted> desired;
     std::map<std::pair<int, int>, std::size_t> filterCounts;  ///< static objects per (group, mask)
-    std::vector<std::uint64_t> desiredKeys;
+    std::vector<std::uint8_t> inCache;  ///< per desired pair: already in the pair cache
     std::vector<std::pair<btBroadphaseProxy*, btBroadphaseProxy*>> toRemove;
 
     Impl(const Settings& s, btOverlappingPairCache* pairCache, CullerFactory f) : settings(s), factory(std::move(f)) {
@@ -263,26 +279,34 @@ struct CullideBroadphase::Impl {
         return buf;
     }
 
-    static int treeFor(const Proxy* p) { return isStatic(p) ? kRestingTree : kMovingTree; }
-
     void removeFromTree(Proxy* p) {
         if (p->leaf != nullptr) trees[p->treeId].remove(p->leaf);
         p->leaf = nullptr;
         p->treeId = kNoTree;
     }
 
-    /// Inserts or updates the proxy's leaf (fattened by kTreeMargin when it leaves its volume, as btDbvtBroadphase),
-    /// in the tree of its current static flag.
+    /// Moves a leaf to the other tree with the same (fattened) volume: the pairs found with it stay the same.
+    void moveLeaf(Proxy* p, int id) {
+        const btDbvtVolume volume = p->leaf->volume;
+        trees[p->treeId].remove(p->leaf);
+        p->leaf = trees[id].insert(volume, p);
+        p->treeId = id;
+    }
+
+    /// Inserts or updates the proxy's leaf, fattened by kTreeMargin when the box leaves it (as btDbvtBroadphase). A
+    /// leaf that moves goes to the moving tree and counts as moved in the next frame.
     void placeInTree(Proxy* p) {
         btDbvtVolume volume = btDbvtVolume::FromMM(p->m_aabbMin, p->m_aabbMax);
-        const int id = treeFor(p);
-        if (p->leaf != nullptr && p->treeId != id) removeFromTree(p);
         if (p->leaf == nullptr) {
-            p->leaf = trees[id].insert(volume, p);
-            p->treeId = id;
-        } else {
-            trees[id].update(p->leaf, volume, kTreeMargin);
+            p->leaf = trees[kMovingTree].insert(volume, p);
+            p->treeId = kMovingTree;
+            p->movedFrame = frame + 1;
+            return;
         }
+        if (p->leaf->volume.Contain(volume)) return;  // within its fattened leaf: nothing moves
+        if (p->treeId != kMovingTree) moveLeaf(p, kMovingTree);
+        trees[kMovingTree].update(p->leaf, volume, kTreeMargin);
+        p->movedFrame = frame + 1;
     }
 
     /// Calls f(proxy) for every leaf of both trees whose volume overlaps `volume`.
@@ -360,6 +384,9 @@ struct CullideBroadphase::Impl {
         auto* p = static_cast<Proxy*>(abs);
         cache->removeOverlappingPairsContainingProxy(p, dispatcher);
         removeFromTree(p);
+        lastObjectPairs.erase(std::remove_if(lastObjectPairs.begin(), lastObjectPairs.end(),
+                                             [p](const auto& pair) { return pair.first == p || pair.second == p; }),
+                              lastObjectPairs.end());
         ghosts.erase(std::remove(ghosts.begin(), ghosts.end(), p), ghosts.end());
         Proxy* last = proxies.back();
         proxies[p->slot] = last;
@@ -453,7 +480,8 @@ struct CullideBroadphase::Impl {
 
     // ---- the frame ----
 
-    /// Every proxy's role this frame; a proxy whose static flag changed moves to the other tree.
+    /// Every proxy's role and geometry kind this frame. A change of either counts as a move (its pairs are found
+    /// again); a leaf that has not moved for kSettleFrames goes to the resting tree, one that moved to the moving one.
     void classify() {
         for (Proxy* p : proxies) {
             p->cullIndex = kNotCulled;
@@ -468,9 +496,14 @@ struct CullideBroadphase::Impl {
                 p->role = Role::Static;
             else
                 p->role = Role::Dynamic;
-            if (p->leaf != nullptr && p->treeId != treeFor(p)) placeInTree(p);
             const btCollisionObject* obj = objectOf(p);
             p->kind = obj != nullptr ? bullet::geometryKindOf(obj->getCollisionShape()) : bullet::GeometryKind::None;
+            if (p->role != p->lastRole || p->kind != p->lastKind) p->movedFrame = frame;
+            p->lastRole = p->role;
+            p->lastKind = p->kind;
+            if (p->leaf == nullptr) continue;
+            const bool moving = frame - std::min(frame, p->movedFrame) < kSettleFrames;
+            if (moving != (p->treeId == kMovingTree)) moveLeaf(p, moving ? kMovingTree : kRestingTree);
         }
     }
 
@@ -479,14 +512,13 @@ struct CullideBroadphase::Impl {
     /// (btDiscreteDynamicsWorld::addRigidBody gives static bodies the StaticFilter group and a mask without it:
     /// that is why dynamics worlds have no static-static pairs, while a btCollisionWorld of plain, static-flagged
     /// btCollisionObjects has them). With an overlap filter callback (it may admit anything) or a pair cache of
-    /// unknown kind, every static object may. Returns whether any static object does.
-    bool markStaticsPairingStatics() {
+    /// unknown kind, every static object may.
+    void markStaticsPairingStatics() {
         auto* hashed = dynamic_cast<btHashedOverlappingPairCache*>(cache);
         const bool anything = hashed == nullptr || hashed->getOverlapFilterCallback() != nullptr;
         filterCounts.clear();
         for (const Proxy* p : proxies)
             if (p->role == Role::Static) ++filterCounts[{p->m_collisionFilterGroup, p->m_collisionFilterMask}];
-        bool any = false;
         for (Proxy* p : proxies) {
             if (p->role != Role::Static) continue;
             p->pairsWithStatics = anything;
@@ -497,34 +529,66 @@ struct CullideBroadphase::Impl {
                 p->pairsWithStatics = (count > 1 || !self) && (p->m_collisionFilterGroup & filter.second) != 0 &&
                                       (filter.first & p->m_collisionFilterMask) != 0;
             }
-            any = any || p->pairsWithStatics;
         }
-        return any;
     }
 
     static bool pairable(const Proxy* p) { return p->role == Role::Dynamic || p->role == Role::Static; }
 
     /// The object level: pairs of overlapping tree leaves (fattened boxes, as btDbvtBroadphase pairs them) that the
-    /// pair cache's filter admits. Moving objects against both trees; static objects against each other only where
-    /// their filters allow it (markStaticsPairingStatics). Pairs whose narrow phase reads triangles become culling
-    /// candidates; every other pair goes to Bullet's algorithms as it is.
-    void collectObjectPairs(bool staticsPair) {
-        auto visitor = visitLeafPairs([&](Proxy* a, Proxy* b) {
+    /// pair cache's filter admits, static objects with each other only where their filters allow it
+    /// (markStaticsPairingStatics). Incremental, like btDbvtBroadphase: only leaves that moved this frame (or whose
+    /// role or kind changed) are searched for, against both trees; a pair of two leaves that did not move is last
+    /// frame's verdict, unchanged. When what decides pairs changed (filters of static objects, the overlap filter
+    /// callback, the culling policy), every pair is searched again. Pairs whose narrow phase reads triangles become
+    /// culling candidates; every other pair goes to Bullet's algorithms as it is.
+    void collectObjectPairs() {
+        objectPairsNow.clear();
+        auto consider = [&](Proxy* a, Proxy* b) {
             if (!pairable(a) || !pairable(b)) return;
             if (a->role == Role::Static && b->role == Role::Static && !(a->pairsWithStatics && b->pairsWithStatics))
                 return;
             if (!cache->needsBroadphaseCollision(a, b)) return;
             ++stats.objectPairs;
+            objectPairsNow.emplace_back(a, b);
             if (bullet::trianglesConsumed(a->kind, b->kind, convexMeshCulling))
                 candidates.emplace_back(a, b);
             else
                 addDesired(a, b);
-        });
-        btDbvt& moving = trees[kMovingTree];
-        btDbvt& resting = trees[kRestingTree];
-        moving.collideTTpersistentStack(moving.m_root, moving.m_root, visitor);
-        moving.collideTTpersistentStack(moving.m_root, resting.m_root, visitor);
-        if (staticsPair) resting.collideTTpersistentStack(resting.m_root, resting.m_root, visitor);
+        };
+        auto movedNow = [this](const Proxy* p) { return p->movedFrame == frame; };
+        if (pairRulesUnchanged()) {
+            for (const auto& [a, b] : lastObjectPairs)
+                if (!movedNow(a) && !movedNow(b)) consider(a, b);
+            stats.carriedPairs = objectPairsNow.size();
+            for (Proxy* p : proxies) {
+                if (p->leaf == nullptr || !movedNow(p) || !pairable(p)) continue;
+                forLeavesIn(p->leaf->volume, [&](Proxy* q) {
+                    if (q == p || (movedNow(q) && q->m_uniqueId < p->m_uniqueId)) return;  // once per pair
+                    consider(p, q);
+                });
+            }
+        } else {
+            auto visitor = visitLeafPairs(consider);
+            btDbvt& moving = trees[kMovingTree];
+            btDbvt& resting = trees[kRestingTree];
+            moving.collideTTpersistentStack(moving.m_root, moving.m_root, visitor);
+            moving.collideTTpersistentStack(moving.m_root, resting.m_root, visitor);
+            resting.collideTTpersistentStack(resting.m_root, resting.m_root, visitor);
+        }
+        lastObjectPairs.swap(objectPairsNow);
+    }
+
+    /// Whether last frame's pairs of leaves that did not move still hold: the same static filters, overlap filter
+    /// callback and culling policy (records what it compares for the next frame).
+    bool pairRulesUnchanged() {
+        auto* hashed = dynamic_cast<btHashedOverlappingPairCache*>(cache);
+        const btOverlapFilterCallback* callback = hashed != nullptr ? hashed->getOverlapFilterCallback() : nullptr;
+        const bool same = frame > 1 && hashed != nullptr && callback == lastCallback &&
+                          convexMeshCulling == lastConvexMeshCulling && filterCounts == lastFilterCounts;
+        lastCallback = callback;
+        lastConvexMeshCulling = convexMeshCulling;
+        lastFilterCounts = filterCounts;
+        return same;
     }
 
     /// The culling frame: the objects of the candidate pairs (meshes in their own frame with their transform, or
@@ -634,7 +698,7 @@ struct CullideBroadphase::Impl {
 
     void addDesired(Proxy* a, Proxy* b) {
         if (a->m_uniqueId > b->m_uniqueId) std::swap(a, b);
-        desired.emplace_back(a, b);
+        desired.push_back({pairKey(a, b), a, b});
     }
 
     void makeRecord(Proxy* pa, Proxy* pb, const ObjectPair& op) {
@@ -741,9 +805,8 @@ struct CullideBroadphase::Impl {
         }
         if (!result.rejected.empty())
             desired.erase(std::remove_if(desired.begin(), desired.end(),
-                                         [](const auto& pair) {
-                                             return pair.first->role == Role::Invalid ||
-                                                    pair.second->role == Role::Invalid;
+                                         [](const Wanted& w) {
+                                             return w.a->role == Role::Invalid || w.b->role == Role::Invalid;
                                          }),
                           desired.end());
         for (const ObjectPair& op : result.pairs) {
@@ -802,29 +865,35 @@ struct CullideBroadphase::Impl {
         }
     }
 
+    /// Makes the pair cache hold exactly the desired pairs that its filter admits: pairs no longer desired are
+    /// removed (their algorithms freed through the dispatcher), new ones added through the cache (filters, ghost
+    /// pair callback); pairs already there are left alone.
     void syncPairCache(btDispatcher* dispatcher) {
-        std::sort(desired.begin(), desired.end(), [](const auto& x, const auto& y) {
-            return pairKey(x.first, x.second) < pairKey(y.first, y.second);
-        });
-        desired.erase(std::unique(desired.begin(), desired.end()), desired.end());
-        desiredKeys.clear();
-        for (const auto& [a, b] : desired) desiredKeys.push_back(pairKey(a, b));
-
+        std::sort(desired.begin(), desired.end(), [](const Wanted& x, const Wanted& y) { return x.key < y.key; });
+        desired.erase(std::unique(desired.begin(), desired.end(),
+                                  [](const Wanted& x, const Wanted& y) { return x.key == y.key; }),
+                      desired.end());
+        inCache.assign(desired.size(), 0);
         toRemove.clear();
         const btBroadphasePairArray& array = cache->getOverlappingPairArray();
         for (int i = 0; i < array.size(); ++i) {
             btBroadphaseProxy* p0 = array[i].m_pProxy0;
             btBroadphaseProxy* p1 = array[i].m_pProxy1;
-            if (!std::binary_search(desiredKeys.begin(), desiredKeys.end(), pairKey(p0, p1)) ||
-                !cache->needsBroadphaseCollision(p0, p1))
+            const std::uint64_t key = pairKey(p0, p1);
+            const auto it = std::lower_bound(desired.begin(), desired.end(), key,
+                                             [](const Wanted& w, std::uint64_t k) { return w.key < k; });
+            if (it != desired.end() && it->key == key && cache->needsBroadphaseCollision(p0, p1))
+                inCache[static_cast<std::size_t>(it - desired.begin())] = 1;
+            else
                 toRemove.emplace_back(p0, p1);
         }
         for (const auto& [p0, p1] : toRemove) cache->removeOverlappingPair(p0, p1, dispatcher);
         stats.pairsRemoved = toRemove.size();
 
-        for (const auto& [a, b] : desired) {
+        for (std::size_t i = 0; i < desired.size(); ++i) {
+            if (inCache[i]) continue;
             const int before = cache->getNumOverlappingPairs();
-            cache->addOverlappingPair(a, b);
+            cache->addOverlappingPair(desired[i].a, desired[i].b);
             if (cache->getNumOverlappingPairs() > before) ++stats.pairsAdded;
         }
         stats.pairs = static_cast<std::size_t>(cache->getNumOverlappingPairs());
@@ -844,7 +913,8 @@ struct CullideBroadphase::Impl {
         classify();
         for (const Proxy* p : proxies)
             if (p->role == Role::Invalid) ++stats.rejectedObjects;
-        collectObjectPairs(markStaticsPairingStatics());
+        markStaticsPairingStatics();
+        collectObjectPairs();
         buildCullFrame();
         bool cullerUsable = !candidateIndices.empty();
         if (cullerUsable) {

@@ -88,6 +88,8 @@ struct CullideFrameStats {
     std::size_t proxies = 0;
     /// Object level: pairs of overlapping (fattened) boxes that the pair cache's filter admits.
     std::size_t objectPairs = 0;
+    /// ... of which carried over from the last frame (neither leaf moved: not searched again)
+    std::size_t carriedPairs = 0;
     /// ... of which went through the culler (their narrow phase reads triangles: GImpact-GImpact, GImpact-mesh).
     std::size_t culledPairs = 0;
     /// ... of which the culler proved farther apart than the margin: no pair.
