@@ -93,5 +93,28 @@ TEST(ObjectLevel, FlagChangesMoveProxiesBetweenTrees) {
     EXPECT_GE(mx.x(), btScalar(1.4));
 }
 
+/// Pairs of leaves that did not move carry over between steps; a pair whose leaf moved is searched again: it goes
+/// when the boxes part, comes back when they meet, and the pairs of objects that stay put stay.
+TEST(ObjectLevel, PairsFollowMovesAndCarryOverOtherwise) {
+    ShapeStore shapes;
+    btCollisionShape* box = shapes.box(btVector3(btScalar(0.5), btScalar(0.5), btScalar(0.5)));
+    TestWorld w(PipelineKind::Cullide, referenceFactory());
+    w.world().setGravity(btVector3(0, 0, 0));
+    w.addBody(box, 1, at(0, 0, 0));
+    w.addBody(box, 1, at(0.9, 0, 0));
+    btRigidBody* mover = w.addBody(box, 1, at(10, 0, 0));
+    w.addBody(box, 1, at(10.9, 0, 0));
+    auto pairs = [&] { return w.broadphase().getOverlappingPairCache()->getNumOverlappingPairs(); };
+    for (int step = 0; step < 4; ++step) w.detectCollisions();  // the leaves settle
+    EXPECT_EQ(pairs(), 2);
+    EXPECT_EQ(w.cullideBroadphase()->getLastFrameStats().carriedPairs, 2u);
+    mover->setWorldTransform(at(30, 0, 0));
+    w.detectCollisions();
+    EXPECT_EQ(pairs(), 1) << "the pair of a leaf that moved away must go";
+    mover->setWorldTransform(at(0.5, 0.9, 0));
+    w.detectCollisions();
+    EXPECT_EQ(pairs(), 3) << "a leaf that moved in must pair with both resting boxes";
+}
+
 }  // namespace
 }  // namespace cullide::test
