@@ -1,5 +1,6 @@
 #include "SteppingScene.h"
 
+#include "SeededRandom.h"
 #include "cullide/Timer.h"
 #include "cullide_bullet/CullideBroadphase.h"
 #include "cullide_bullet/CullideCollisionDispatcher.h"
@@ -37,18 +38,7 @@ public:
     double aabbMs = 0, broadphaseMs = 0, narrowMs = 0;
 };
 
-/// Uniform doubles from mt19937_64 with our own mapping (the std distributions differ between libraries).
-class Random {
-public:
-    explicit Random(std::uint64_t seed) : m_gen(seed) {}
-    btScalar uniform(double lo, double hi) {
-        const double u = static_cast<double>(m_gen() >> 11) * (1.0 / 9007199254740992.0);
-        return static_cast<btScalar>(lo + (hi - lo) * u);
-    }
-
-private:
-    std::mt19937_64 m_gen;
-};
+using Random = cullide::bench::SeededRandom;
 
 }  // namespace
 

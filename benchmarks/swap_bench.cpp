@@ -9,6 +9,7 @@
 // Their timings are comparable step by step, and "lost pairs" are exact: object pairs with contact points after the
 // default world's step but not after the CULLIDE world's (on the same state). Prints one table row per scene;
 // --json writes the figures (docs/benchmarks.md, scripts/bench.sh).
+#include "SeededRandom.h"
 #include "cullide/Timer.h"
 #include "cullide/TriangleTest.h"
 #include "cullide_bullet/CullideBroadphase.h"
@@ -41,18 +42,7 @@ using cullide::Timer;
 enum class Pipeline { Dbvt, Sap, Cullide };
 constexpr Pipeline kPipelines[] = {Pipeline::Dbvt, Pipeline::Sap, Pipeline::Cullide};
 
-/// Uniform doubles from mt19937_64 with our own mapping (the std distributions differ between libraries).
-class Random {
-public:
-    explicit Random(std::uint64_t seed) : m_gen(seed) {}
-    btScalar uniform(double lo, double hi) {
-        const double u = static_cast<double>(m_gen() >> 11) * (1.0 / 9007199254740992.0);
-        return static_cast<btScalar>(lo + (hi - lo) * u);
-    }
-
-private:
-    std::mt19937_64 m_gen;
-};
+using Random = cullide::bench::SeededRandom;
 
 /// Shapes and mesh data shared by the three worlds of a scene (one set, as an application would share them).
 struct Shapes {

@@ -3,6 +3,7 @@
 #   scripts/bench.sh            full run (~25 min on 2 cores + llvmpipe): out/bench/results.json, the plots and
 #                               docs/benchmarks.md (with docs/bench/results-<cpu|gpu>.json and docs/bench/*.png)
 #   scripts/bench.sh --quick    smoke run (~3 min): out/bench/results.json, out/bench/benchmarks.md, out/bench/plots/
+# Both also run cullide-swap-bench (the two-line swap against Bullet's pipelines): out/bench/swap.{txt,json}.
 # Each (scene, engine) runs as its own process (build-bench/benchmarks/cullide-bench-run), so its peak memory is its
 # own; the list of runs is scripts/bench-runs.sh (shared with the GPU bundle, scripts/gpu-run.sh). The same command
 # on a machine with an NVIDIA GPU picks the hardware EGL device (CULLIDE_GL_DEVICE overrides) and files its results
@@ -25,7 +26,7 @@ scripts/fetch_meshes.sh || true
 dir=build-bench
 cmake -S . -B $dir -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCULLIDE_WERROR=ON -DCULLIDE_BUILD_CGAL_ORACLE=OFF \
   -DCULLIDE_BUILD_TESTS=OFF >/dev/null
-cmake --build $dir -j"$(nproc)" --target cullide-bench-run cullide-bench-report >/dev/null
+cmake --build $dir -j"$(nproc)" --target cullide-bench-run cullide-bench-report cullide-swap-bench >/dev/null
 export MESA_SHADER_CACHE_DIR="$PWD/$dir/mesa-shader-cache"
 run=$dir/benchmarks/cullide-bench-run
 report=$dir/benchmarks/cullide-bench-report
@@ -41,6 +42,10 @@ case "$probe" in
   *) class=gpu ;;
 esac
 scripts/bench-runs.sh $run $out $([ $quick -eq 1 ] && echo --quick)
+# The two-line swap against Bullet's default pipeline on typical scenes, in lockstep in one process (issue #12;
+# docs/drop-in.md): a table on stdout, figures in swap.json.
+$dir/benchmarks/cullide-swap-bench --steps $([ $quick -eq 1 ] && echo 20 || echo 120) --json $out/swap.json \
+  2>$out/swap-lost.txt | tee $out/swap.txt
 
 # Machine, then results.json and the report.
 load_after=$(cut -d' ' -f1-3 /proc/loadavg)

@@ -74,6 +74,7 @@ struct Proxy : btBroadphaseProxy {
     // Per-frame scratch.
     Role role = Role::Invalid;
     bullet::GeometryKind kind = bullet::GeometryKind::None;
+    bool convex = false;  ///< its shape is convex (btCollisionShape::isConvex)
     Role lastRole = Role::Invalid;
     bullet::GeometryKind lastKind = bullet::GeometryKind::None;
     std::uint32_t cullIndex = kNotCulled;  ///< index in the culling frame's objects
@@ -497,7 +498,9 @@ struct CullideBroadphase::Impl {
             else
                 p->role = Role::Dynamic;
             const btCollisionObject* obj = objectOf(p);
-            p->kind = obj != nullptr ? bullet::geometryKindOf(obj->getCollisionShape()) : bullet::GeometryKind::None;
+            const btCollisionShape* shape = obj != nullptr ? obj->getCollisionShape() : nullptr;
+            p->kind = bullet::geometryKindOf(shape);
+            p->convex = shape != nullptr && shape->isConvex();
             if (p->role != p->lastRole || p->kind != p->lastKind) p->movedFrame = frame;
             p->lastRole = p->role;
             p->lastKind = p->kind;
@@ -550,7 +553,8 @@ struct CullideBroadphase::Impl {
             if (!cache->needsBroadphaseCollision(a, b)) return;
             ++stats.objectPairs;
             objectPairsNow.emplace_back(a, b);
-            if (bullet::trianglesConsumed(a->kind, b->kind, convexMeshCulling))
+            if (bullet::trianglesConsumed(a->kind, b->kind, convexMeshCulling) ||
+                bullet::prunedByCuller(a->kind, a->convex, b->kind, b->convex))
                 candidates.emplace_back(a, b);
             else
                 addDesired(a, b);

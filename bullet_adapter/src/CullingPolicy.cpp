@@ -12,6 +12,13 @@ bool trianglesConsumed(GeometryKind a, GeometryKind b, bool convexVsMesh) {
     return false;
 }
 
+bool prunedByCuller(GeometryKind a, bool convexA, GeometryKind b, bool convexB) {
+    auto convex = [](GeometryKind k, bool isConvex) {
+        return k == GeometryKind::ConvexHull || k == GeometryKind::Compound || (k == GeometryKind::None && isConvex);
+    };
+    return (a == GeometryKind::GImpactMesh && convex(b, convexB)) || (b == GeometryKind::GImpactMesh && convex(a, convexA));
+}
+
 double requiredCullingMargin(const std::vector<MarginEntry>& objects, const BreakingRule& rule) {
     double gimpact = -1.0, hull = -1.0, mesh = -1.0;  // largest margin per kind (-1: none in the frame)
     double coordinate = 0.0;

@@ -31,6 +31,17 @@ TEST(CullingPolicy, OnlyPairsWhoseTrianglesAreReadAreCulled) {
             }
 }
 
+TEST(CullingPolicy, GImpactAgainstConvexShapesIsPrunedByTheCuller) {
+    using K = GeometryKind;
+    EXPECT_TRUE(bullet::prunedByCuller(K::GImpactMesh, false, K::None, true));   // a box, a sphere
+    EXPECT_TRUE(bullet::prunedByCuller(K::ConvexHull, true, K::GImpactMesh, false));
+    EXPECT_TRUE(bullet::prunedByCuller(K::GImpactMesh, false, K::Compound, false));
+    EXPECT_FALSE(bullet::prunedByCuller(K::GImpactMesh, false, K::None, false));  // a soft body, a concave shape
+    EXPECT_FALSE(bullet::prunedByCuller(K::TriangleMesh, false, K::None, true));
+    EXPECT_FALSE(bullet::prunedByCuller(K::ConvexHull, true, K::None, true));
+    EXPECT_FALSE(bullet::prunedByCuller(K::GImpactMesh, false, K::GImpactMesh, false));  // reads triangles instead
+}
+
 MarginEntry entry(GeometryKind kind, double margin, double disc, bool moving, double coordinate = 0.0) {
     MarginEntry e;
     e.kind = kind;

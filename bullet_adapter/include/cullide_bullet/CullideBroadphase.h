@@ -1,17 +1,21 @@
-// CullideBroadphase: a drop-in btBroadphaseInterface whose overlapping pairs come from CULLIDE (GPU image-space
-// visibility culling) instead of AABB overlap.
+// CullideBroadphase: a drop-in btBroadphaseInterface whose mesh pairs are decided by CULLIDE (image-space
+// visibility culling, GPU levels where they pay) instead of AABB overlap alone.
 //
 //     auto* broadphase = new cullide::CullideBroadphase();                             // was: new btDbvtBroadphase()
 //     auto* dispatcher = new cullide::CullideCollisionDispatcher(config, broadphase);  // was: new btCollisionDispatcher(config)
 //
 // Design (see bullet_adapter/README.md for the details and the limits):
-// - Proxies live in an internal Bullet btDbvt used only to answer rayTest / aabbTest (convex sweeps, contactTest).
-// - calculateOverlappingPairs() builds one culling frame: shapes with triangle geometry (btGImpactMeshShape,
-//   btBvhTriangleMeshShape / btTriangleMeshShape, btConvexHullShape, btCompoundShape of convex children: hulls as
-//   hulls, other children as their boxes) as world-space triangles, every other shape as its broadphase AABB; static objects only where they are near a moving one (and never paired with each other).
-//   The culler runs once; the pair cache (a btHashedOverlappingPairCache, own or given) is synchronised with its
-//   object pairs: new pairs are added through the cache (filters, ghost pair callback), pairs that can no longer
-//   collide are removed (their algorithms freed through the dispatcher).
+// - The object level is incremental, like btDbvtBroadphase: proxies live in two Bullet btDbvts (leaves that moved
+//   recently, resting ones; fattened leaves), only leaves that moved are searched, pairs of unmoved leaves carry
+//   over. Pairs are decided by the filter alone (group/mask, the overlap filter callback), as in Bullet; the same
+//   trees answer rayTest / aabbTest (convex sweeps, contactTest).
+// - The CULLIDE levels run only for pairs whose narrow phase reads the surviving triangles: GImpact-GImpact and
+//   GImpact-triangle mesh (and hull/compound-triangle mesh with setConvexMeshCulling(true)). The culler gets those
+//   pairs only, meshes as the shape's local triangles plus the body's transform (built once per shape, shared by its
+//   bodies); a pair it proves farther apart than its margin gets no pair. Every other pair goes from the object level
+//   straight to Bullet's algorithms. The pair cache (a btHashedOverlappingPairCache, own or given) is synchronised:
+//   new pairs are added through the cache (filters, ghost pair callback), pairs that can no longer collide are
+//   removed (their algorithms freed through the dispatcher).
 // - Infinite shapes (btStaticPlaneShape, any AABB beyond 1e15) are never rasterised: planes pair by a half-space
 //   test, other huge boxes by an AABB test. Ghost objects keep Bullet's ghost semantics: they pair by AABB overlap
 //   (grown by getGhostPairMargin()) and filters only, eagerly in createProxy/setAabb like btDbvtBroadphase.
