@@ -182,21 +182,21 @@ struct CullideBroadphase::Impl {
     std::vector<bullet::MarginEntry> marginEntries;
     /// Object-level pairs of the last frame (carried over where both leaves rest) and of this one.
     std::vector<std::pair<Proxy*, Proxy*>> lastObjectPairs, objectPairsNow;
+    bool incremental = false;  ///< this frame carried pairs over (collectObjectPairs)
     const btOverlapFilterCallback* lastCallback = nullptr;
     bool lastConvexMeshCulling = false;
     std::map<std::pair<int, int>, std::size_t> lastFilterCounts;
     std::vector<std::pair<Proxy*, Proxy*>> candidates;  ///< object-level pairs whose triangles are read: culled
     std::vector<ObjectIndexPair> candidateIndices;
     Result result;
-    /// The pairs the cache must hold after this frame, with their key (pairKey).
+    /// The pairs the cache must hold after this frame (repeats allowed).
     struct Wanted {
-        std::uint64_t key;
         Proxy* a;
         Proxy* b;
     };
     std::vector<Wanted> desired;
     std::map<std::pair<int, int>, std::size_t> filterCounts;  ///< static objects per (group, mask)
-    std::vector<std::uint8_t> inCache;  ///< per desired pair: already in the pair cache
+    std::vector<std::uint8_t> inCache;  ///< per pair of the cache before the sync: still desired
     std::vector<std::pair<btBroadphaseProxy*, btBroadphaseProxy*>> toRemove;
 
     Impl(const Settings& s, btOverlappingPairCache* pairCache, CullerFactory f) : settings(s), factory(std::move(f)) {
@@ -546,33 +546,34 @@ struct CullideBroadphase::Impl {
     /// culling candidates; every other pair goes to Bullet's algorithms as it is.
     void collectObjectPairs() {
         objectPairsNow.clear();
-        auto consider = [&](Proxy* a, Proxy* b) {
+        // A carried pair that skips the culler is already in the pair cache: the sync keeps it (keptAsCarried).
+        auto consider = [&](Proxy* a, Proxy* b, bool carried) {
             if (!pairable(a) || !pairable(b)) return;
             if (a->role == Role::Static && b->role == Role::Static && !(a->pairsWithStatics && b->pairsWithStatics))
                 return;
             if (!cache->needsBroadphaseCollision(a, b)) return;
             ++stats.objectPairs;
             objectPairsNow.emplace_back(a, b);
-            if (bullet::trianglesConsumed(a->kind, b->kind, convexMeshCulling) ||
-                bullet::prunedByCuller(a->kind, a->convex, b->kind, b->convex))
+            if (culled(a, b))
                 candidates.emplace_back(a, b);
-            else
+            else if (!carried)
                 addDesired(a, b);
         };
-        auto movedNow = [this](const Proxy* p) { return p->movedFrame == frame; };
-        if (pairRulesUnchanged()) {
+        auto movedNow = [this](const Proxy* p) { return moved(p); };
+        incremental = pairRulesUnchanged();
+        if (incremental) {
             for (const auto& [a, b] : lastObjectPairs)
-                if (!movedNow(a) && !movedNow(b)) consider(a, b);
+                if (!movedNow(a) && !movedNow(b)) consider(a, b, true);
             stats.carriedPairs = objectPairsNow.size();
             for (Proxy* p : proxies) {
                 if (p->leaf == nullptr || !movedNow(p) || !pairable(p)) continue;
                 forLeavesIn(p->leaf->volume, [&](Proxy* q) {
                     if (q == p || (movedNow(q) && q->m_uniqueId < p->m_uniqueId)) return;  // once per pair
-                    consider(p, q);
+                    consider(p, q, false);
                 });
             }
         } else {
-            auto visitor = visitLeafPairs(consider);
+            auto visitor = visitLeafPairs([&](Proxy* a, Proxy* b) { consider(a, b, false); });
             btDbvt& moving = trees[kMovingTree];
             btDbvt& resting = trees[kRestingTree];
             moving.collideTTpersistentStack(moving.m_root, moving.m_root, visitor);
@@ -580,6 +581,23 @@ struct CullideBroadphase::Impl {
             resting.collideTTpersistentStack(resting.m_root, resting.m_root, visitor);
         }
         lastObjectPairs.swap(objectPairsNow);
+    }
+
+    bool moved(const Proxy* p) const { return p->movedFrame == frame; }
+
+    /// Whether the pair goes through the culler (its triangles are read, or the culler decides it).
+    bool culled(const Proxy* a, const Proxy* b) const {
+        return bullet::trianglesConsumed(a->kind, b->kind, convexMeshCulling) ||
+               bullet::prunedByCuller(a->kind, a->convex, b->kind, b->convex);
+    }
+
+    /// A pair of the cache that this frame carried over without the culler (neither leaf moved, nothing that decides
+    /// pairs changed): it was wanted last frame and still is, so the sync leaves it alone.
+    bool keptAsCarried(const btBroadphaseProxy* p0, const btBroadphaseProxy* p1) const {
+        const auto* a = static_cast<const Proxy*>(p0);
+        const auto* b = static_cast<const Proxy*>(p1);
+        return incremental && pairable(a) && pairable(b) && !moved(a) && !moved(b) && !culled(a, b) &&
+               !(a->role == Role::Static && b->role == Role::Static && !(a->pairsWithStatics && b->pairsWithStatics));
     }
 
     /// Whether last frame's pairs of leaves that did not move still hold: the same static filters, overlap filter
@@ -702,7 +720,7 @@ struct CullideBroadphase::Impl {
 
     void addDesired(Proxy* a, Proxy* b) {
         if (a->m_uniqueId > b->m_uniqueId) std::swap(a, b);
-        desired.push_back({pairKey(a, b), a, b});
+        desired.push_back({a, b});
     }
 
     void makeRecord(Proxy* pa, Proxy* pb, const ObjectPair& op) {
@@ -869,37 +887,36 @@ struct CullideBroadphase::Impl {
         }
     }
 
-    /// Makes the pair cache hold exactly the desired pairs that its filter admits: pairs no longer desired are
-    /// removed (their algorithms freed through the dispatcher), new ones added through the cache (filters, ghost
-    /// pair callback); pairs already there are left alone.
+    /// Makes the pair cache hold exactly the wanted pairs that its filter admits: the pairs carried over without the
+    /// culler (kept where they are, never looked up) and the desired ones (new object-level pairs, the culler's,
+    /// planes', ghosts'). Each desired pair is looked up in the cache (a hash lookup) and marked where it already is;
+    /// other pairs are removed (their algorithms freed through the dispatcher), missing ones added through the cache
+    /// (filters, ghost pair callback) in the order they were collected (deterministic: the trees' order).
     void syncPairCache(btDispatcher* dispatcher) {
-        std::sort(desired.begin(), desired.end(), [](const Wanted& x, const Wanted& y) { return x.key < y.key; });
-        desired.erase(std::unique(desired.begin(), desired.end(),
-                                  [](const Wanted& x, const Wanted& y) { return x.key == y.key; }),
-                      desired.end());
-        inCache.assign(desired.size(), 0);
+        const int before = cache->getNumOverlappingPairs();
+        inCache.assign(static_cast<std::size_t>(before), 0);
+        for (const Wanted& w : desired) {
+            if (const btBroadphasePair* pair = cache->findPair(w.a, w.b)) {
+                const std::size_t index = static_cast<std::size_t>(pair - &cache->getOverlappingPairArray()[0]);
+                if (index < inCache.size() && cache->needsBroadphaseCollision(w.a, w.b)) inCache[index] = 1;
+                continue;
+            }
+            const int count = cache->getNumOverlappingPairs();
+            cache->addOverlappingPair(w.a, w.b);
+            if (cache->getNumOverlappingPairs() > count) ++stats.pairsAdded;
+        }
         toRemove.clear();
         const btBroadphasePairArray& array = cache->getOverlappingPairArray();
-        for (int i = 0; i < array.size(); ++i) {
-            btBroadphaseProxy* p0 = array[i].m_pProxy0;
-            btBroadphaseProxy* p1 = array[i].m_pProxy1;
-            const std::uint64_t key = pairKey(p0, p1);
-            const auto it = std::lower_bound(desired.begin(), desired.end(), key,
-                                             [](const Wanted& w, std::uint64_t k) { return w.key < k; });
-            if (it != desired.end() && it->key == key && cache->needsBroadphaseCollision(p0, p1))
-                inCache[static_cast<std::size_t>(it - desired.begin())] = 1;
-            else
-                toRemove.emplace_back(p0, p1);
+        for (std::size_t i = 0; i < inCache.size(); ++i) {
+            const btBroadphasePair& pair = array[static_cast<int>(i)];
+            if (inCache[i]) continue;
+            if (keptAsCarried(pair.m_pProxy0, pair.m_pProxy1) &&
+                cache->needsBroadphaseCollision(pair.m_pProxy0, pair.m_pProxy1))
+                continue;
+            toRemove.emplace_back(pair.m_pProxy0, pair.m_pProxy1);
         }
         for (const auto& [p0, p1] : toRemove) cache->removeOverlappingPair(p0, p1, dispatcher);
         stats.pairsRemoved = toRemove.size();
-
-        for (std::size_t i = 0; i < desired.size(); ++i) {
-            if (inCache[i]) continue;
-            const int before = cache->getNumOverlappingPairs();
-            cache->addOverlappingPair(desired[i].a, desired[i].b);
-            if (cache->getNumOverlappingPairs() > before) ++stats.pairsAdded;
-        }
         stats.pairs = static_cast<std::size_t>(cache->getNumOverlappingPairs());
     }
 
