@@ -43,7 +43,7 @@ enum class Role : std::uint8_t { Invalid, Infinite, Ghost, Dynamic, Static };
 
 /// The object level's two trees, as btDbvtBroadphase's two sets: proxies whose leaf moved in the last
 /// kSettleFrames frames, and the others (static, sleeping, or moving within their fattened leaf).
-enum TreeId : int { kNoTree = -1, kMovingTree = 0, kRestingTree = 1 };
+enum TreeId : int { kDestroyed = -2, kNoTree = -1, kMovingTree = 0, kRestingTree = 1 };
 constexpr std::uint64_t kSettleFrames = 2;
 
 /// Not handed to the culler this frame.
@@ -183,6 +183,7 @@ struct CullideBroadphase::Impl {
     /// Object-level pairs of the last frame (carried over where both leaves rest) and of this one.
     std::vector<std::pair<Proxy*, Proxy*>> lastObjectPairs, objectPairsNow;
     bool incremental = false;  ///< this frame carried pairs over (collectObjectPairs)
+    std::vector<Proxy*> destroyed;  ///< destroyed since the last frame, freed by forgetDestroyed
     const btOverlapFilterCallback* lastCallback = nullptr;
     bool lastConvexMeshCulling = false;
     std::map<std::pair<int, int>, std::size_t> lastFilterCounts;
@@ -221,6 +222,7 @@ struct CullideBroadphase::Impl {
     ~Impl() {
         for (Proxy* p : proxies) delete p;
         proxies.clear();
+        forgetDestroyed();
         releaseCache();
     }
 
@@ -385,9 +387,6 @@ struct CullideBroadphase::Impl {
         auto* p = static_cast<Proxy*>(abs);
         cache->removeOverlappingPairsContainingProxy(p, dispatcher);
         removeFromTree(p);
-        lastObjectPairs.erase(std::remove_if(lastObjectPairs.begin(), lastObjectPairs.end(),
-                                             [p](const auto& pair) { return pair.first == p || pair.second == p; }),
-                              lastObjectPairs.end());
         ghosts.erase(std::remove(ghosts.begin(), ghosts.end(), p), ghosts.end());
         Proxy* last = proxies.back();
         proxies[p->slot] = last;
@@ -399,7 +398,9 @@ struct CullideBroadphase::Impl {
             else
                 ++it;
         }
-        delete p;
+        // Freed at the next frame, once last frame's pairs have forgotten it (one pass for all destroyed proxies).
+        p->role = Role::Invalid;
+        destroyed.push_back(p);
     }
 
     void setAabb(btBroadphaseProxy* abs, const btVector3& mn, const btVector3& mx) {
@@ -584,6 +585,19 @@ struct CullideBroadphase::Impl {
     }
 
     bool moved(const Proxy* p) const { return p->movedFrame == frame; }
+
+    /// Drops destroyed proxies from last frame's pairs and frees them.
+    void forgetDestroyed() {
+        if (destroyed.empty()) return;
+        const auto gone = [](const std::pair<Proxy*, Proxy*>& pair) {
+            return pair.first->treeId == kDestroyed || pair.second->treeId == kDestroyed;
+        };
+        for (Proxy* p : destroyed) p->treeId = kDestroyed;
+        lastObjectPairs.erase(std::remove_if(lastObjectPairs.begin(), lastObjectPairs.end(), gone),
+                              lastObjectPairs.end());
+        for (Proxy* p : destroyed) delete p;
+        destroyed.clear();
+    }
 
     /// Whether the pair goes through the culler (its triangles are read, or the culler decides it).
     bool culled(const Proxy* a, const Proxy* b) const {
@@ -924,6 +938,7 @@ struct CullideBroadphase::Impl {
         cullide::Timer total;
         ++frame;
         stats = CullideFrameStats{};
+        forgetDestroyed();
         stats.proxies = proxies.size();
         hashThisFrame.clear();
         records.clear();
@@ -1078,6 +1093,8 @@ void CullideBroadphase::getBroadphaseAabb(btVector3& aabbMin, btVector3& aabbMax
 void CullideBroadphase::resetPool(btDispatcher* /*dispatcher*/) {
     if (!m_impl->proxies.empty()) return;
     for (btDbvt& tree : m_impl->trees) tree.clear();
+    m_impl->forgetDestroyed();
+    m_impl->lastObjectPairs.clear();
     m_impl->records.clear();
     m_impl->shapeCache.clear();
     m_impl->nextUid = 0;
