@@ -354,8 +354,8 @@ struct Row {
     cullide::CullideFrameStats last;
     double cullidePairs = 0, fallbackPairs = 0, penetrationPairs = 0;  ///< dispatcher, per step
     double buildMs = 0, cullMs = 0, syncMs = 0;  ///< CullideBroadphase's stages, per step
-    /// Lost pairs explained (explainLost, the first kLostChecks), and of those the meshes farther apart than the
-    /// culling margin.
+    /// Lost pairs explained (explainLost, the first kLostChecks), and of those the meshes without a triangle pair
+    /// within the culling margin at the detected state.
     std::size_t lostChecked = 0, lostApart = 0;
 };
 
@@ -375,19 +375,26 @@ struct TriangleCollector : btTriangleCallback {
     }
 };
 
-std::vector<std::array<cullide::Vec3, 3>> worldTriangles(const btCollisionObject& o) {
+std::vector<std::array<cullide::Vec3, 3>> worldTriangles(const btCollisionObject& o, const btTransform& placement) {
     TriangleCollector c;
-    c.placement = &o.getWorldTransform();
+    c.placement = &placement;
     const btVector3 big(btScalar(1e9), btScalar(1e9), btScalar(1e9));
     static_cast<const btConcaveShape*>(o.getCollisionShape())->processAllTriangles(&c, -big, big);
     return c.triangles;
+}
+
+std::string number(double x) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.9g", x);
+    return buf;
 }
 
 /// A lost pair, explained on stderr: whether the CULLIDE world still had the object pair, Bullet's deepest point,
 /// and for two concave shapes the exact distance of their triangles (brute force): farther apart than the culling
 /// margin means Bullet's contacts there are not between touching triangles (GImpact's clip method makes penetration
 /// points from triangle pairs whose boxes overlap).
-void explainLost(const World& reference, World& cullideWorld, const std::pair<int, int>& p, int step, Row& row) {
+void explainLost(const World& reference, World& cullideWorld, const std::pair<int, int>& p, int step,
+                 const std::vector<btTransform>& detectedAt, Row& row) {
     ++row.lostChecked;
     btCollisionObject* a = cullideWorld.bodies[std::size_t(p.first)].get();
     btCollisionObject* b = cullideWorld.bodies[std::size_t(p.second)].get();
@@ -404,19 +411,20 @@ void explainLost(const World& reference, World& cullideWorld, const std::pair<in
     double gap = -1;
     const double margin = static_cast<cullide::CullideBroadphase*>(cullideWorld.broadphase.get())->getCullingMargin();
     if (a->getCollisionShape()->isConcave() && b->getCollisionShape()->isConcave()) {
-        const auto ta = worldTriangles(*a), tb = worldTriangles(*b);
-        gap = 1e30;
+        // At the state both worlds detected collisions on (before the step's integration).
+        const auto ta = worldTriangles(*a, detectedAt[std::size_t(p.first)]);
+        const auto tb = worldTriangles(*b, detectedAt[std::size_t(p.second)]);
+        gap = 0;  // triangle pairs within the margin, brute force with the culler's exact predicate
         for (const auto& x : ta)
-            for (const auto& y : tb) gap = std::min(gap, cullide::triangleDistance(x[0], x[1], x[2], y[0], y[1], y[2]));
-        if (gap > margin) ++row.lostApart;
+            for (const auto& y : tb) gap += cullide::trianglesWithin(x[0], x[1], x[2], y[0], y[1], y[2], margin);
+        if (gap == 0) ++row.lostApart;
     }
     std::fprintf(stderr,
                  "%s: step %d lost pair %d-%d (%s): Bullet's deepest point %.4g; %s\n", row.scene.c_str(), step,
                  p.first, p.second, inCache ? "in the pair cache" : "pruned by the culler", deepest,
                  gap < 0 ? "not two meshes"
-                         : (gap > margin ? "meshes " + std::to_string(gap) + " apart, beyond the margin " +
-                                               std::to_string(margin)
-                                         : "meshes " + std::to_string(gap) + " apart, WITHIN the margin")
+                         : (number(gap) + " triangle pairs within the margin " + number(margin) +
+                            (gap == 0 ? " (none: the meshes are farther apart)" : " (a MISSED contact)"))
                                .c_str());
 }
 
@@ -430,7 +438,9 @@ Row runScene(const SceneFactory& factory, int steps) {
     row.what = scene.what;
     row.bodies = scene.bodies.size();
     row.steps = steps;
+    std::vector<btTransform> detectedAt(scene.bodies.size());
     for (int s = 0; s < steps; ++s) {
+        for (std::size_t i = 0; i < detectedAt.size(); ++i) detectedAt[i] = worlds[0]->bodies[i]->getWorldTransform();
         for (std::size_t k = 0; k < worlds.size(); ++k) worlds[(k + static_cast<std::size_t>(s)) % worlds.size()]
                                                                ->step(scene.raysPerStep, s);
         const auto want = worlds[0]->contactPairs();
@@ -439,7 +449,7 @@ Row runScene(const SceneFactory& factory, int steps) {
         for (const auto& p : want) {
             if (got.count(p)) continue;
             ++row.lost;
-            if (row.lostChecked < kLostChecks) explainLost(*worlds[0], *worlds[2], p, s, row);
+            if (row.lostChecked < kLostChecks) explainLost(*worlds[0], *worlds[2], p, s, detectedAt, row);
         }
         for (const auto& p : got) row.extra += want.count(p) ? 0 : 1;
         const auto& d = static_cast<cullide::CullideCollisionDispatcher*>(worlds[2]->dispatcher.get())->getLastStepStats();
