@@ -408,23 +408,23 @@ void explainLost(const World& reference, World& cullideWorld, const std::pair<in
         for (int c = 0; c < m->getNumContacts(); ++c)
             deepest = std::min(deepest, double(m->getContactPoint(c).getDistance()));
     }
-    double gap = -1;
+    long within = -1;  // triangle pairs within the margin (two meshes only)
     const double margin = static_cast<cullide::CullideBroadphase*>(cullideWorld.broadphase.get())->getCullingMargin();
     if (a->getCollisionShape()->isConcave() && b->getCollisionShape()->isConcave()) {
         // At the state both worlds detected collisions on (before the step's integration).
         const auto ta = worldTriangles(*a, detectedAt[std::size_t(p.first)]);
         const auto tb = worldTriangles(*b, detectedAt[std::size_t(p.second)]);
-        gap = 0;  // triangle pairs within the margin, brute force with the culler's exact predicate
+        within = 0;  // brute force with the culler's exact predicate
         for (const auto& x : ta)
-            for (const auto& y : tb) gap += cullide::trianglesWithin(x[0], x[1], x[2], y[0], y[1], y[2], margin);
-        if (gap == 0) ++row.lostApart;
+            for (const auto& y : tb) within += cullide::trianglesWithin(x[0], x[1], x[2], y[0], y[1], y[2], margin);
+        if (within == 0) ++row.lostApart;
     }
     std::fprintf(stderr,
                  "%s: step %d lost pair %d-%d (%s): Bullet's deepest point %.4g; %s\n", row.scene.c_str(), step,
                  p.first, p.second, inCache ? "in the pair cache" : "pruned by the culler", deepest,
-                 gap < 0 ? "not two meshes"
-                         : (number(gap) + " triangle pairs within the margin " + number(margin) +
-                            (gap == 0 ? " (none: the meshes are farther apart)" : " (a MISSED contact)"))
+                 within < 0 ? "not two meshes"
+                         : (std::to_string(within) + " triangle pairs within the margin " + number(margin) +
+                            (within == 0 ? " (none: the meshes are farther apart)" : " (a MISSED contact)"))
                                .c_str());
 }
 

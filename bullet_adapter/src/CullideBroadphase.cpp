@@ -538,6 +538,13 @@ struct CullideBroadphase::Impl {
 
     static bool pairable(const Proxy* p) { return p->role == Role::Dynamic || p->role == Role::Static; }
 
+    /// The object level may pair a and b: both pairable, and two static objects only where both filters admit
+    /// static partners (markStaticsPairingStatics). The pair cache's filter decides the rest.
+    static bool mayPair(const Proxy* a, const Proxy* b) {
+        if (!pairable(a) || !pairable(b)) return false;
+        return !(a->role == Role::Static && b->role == Role::Static) || (a->pairsWithStatics && b->pairsWithStatics);
+    }
+
     /// The object level: pairs of overlapping tree leaves (fattened boxes, as btDbvtBroadphase pairs them) that the
     /// pair cache's filter admits, static objects with each other only where their filters allow it
     /// (markStaticsPairingStatics). Incremental, like btDbvtBroadphase: only leaves that moved this frame (or whose
@@ -549,10 +556,7 @@ struct CullideBroadphase::Impl {
         objectPairsNow.clear();
         // A carried pair that skips the culler is already in the pair cache: the sync keeps it (keptAsCarried).
         auto consider = [&](Proxy* a, Proxy* b, bool carried) {
-            if (!pairable(a) || !pairable(b)) return;
-            if (a->role == Role::Static && b->role == Role::Static && !(a->pairsWithStatics && b->pairsWithStatics))
-                return;
-            if (!cache->needsBroadphaseCollision(a, b)) return;
+            if (!mayPair(a, b) || !cache->needsBroadphaseCollision(a, b)) return;
             ++stats.objectPairs;
             objectPairsNow.emplace_back(a, b);
             if (culled(a, b))
@@ -560,16 +564,15 @@ struct CullideBroadphase::Impl {
             else if (!carried)
                 addDesired(a, b);
         };
-        auto movedNow = [this](const Proxy* p) { return moved(p); };
         incremental = pairRulesUnchanged();
         if (incremental) {
             for (const auto& [a, b] : lastObjectPairs)
-                if (!movedNow(a) && !movedNow(b)) consider(a, b, true);
+                if (!moved(a) && !moved(b)) consider(a, b, true);
             stats.carriedPairs = objectPairsNow.size();
             for (Proxy* p : proxies) {
-                if (p->leaf == nullptr || !movedNow(p) || !pairable(p)) continue;
+                if (p->leaf == nullptr || !moved(p) || !pairable(p)) continue;
                 forLeavesIn(p->leaf->volume, [&](Proxy* q) {
-                    if (q == p || (movedNow(q) && q->m_uniqueId < p->m_uniqueId)) return;  // once per pair
+                    if (q == p || (moved(q) && q->m_uniqueId < p->m_uniqueId)) return;  // once per pair
                     consider(p, q, false);
                 });
             }
@@ -589,11 +592,12 @@ struct CullideBroadphase::Impl {
     /// Drops destroyed proxies from last frame's pairs and frees them.
     void forgetDestroyed() {
         if (destroyed.empty()) return;
-        const auto gone = [](const std::pair<Proxy*, Proxy*>& pair) {
-            return pair.first->treeId == kDestroyed || pair.second->treeId == kDestroyed;
-        };
         for (Proxy* p : destroyed) p->treeId = kDestroyed;
-        lastObjectPairs.erase(std::remove_if(lastObjectPairs.begin(), lastObjectPairs.end(), gone),
+        lastObjectPairs.erase(std::remove_if(lastObjectPairs.begin(), lastObjectPairs.end(),
+                                             [](const std::pair<Proxy*, Proxy*>& pair) {
+                                                 return pair.first->treeId == kDestroyed ||
+                                                        pair.second->treeId == kDestroyed;
+                                             }),
                               lastObjectPairs.end());
         for (Proxy* p : destroyed) delete p;
         destroyed.clear();
@@ -610,8 +614,7 @@ struct CullideBroadphase::Impl {
     bool keptAsCarried(const btBroadphaseProxy* p0, const btBroadphaseProxy* p1) const {
         const auto* a = static_cast<const Proxy*>(p0);
         const auto* b = static_cast<const Proxy*>(p1);
-        return incremental && pairable(a) && pairable(b) && !moved(a) && !moved(b) && !culled(a, b) &&
-               !(a->role == Role::Static && b->role == Role::Static && !(a->pairsWithStatics && b->pairsWithStatics));
+        return incremental && mayPair(a, b) && !moved(a) && !moved(b) && !culled(a, b);
     }
 
     /// Whether last frame's pairs of leaves that did not move still hold: the same static filters, overlap filter
