@@ -2,7 +2,7 @@
 // btCollisionDispatcher), with btAxisSweep3, and with the README's two-line swap (CullideBroadphase +
 // CullideCollisionDispatcher), side by side in one process (issue #12, item 7).
 //
-//   cullide-swap-bench [--steps N] [--scene NAME]... [--json FILE]
+//   cullide-swap-bench [--steps N] [--scene NAME]... [--json FILE] [--no-penetration-fallback]
 //
 // The worlds run in lockstep: every step each world is stepped once (timed, the order rotating), then the default
 // world's body states are copied into the others, so all three detect collisions on identical states every step.
@@ -28,6 +28,7 @@
 #include <cstring>
 #include <fstream>
 #include <functional>
+#include <map>
 #include <memory>
 #include <random>
 #include <set>
@@ -43,6 +44,9 @@ enum class Pipeline { Dbvt, Sap, Cullide };
 constexpr Pipeline kPipelines[] = {Pipeline::Dbvt, Pipeline::Sap, Pipeline::Cullide};
 
 using Random = cullide::bench::SeededRandom;
+
+/// CullideBroadphase::setDeepPenetrationFallback for the CULLIDE world (--no-penetration-fallback clears it).
+bool g_penetrationFallback = true;
 
 /// Shapes and mesh data shared by the three worlds of a scene (one set, as an application would share them).
 struct Shapes {
@@ -271,6 +275,7 @@ struct World {
         if (p == Pipeline::Cullide) {
             auto bp = std::make_unique<cullide::CullideBroadphase>();
             if (std::getenv("SWAP_BENCH_CONVEX_MESH") != nullptr) bp->setConvexMeshCulling(true);
+            bp->setDeepPenetrationFallback(g_penetrationFallback);
             dispatcher = std::make_unique<cullide::CullideCollisionDispatcher>(&config, bp.get());
             broadphase = std::move(bp);
         } else {
@@ -325,6 +330,24 @@ struct World {
         return out;
     }
 
+    /// Contact points by object pair (lower user index first): (triangle key, distance) per point, the key being
+    /// both sides' (part, index) as the narrow phase set them, in the pair's order.
+    using PointKey = std::array<int, 4>;
+    std::map<std::pair<int, int>, std::vector<std::pair<PointKey, double>>> contactPoints() const {
+        std::map<std::pair<int, int>, std::vector<std::pair<PointKey, double>>> out;
+        for (int k = 0; k < dispatcher->getNumManifolds(); ++k) {
+            const btPersistentManifold* m = dispatcher->getManifoldByIndexInternal(k);
+            const int a = m->getBody0()->getUserIndex(), b = m->getBody1()->getUserIndex();
+            for (int c = 0; c < m->getNumContacts(); ++c) {
+                const btManifoldPoint& pt = m->getContactPoint(c);
+                const PointKey key = a < b ? PointKey{pt.m_partId0, pt.m_index0, pt.m_partId1, pt.m_index1}
+                                           : PointKey{pt.m_partId1, pt.m_index1, pt.m_partId0, pt.m_index0};
+                out[{std::min(a, b), std::max(a, b)}].emplace_back(key, double(pt.getDistance()));
+            }
+        }
+        return out;
+    }
+
     /// Takes over another world's body states (lockstep).
     void copyStatesFrom(const World& from) {
         for (std::size_t i = 0; i < bodies.size(); ++i) {
@@ -357,7 +380,34 @@ struct Row {
     /// Lost pairs explained (explainLost, the first kLostChecks), and of those the meshes without a triangle pair
     /// within the culling margin at the detected state.
     std::size_t lostChecked = 0, lostApart = 0;
+    /// Contact error on pairs with contacts in both worlds: points of the default world whose triangle key the
+    /// CULLIDE world's manifold lacks, and the difference of the deepest points.
+    std::size_t points = 0, pointsMissing = 0, comparedPairSteps = 0;
+    double deepestDiffMax = 0, deepestDiffSum = 0;
+    double convexCandidates = 0, convexTriangles = 0;  ///< GImpact-convex triangles per step: Bullet's query, run
 };
+
+/// Adds one step's contact error (see Row).
+void compareContacts(const World& reference, const World& cullideWorld, Row& row) {
+    const auto want = reference.contactPoints();
+    const auto got = cullideWorld.contactPoints();
+    for (const auto& [pair, points] : want) {
+        const auto it = got.find(pair);
+        if (it == got.end()) continue;  // a lost pair: counted as such
+        double deepestWant = 1e30, deepestGot = 1e30;
+        for (const auto& [key, distance] : points) {
+            deepestWant = std::min(deepestWant, distance);
+            ++row.points;
+            const bool found = std::any_of(it->second.begin(), it->second.end(),
+                                           [&](const auto& p) { return p.first == key; });
+            row.pointsMissing += found ? 0 : 1;
+        }
+        for (const auto& p : it->second) deepestGot = std::min(deepestGot, p.second);
+        ++row.comparedPairSteps;
+        row.deepestDiffMax = std::max(row.deepestDiffMax, std::fabs(deepestWant - deepestGot));
+        row.deepestDiffSum += std::fabs(deepestWant - deepestGot);
+    }
+}
 
 constexpr std::size_t kLostChecks = 8;
 
@@ -452,10 +502,13 @@ Row runScene(const SceneFactory& factory, int steps) {
             if (row.lostChecked < kLostChecks) explainLost(*worlds[0], *worlds[2], p, s, detectedAt, row);
         }
         for (const auto& p : got) row.extra += want.count(p) ? 0 : 1;
+        compareContacts(*worlds[0], *worlds[2], row);
         const auto& d = static_cast<cullide::CullideCollisionDispatcher*>(worlds[2]->dispatcher.get())->getLastStepStats();
         row.cullidePairs += double(d.cullidePairs) / steps;
         row.fallbackPairs += double(d.fallbackPairs) / steps;
         row.penetrationPairs += double(d.penetrationPairs) / steps;
+        row.convexCandidates += double(d.convexCandidates) / steps;
+        row.convexTriangles += double(d.convexTriangles) / steps;
         const auto& b = static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get())->getLastFrameStats();
         row.buildMs += b.buildMs / steps;
         row.cullMs += b.cullMs / steps;
@@ -477,11 +530,14 @@ void printRow(const Row& r) {
     std::printf("%-16s %6zu %5d | %8.2f %8.2f %8.2f | %5.2fx | bp %6.2f/%6.2f nar %7.2f/%7.2f | pairs %8.0f/%8.0f | "
                 "lost %zu of %zu (checked %zu: %zu apart) extra %zu | dispatcher: culled %.1f, full %.1f "
                 "(penetrating %.1f) | object level %.2f ms, culler %.2f, pair sync %.2f; last step: %zu object pairs, "
-                "%zu carried\n",
+                "%zu carried | contact keys missing %zu of %zu, deepest point diff max %.3g mean %.3g (%zu pair-steps) | "
+                "GImpact-convex triangles %.0f of %.0f\n",
                 r.scene.c_str(), r.bodies, r.steps, r.ms[0], r.ms[1], r.ms[2], r.ms[2] / best, r.broadphaseMs[0],
                 r.broadphaseMs[2], r.narrowMs[0], r.narrowMs[2], r.pairs[0], r.pairs[2], r.lost, r.contactPairSteps,
                 r.lostChecked, r.lostApart, r.extra, r.cullidePairs, r.fallbackPairs, r.penetrationPairs, r.buildMs, r.cullMs, r.syncMs, r.last.objectPairs,
-                r.last.carriedPairs);
+                r.last.carriedPairs, r.pointsMissing, r.points, r.deepestDiffMax,
+                r.comparedPairSteps ? r.deepestDiffSum / double(r.comparedPairSteps) : 0.0, r.comparedPairSteps,
+                r.convexTriangles, r.convexCandidates);
     std::fflush(stdout);
 }
 
@@ -490,18 +546,21 @@ void writeJson(const std::string& path, const std::vector<Row>& rows) {
     out << "[\n";
     for (std::size_t i = 0; i < rows.size(); ++i) {
         const Row& r = rows[i];
-        char buf[1024];
+        char buf[2048];
         std::snprintf(buf, sizeof buf,
                       "  {\"scene\": \"%s\", \"what\": \"%s\", \"bodies\": %zu, \"steps\": %d, \"dbvt_ms\": %.4f, "
                       "\"sap_ms\": %.4f, \"cullide_ms\": %.4f, \"ratio\": %.4f, \"dbvt_broadphase_ms\": %.4f, "
                       "\"cullide_broadphase_ms\": %.4f, \"dbvt_narrow_ms\": %.4f, \"cullide_narrow_ms\": %.4f, "
                       "\"dbvt_pairs\": %.1f, \"cullide_pairs\": %.1f, \"contact_pair_steps\": %zu, \"lost\": %zu, "
                       "\"lost_checked\": %zu, \"lost_apart\": %zu, \"extra\": %zu, \"culled_pairs\": %zu, "
-                      "\"pruned_pairs\": %zu}%s\n",
+                      "\"pruned_pairs\": %zu, \"points\": %zu, \"points_missing\": %zu, \"deepest_diff_max\": %.6g, "
+                      "\"deepest_diff_mean\": %.6g, \"penetration_fallback\": %s}%s\n",
                       r.scene.c_str(), r.what.c_str(), r.bodies, r.steps, r.ms[0], r.ms[1], r.ms[2],
                       r.ms[2] / std::min(r.ms[0], r.ms[1]), r.broadphaseMs[0], r.broadphaseMs[2], r.narrowMs[0],
                       r.narrowMs[2], r.pairs[0], r.pairs[2], r.contactPairSteps, r.lost, r.lostChecked, r.lostApart,
-                      r.extra, r.last.culledPairs, r.last.prunedPairs, i + 1 < rows.size() ? "," : "");
+                      r.extra, r.last.culledPairs, r.last.prunedPairs, r.points, r.pointsMissing, r.deepestDiffMax,
+                      r.comparedPairSteps ? r.deepestDiffSum / double(r.comparedPairSteps) : 0.0,
+                      g_penetrationFallback ? "true" : "false", i + 1 < rows.size() ? "," : "");
         out << buf;
     }
     out << "]\n";
@@ -519,10 +578,13 @@ int main(int argc, char** argv) {
             steps = std::max(1, std::atoi(argv[++i]));
         } else if (a == "--scene" && i + 1 < argc) {
             only.emplace_back(argv[++i]);
+        } else if (a == "--no-penetration-fallback") {
+            g_penetrationFallback = false;
         } else if (a == "--json" && i + 1 < argc) {
             json = argv[++i];
         } else {
-            std::fprintf(stderr, "usage: cullide-swap-bench [--steps N] [--scene NAME]... [--json FILE]\nscenes:");
+            std::fprintf(stderr, "usage: cullide-swap-bench [--steps N] [--scene NAME]... [--json FILE] "
+                                 "[--no-penetration-fallback]\nscenes:");
             for (const SceneFactory& f : kScenes) std::fprintf(stderr, " %s", f.name);
             std::fprintf(stderr, "\n");
             return 2;

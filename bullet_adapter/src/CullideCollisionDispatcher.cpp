@@ -140,6 +140,60 @@ struct SurvivingMeshWrapper {
     btCollisionObjectWrapper wrapper;
 };
 
+/// Where a GImpact triangle can still make a contact point with a convex shape: the convex shape's local box
+/// (btCollisionShape::getAabb, margin included), the map from mesh-local to convex-local coordinates, the contact
+/// breaking threshold and the float slack of the mapped coordinates.
+struct ConvexReach {
+    btTransform meshToConvex;
+    btVector3 min, max;
+    btScalar threshold = 0;
+    btScalar slack = 0;
+};
+
+/// Safety factor on the reach: GJK's and the polyhedral clipper's tolerances are far below it.
+constexpr btScalar kConvexReachFactor = btScalar(1.5);
+
+btScalar largestCoordinate(const btVector3& v) {
+    const btVector3 a = v.absolute();
+    return a[a.maxAxis()];
+}
+
+/// btManifoldResult drops a point deeper than the manifold's contact breaking threshold (depth measured between the
+/// margin-inflated shapes), and btCollisionDispatcher::getNewManifold sets that threshold to
+/// gContactBreakingThreshold, scaled by the smaller angular motion disc of the two objects' shapes when
+/// CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD is set; the larger of the two rules is used here, whatever the flag.
+ConvexReach convexReach(const btCollisionObjectWrapper& meshWrap, const btCollisionObjectWrapper& convexWrap) {
+    ConvexReach reach;
+    reach.meshToConvex = convexWrap.getWorldTransform().inverseTimes(meshWrap.getWorldTransform());
+    convexWrap.getCollisionShape()->getAabb(btTransform::getIdentity(), reach.min, reach.max);
+    const btCollisionShape* meshShape = meshWrap.getCollisionObject()->getCollisionShape();
+    const btCollisionShape* convexShape = convexWrap.getCollisionObject()->getCollisionShape();
+    reach.threshold = btMax(gContactBreakingThreshold,
+                            btMin(meshShape->getContactBreakingThreshold(gContactBreakingThreshold),
+                                  convexShape->getContactBreakingThreshold(gContactBreakingThreshold)));
+    const btScalar scale = btMax(btMax(largestCoordinate(reach.min), largestCoordinate(reach.max)),
+                                 largestCoordinate(reach.meshToConvex.getOrigin()));
+    reach.slack = 64 * SIMD_EPSILON * scale;
+    return reach;
+}
+
+/// False when the triangle's box, mapped into the convex shape's frame, stays farther from the convex shape's box
+/// along an axis than factor * (the triangle's margin + the breaking threshold): the triangle is farther than that
+/// from the shape, so the convex algorithm cannot make a point from it.
+bool convexCanTouch(const btTriangleShapeEx& triangle, const ConvexReach& reach) {
+    btVector3 lo = reach.meshToConvex(triangle.m_vertices1[0]);
+    btVector3 hi = lo;
+    for (int k = 1; k < 3; ++k) {
+        const btVector3 v = reach.meshToConvex(triangle.m_vertices1[k]);
+        lo.setMin(v);
+        hi.setMax(v);
+    }
+    const btScalar d = kConvexReachFactor * (triangle.getMargin() + reach.threshold) + reach.slack;
+    for (int k = 0; k < 3; ++k)
+        if (lo[k] > reach.max[k] + d || hi[k] < reach.min[k] - d) return false;
+    return true;
+}
+
 /// GImpact pairs on CULLIDE's lists. GImpact-GImpact: the surviving triangle pairs go straight to Bullet's
 /// triangle-triangle routine (collide_sat_triangles), no BVH traversal. GImpact-triangle mesh: Bullet's own
 /// gimpact_vs_concave (per mesh triangle: a BVH query of the GImpact mesh and convex-convex tests), driven with the
@@ -152,6 +206,10 @@ public:
 
     void processCollision(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
                           const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut) override {
+        if (trimeshAgainstConvex(body0Wrap, body1Wrap) || trimeshAgainstConvex(body1Wrap, body0Wrap)) {
+            processWithConvex(body0Wrap, body1Wrap, dispatchInfo, resultOut);
+            return;
+        }
         if (body0Wrap->getCollisionShape()->getShapeType() != GIMPACT_SHAPE_PROXYTYPE ||
             body1Wrap->getCollisionShape()->getShapeType() != GIMPACT_SHAPE_PROXYTYPE) {
             processWithMesh(body0Wrap, body1Wrap, dispatchInfo, resultOut);
@@ -220,7 +278,82 @@ public:
             ++stats.clearedPairs;
     }
 
+    /// A GImpact triangle mesh (`mesh`) against a convex shape that is not a compound (`convex`).
+    static bool trimeshAgainstConvex(const btCollisionObjectWrapper* mesh, const btCollisionObjectWrapper* convex) {
+        const btCollisionShape* m = mesh->getCollisionShape();
+        const btCollisionShape* c = convex->getCollisionShape();
+        return m->getShapeType() == GIMPACT_SHAPE_PROXYTYPE &&
+               static_cast<const btGImpactShapeInterface*>(m)->getGImpactShapeType() == CONST_GIMPACT_TRIMESH_SHAPE &&
+               c->isConvex() && !c->isCompound();
+    }
+
 private:
+    /// GImpact mesh against a convex shape (either order): Bullet's own per-triangle loop — its box query of each
+    /// mesh part with the convex shape's box in the part's frame, then every candidate triangle against the convex
+    /// shape through the dispatcher's convex algorithm, in Bullet's order and with Bullet's shape identifiers — minus
+    /// the candidates that cannot make a contact point (convexCanTouch). Bullet's query box is the convex shape's
+    /// AABB in the mesh's frame, which for a large or rotated convex shape (a ground box) holds most of the mesh, and
+    /// every candidate costs a GJK run. The contacts are Bullet's: a skipped triangle is farther from the convex shape
+    /// than btManifoldResult accepts a point.
+    void processWithConvex(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
+                           const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut) {
+        CullideDispatchStats& stats = cullideDispatcher(m_dispatcher).currentStats();
+        clearCache();
+        m_resultOut = resultOut;
+        m_dispatchInfo = &dispatchInfo;
+        const bool swapped = !trimeshAgainstConvex(body0Wrap, body1Wrap);
+        const btCollisionObjectWrapper* meshWrap = swapped ? body1Wrap : body0Wrap;
+        const btCollisionObjectWrapper* convexWrap = swapped ? body0Wrap : body1Wrap;
+        const auto* mesh = static_cast<const btGImpactMeshShape*>(meshWrap->getCollisionShape());
+        const btCollisionShape* convex = convexWrap->getCollisionShape();
+        const ConvexReach reach = convexReach(*meshWrap, *convexWrap);
+        ++stats.convexPairs;
+        int& part = swapped ? m_part1 : m_part0;
+        int& face = swapped ? m_triface1 : m_triface0;
+        for (part = mesh->getMeshPartCount(); part-- > 0;) {
+            const btGImpactMeshShapePart* meshPart = mesh->getMeshPart(part);
+            candidates.resize(0);
+            gimpact_vs_shape_find_pairs(meshWrap->getWorldTransform(), convexWrap->getWorldTransform(), meshPart,
+                                        convex, candidates);
+            if (candidates.size() == 0) continue;
+            meshPart->lockChildShapes();
+            btTriangleShapeEx triangle;
+            for (int i = candidates.size(); i-- > 0;) {
+                meshPart->getBulletTriangle(candidates[i], triangle);
+                ++stats.convexCandidates;
+                if (!convexCanTouch(triangle, reach)) continue;
+                ++stats.convexTriangles;
+                face = candidates[i];
+                // The wrapper carries (m_part0, m_triface0) whichever side the mesh is, as Bullet's loop does.
+                const btCollisionObjectWrapper triangleWrap(meshWrap, &triangle, meshWrap->getCollisionObject(),
+                                                            meshWrap->getWorldTransform(), m_part0, m_triface0);
+                collideChild(triangleWrap, *convexWrap, triangle, *convex, swapped);
+            }
+            meshPart->unlockChildShapes();
+        }
+        if (getLastManifold() != nullptr) m_resultOut->refreshContactPoints();
+    }
+
+    /// One candidate triangle against the convex shape, with the result's wrapper of the mesh side replaced by the
+    /// triangle's for the call (the contact's shape identifiers and callbacks see the triangle).
+    void collideChild(const btCollisionObjectWrapper& triangleWrap, const btCollisionObjectWrapper& convexWrap,
+                      const btTriangleShapeEx& triangle, const btCollisionShape& convex, bool swapped) {
+        const bool first = m_resultOut->getBody0Wrap()->getCollisionObject() == triangleWrap.getCollisionObject();
+        const btCollisionObjectWrapper* previous = first ? m_resultOut->getBody0Wrap() : m_resultOut->getBody1Wrap();
+        if (first)
+            m_resultOut->setBody0Wrap(&triangleWrap);
+        else
+            m_resultOut->setBody1Wrap(&triangleWrap);
+        if (swapped)
+            shape_vs_shape_collision(&convexWrap, &triangleWrap, &convex, &triangle);
+        else
+            shape_vs_shape_collision(&triangleWrap, &convexWrap, &triangle, &convex);
+        if (first)
+            m_resultOut->setBody0Wrap(previous);
+        else
+            m_resultOut->setBody1Wrap(previous);
+    }
+
     /// GImpact mesh against a triangle mesh (either order): as Bullet's processCollision, with a stand-in mesh that
     /// enumerates the surviving triangles (mesh-local vertices as processAllTriangles yields them, same margin).
     void processWithMesh(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
@@ -254,6 +387,7 @@ private:
     }
 
     static thread_local std::vector<std::array<int, 4>> ordered;  // part0, part1, tri0, tri1
+    static thread_local btAlignedObjectArray<int> candidates;      // Bullet's box query of one mesh part
     static thread_local std::vector<int> interleaved;
 
     /// Keeps, of ordered[begin, end) (one part pair), the triangle pairs that Bullet's own candidate search
@@ -310,6 +444,7 @@ public:
 
 thread_local std::vector<std::array<int, 4>> CullideGImpactAlgorithm::ordered;
 thread_local std::vector<int> CullideGImpactAlgorithm::interleaved;
+thread_local btAlignedObjectArray<int> CullideGImpactAlgorithm::candidates;
 
 /// Convex hull vs triangle mesh: Bullet's btConvexConcaveCollisionAlgorithm (btConvexTriangleCallback, persistent
 /// manifold) driven with the surviving mesh triangles only. Same size as the base class.
@@ -403,7 +538,9 @@ btCollisionAlgorithm* CullideCollisionDispatcher::findAlgorithm(const btCollisio
         const bool gimpactPair = (t0 == GIMPACT_SHAPE_PROXYTYPE &&
                                   (t1 == GIMPACT_SHAPE_PROXYTYPE || t1 == TRIANGLE_MESH_SHAPE_PROXYTYPE)) ||
                                  (t0 == TRIANGLE_MESH_SHAPE_PROXYTYPE && t1 == GIMPACT_SHAPE_PROXYTYPE);
-        if (gimpactPair && registeredIs<btGImpactCollisionAlgorithm::CreateFunc>(registered))
+        const bool gimpactConvexPair = CullideGImpactAlgorithm::trimeshAgainstConvex(body0Wrap, body1Wrap) ||
+                                       CullideGImpactAlgorithm::trimeshAgainstConvex(body1Wrap, body0Wrap);
+        if ((gimpactPair || gimpactConvexPair) && registeredIs<btGImpactCollisionAlgorithm::CreateFunc>(registered))
             replacement = &g_gimpactCreate;
         else if (t1 == TRIANGLE_MESH_SHAPE_PROXYTYPE && culledConvex(body0Wrap) &&
                  registeredIs<btConvexConcaveCollisionAlgorithm::CreateFunc>(registered))
@@ -438,6 +575,9 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
     m_total.fallbackPairs += m_current.fallbackPairs;
     m_total.clearedPairs += m_current.clearedPairs;
     m_total.penetrationPairs += m_current.penetrationPairs;
+    m_total.convexPairs += m_current.convexPairs;
+    m_total.convexCandidates += m_current.convexCandidates;
+    m_total.convexTriangles += m_current.convexTriangles;
     m_total.dispatchMs += m_current.dispatchMs;
     if (m_broadphase != nullptr && pairCache == m_broadphase->getOverlappingPairCache()) m_lastStep = m_current;
     m_current = outer;

@@ -159,6 +159,57 @@ TEST(BulletGImpact, ToriOnBoxesWithAKinematicTorus) {
     EXPECT_GT(kinematicPairSteps, 20u) << "the kinematic torus never swept into the pile: the scene tests nothing";
 }
 
+/// GImpact tori on a large tilted ground box, with hulls and spheres among them. Bullet's query box for a torus is
+/// the ground's AABB in the torus's frame, which holds nearly all of the torus: CULLIDE's dispatcher runs Bullet's
+/// per-triangle loop on the triangles within reach of the convex shape only. Every contact point (position,
+/// normal, distance, triangle) must be Bullet's, and most candidate triangles must have been skipped.
+TEST(BulletGImpact, ConvexShapesGetBulletsContactsFromTrianglesWithinReach) {
+    CULLIDE_BULLET_REQUIRE_GL();
+    ShapeStore shapes;
+    btCollisionShape* ground = shapes.box(btVector3(12, btScalar(0.5), 12));
+    btCollisionShape* torus = shapes.gimpactTorus(1, btScalar(0.3), 24, 12, btScalar(0.04));
+    btCollisionShape* hull = shapes.hull(btVector3(btScalar(0.5), btScalar(0.35), btScalar(0.4)), 30, 7);
+    btCollisionShape* ball = shapes.sphere(btScalar(0.35));
+    const btQuaternion tilt(btVector3(1, 0, 1).normalized(), btScalar(0.12));
+    auto populate = [&](TestWorld& w) {
+        btGImpactCollisionAlgorithm::registerAlgorithm(&w.dispatcher());
+        w.addBody(ground, 0, btTransform(tilt, btVector3(0, -1, 0)));
+        for (int k = 0; k < 6; ++k) {
+            const btVector3 at(btScalar(1.9) * std::sin(btScalar(1.3) * btScalar(k)), btScalar(1.0) + btScalar(0.9) * btScalar(k),
+                               btScalar(1.9) * std::cos(btScalar(0.9) * btScalar(k)));
+            w.addBody(torus, 1, btTransform(btQuaternion(btVector3(1, 0, btScalar(0.4)).normalized(), btScalar(0.3) * btScalar(k)), at));
+            w.addBody(k % 2 ? hull : ball, 1, btTransform(btQuaternion::getIdentity(), at + btVector3(0, btScalar(0.6), 0)));
+        }
+    };
+    TestWorld reference(PipelineKind::Default);
+    TestWorld cullide(PipelineKind::Cullide);
+    populate(reference);
+    populate(cullide);
+    MirrorOptions options;
+    options.steps = 150;
+    // Torus-torus pairs come from CULLIDE's sorted triangle pairs (see ToriNoContactMissingAndContactsAgree); every
+    // pair with a convex shape runs Bullet's own per-triangle loop: exact, point by point.
+    auto isTorus = [](int object) { return object >= 1 && object % 2 == 1; };
+    options.tolerance = [&](const std::pair<int, int>& pair) {
+        return isTorus(pair.first) && isTorus(pair.second) ? 2.0 * double(gContactBreakingThreshold) : 1e-6;
+    };
+    std::size_t candidates = 0, tested = 0, convexPairs = 0;
+    options.each = [&](int, TestWorld&, TestWorld& c) {
+        const CullideDispatchStats& d = c.cullideDispatcher()->getLastStepStats();
+        candidates += d.convexCandidates;
+        tested += d.convexTriangles;
+        convexPairs += d.convexPairs;
+    };
+    const MirrorRun run = runMirrored(reference, cullide, options);
+    printMirrorRun("gimpact tori, hulls and spheres on a tilted ground box", run);
+    std::printf("  GImpact-convex: %zu pair-steps, %zu of %zu candidate triangles within reach\n", convexPairs, tested,
+                candidates);
+    expectAgreement(run, 600);
+    EXPECT_GT(convexPairs, 300u) << "no GImpact-convex pair ran: the scene tests nothing";
+    EXPECT_GT(tested, 0u);
+    EXPECT_LT(tested * 4, candidates) << "the reach filter kept most of Bullet's candidates";
+}
+
 TEST(BulletGImpact, WithoutRegisterAlgorithmMeshPairsStayEmptyLikeBullet) {
     CULLIDE_BULLET_REQUIRE_GL();
     // Bullet's default matrix has no GImpact-GImpact algorithm until registerAlgorithm is called: CULLIDE's

@@ -8,8 +8,13 @@
 //   gimpact_vs_concave over the mesh's surviving triangles only.
 // - Convex hull, or a compound's convex child, vs btBvhTriangleMeshShape / btTriangleMeshShape: a
 //   btConvexConcaveCollisionAlgorithm subclass drives btConvexTriangleCallback with the mesh's surviving triangles.
-// - Everything else (primitives, compound-compound and compound-convex per child, planes, soft bodies, GImpact vs
-//   convex) goes to Bullet's algorithms unchanged; so does any pair for which the broadphase has no fresh triangle
+// - GImpact mesh vs a convex shape (box, sphere, hull, ...; not a compound): Bullet's own per-triangle loop (its box
+//   query, then each candidate triangle against the convex shape, in Bullet's order), minus the triangles farther
+//   from the convex shape's local box than 1.5 * (triangle margin + contact breaking threshold): they cannot make a
+//   point. Bullet's query box is the convex shape's AABB in the mesh's frame; for a ground box that is most of the
+//   mesh, and every candidate costs a GJK run. The contacts are Bullet's, point for point.
+// - Everything else (primitives, compound-compound and compound-convex per child, planes, soft bodies) goes to
+//   Bullet's algorithms unchanged; so does any pair for which the broadphase has no fresh triangle
 //   data (a character controller's private pair cache after the ghost moved, contactTest, another broadphase).
 // - Triangle pairs are processed in sorted order: contacts are deterministic.
 // - Algorithms larger than the configuration's pool element are allocated from the heap, never from the pool.
@@ -38,6 +43,10 @@ struct CullideDispatchStats {
     std::size_t clearedPairs = 0;       ///< pairs with no surviving triangle: manifolds cleared
     std::size_t penetrationPairs = 0;   ///< interpenetrating GImpact pairs given Bullet's full algorithm (included
                                         ///< in cullidePairs; see CullideBroadphase::setDeepPenetrationFallback)
+    /// GImpact mesh vs convex shape pairs (Bullet's per-triangle loop, minus triangles out of reach)
+    std::size_t convexPairs = 0;
+    std::size_t convexCandidates = 0;   ///< ... triangles of Bullet's box query
+    std::size_t convexTriangles = 0;    ///< ... of which within reach of the convex shape: run through GJK
     double dispatchMs = 0.0;            ///< wall time in dispatchAllCollisionPairs
     void reset() { *this = CullideDispatchStats{}; }
 };
