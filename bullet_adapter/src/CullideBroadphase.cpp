@@ -740,6 +740,74 @@ struct CullideBroadphase::Impl {
         desired.push_back({a, b});
     }
 
+    /// The box of triangle t of a world mesh, computed once per makeRecord side (stamped cache).
+    struct TriangleBoxes {
+        std::vector<Aabb> boxes;
+        std::vector<std::uint32_t> stamp;
+        std::uint32_t current = 0;
+        void begin(std::size_t triangles) {
+            if (boxes.size() < triangles) {
+                boxes.resize(triangles);
+                stamp.resize(triangles, 0);
+            }
+            if (++current == 0) {  // wrapped: forget every stamp
+                std::fill(stamp.begin(), stamp.end(), 0);
+                current = 1;
+            }
+        }
+        const Aabb& of(const TriangleMesh& m, std::uint32_t t) {
+            if (stamp[t] != current) {
+                Aabb b;
+                for (std::uint32_t v : m.triangles[t]) b.grow(m.vertices[v]);
+                boxes[t] = b;
+                stamp[t] = current;
+            }
+            return boxes[t];
+        }
+    };
+    TriangleBoxes boxesA, boxesB;
+
+    /// GImpact-GImpact: of the culler's triangle pairs, those whose triangle boxes, grown by the shapes' margins,
+    /// overlap, as Bullet's (part, index) pairs in record orientation, sorted. A pair whose grown boxes are apart is
+    /// farther apart than both margins; the clip method can then make a contact only from a point of one triangle
+    /// more than both margins behind the other's plane: inside the other mesh where it is thicker than that, i.e.
+    /// deep interpenetration, which the fallback hands to Bullet's full algorithm. Returns whether the meshes
+    /// intersect (some kept pair shares a point; tested only with the fallback on). The dispatcher keeps, of these
+    /// pairs, those that Bullet's own BVH search would also produce.
+    bool nearGImpactPairs(const Proxy& pa, const Proxy& pb, const ObjectPair& op, bool flip,
+                          std::vector<BulletTrianglePair>& out) {
+        const double ma = double(bullet::triangleMarginOf(objectOf(&pa)->getCollisionShape()));
+        const double mb = double(bullet::triangleMarginOf(objectOf(&pb)->getCollisionShape()));
+        const TriangleMesh& wa = pa.world;
+        const TriangleMesh& wb = pb.world;
+        boxesA.begin(wa.triangles.size());
+        boxesB.begin(wb.triangles.size());
+        bool intersecting = false;
+        out.reserve(op.triangles.size());
+        for (const TrianglePair& tp : op.triangles) {
+            const Aabb& a = boxesA.of(wa, tp.a);
+            const Aabb& b = boxesB.of(wb, tp.b);
+            if (!a.inflated(ma).overlaps(b.inflated(mb))) continue;
+            if (deepPenetrationFallback && !intersecting && a.overlaps(b)) {  // triangles that meet have meeting boxes
+                const TriangleIndices& x = wa.triangles[tp.a];
+                const TriangleIndices& y = wb.triangles[tp.b];
+                intersecting = trianglesIntersect(wa.vertices[x[0]], wa.vertices[x[1]], wa.vertices[x[2]],
+                                                  wb.vertices[y[0]], wb.vertices[y[1]], wb.vertices[y[2]]);
+            }
+            const BulletTriangle ta = pa.geometry->refs[tp.a];
+            const BulletTriangle tb = pb.geometry->refs[tp.b];
+            out.push_back(flip ? BulletTrianglePair{tb, ta} : BulletTrianglePair{ta, tb});
+        }
+        const auto order = [](const BulletTrianglePair& x, const BulletTrianglePair& y) {
+            if (x.a.part != y.a.part) return x.a.part < y.a.part;
+            if (x.b.part != y.b.part) return x.b.part < y.b.part;
+            if (x.a.index != y.a.index) return x.a.index < y.a.index;
+            return x.b.index < y.b.index;
+        };
+        if (!std::is_sorted(out.begin(), out.end(), order)) std::sort(out.begin(), out.end(), order);
+        return intersecting;
+    }
+
     void makeRecord(Proxy* pa, Proxy* pb, const ObjectPair& op) {
         using bullet::GeometryKind;
         const GeometryKind ka = pa->geometry ? pa->geometry->kind : GeometryKind::None;
@@ -765,42 +833,9 @@ struct CullideBroadphase::Impl {
         rec.transformFirst = objectOf(first)->getWorldTransform();
         rec.transformSecond = objectOf(second)->getWorldTransform();
         if (gimpactPair) {
-            // Near pairs whose triangle boxes, grown by the shapes' margins, overlap. A pair whose boxes are apart
-            // is farther apart than both margins; the clip method can then make a contact only from a point of one
-            // triangle more than both margins behind the other's plane — inside the other mesh where it is thicker
-            // than that, i.e. deep interpenetration, which the fallback below hands to Bullet's full algorithm.
-            // The dispatcher keeps, of these pairs, those that Bullet's own BVH search would also produce.
-            const double ma = double(bullet::triangleMarginOf(objectOf(pa)->getCollisionShape()));
-            const double mb = double(bullet::triangleMarginOf(objectOf(pb)->getCollisionShape()));
-            auto box = [](const TriangleMesh& m, std::uint32_t t, double grow) {
-                Aabb b;
-                for (std::uint32_t v : m.triangles[t]) b.grow(m.vertices[v]);
-                return b.inflated(grow);
-            };
-            rec.triangles.pairs.reserve(op.triangles.size());
             updateWorld(pa, objectOf(pa)->getWorldTransform());  // no-op where it is up to date (static objects)
             updateWorld(pb, objectOf(pb)->getWorldTransform());
-            bool intersecting = false;
-            for (const TrianglePair& tp : op.triangles) {
-                if (!box(pa->world, tp.a, ma).overlaps(box(pb->world, tp.b, mb))) continue;
-                if (deepPenetrationFallback && !intersecting) {
-                    const TriangleIndices& a = pa->world.triangles[tp.a];
-                    const TriangleIndices& b = pb->world.triangles[tp.b];
-                    const std::vector<Vec3>& va = pa->world.vertices;
-                    const std::vector<Vec3>& vb = pb->world.vertices;
-                    intersecting = trianglesIntersect(va[a[0]], va[a[1]], va[a[2]], vb[b[0]], vb[b[1]], vb[b[2]]);
-                }
-                const BulletTriangle ta = pa->geometry->refs[tp.a];
-                const BulletTriangle tb = pb->geometry->refs[tp.b];
-                rec.triangles.pairs.push_back(flip ? BulletTrianglePair{tb, ta} : BulletTrianglePair{ta, tb});
-            }
-            std::sort(rec.triangles.pairs.begin(), rec.triangles.pairs.end(),
-                      [](const BulletTrianglePair& x, const BulletTrianglePair& y) {
-                          if (x.a.part != y.a.part) return x.a.part < y.a.part;
-                          if (x.b.part != y.b.part) return x.b.part < y.b.part;
-                          if (x.a.index != y.a.index) return x.a.index < y.a.index;
-                          return x.b.index < y.b.index;
-                      });
+            const bool intersecting = nearGImpactPairs(*pa, *pb, op, flip, rec.triangles.pairs);
             stats.trianglePairs += rec.triangles.pairs.size();
             rec.triangles.interpenetrating = intersecting;
             if (intersecting) ++stats.interpenetratingPairs;
