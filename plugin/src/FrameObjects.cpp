@@ -236,4 +236,67 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> listedOverlappingPairs(
     return pairs;
 }
 
+namespace {
+
+std::uint32_t findRoot(std::vector<std::uint32_t>& parent, std::uint32_t x) {
+    while (parent[x] != x) {
+        parent[x] = parent[parent[x]];  // path halving
+        x = parent[x];
+    }
+    return x;
+}
+
+double largestSide(const Aabb& box) { return box.isEmpty() ? 0.0 : box.extent().maxCoeff(); }
+
+}  // namespace
+
+std::vector<std::vector<std::uint32_t>> clustersOf(const std::vector<std::uint8_t>& member,
+                                                   const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs,
+                                                   const std::vector<ValidatedObject>& objects) {
+    const auto n = static_cast<std::uint32_t>(objects.size());
+    std::vector<std::uint32_t> parent(n);
+    for (std::uint32_t i = 0; i < n; ++i) parent[i] = i;
+    for (const auto& [a, b] : pairs) {
+        if (a >= n || b >= n || !member[a] || !member[b]) continue;
+        const std::uint32_t ra = findRoot(parent, a), rb = findRoot(parent, b);
+        if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);  // the root is the smallest object
+    }
+    // Components in the order of their smallest object (their root), with their boxes.
+    std::vector<std::vector<std::uint32_t>> components;
+    std::vector<Aabb> boxes;
+    std::vector<std::uint32_t> componentOf(n, 0);
+    for (std::uint32_t i = 0; i < n; ++i) {
+        if (!member[i]) continue;
+        const std::uint32_t root = findRoot(parent, i);
+        if (root == i) {
+            componentOf[i] = static_cast<std::uint32_t>(components.size());
+            components.emplace_back();
+            boxes.emplace_back();
+        }
+        const std::uint32_t c = componentOf[root];
+        components[c].push_back(i);
+        boxes[c].grow(objects[i].box);
+    }
+    // Greedy merge: each component joins the first cluster it stays compact with.
+    std::vector<std::vector<std::uint32_t>> clusters;
+    std::vector<Aabb> clusterBoxes;
+    for (std::size_t c = 0; c < components.size(); ++c) {
+        std::size_t into = clusters.size();
+        for (std::size_t k = 0; k < clusters.size() && into == clusters.size(); ++k) {
+            Aabb merged = clusterBoxes[k];
+            merged.grow(boxes[c]);
+            if (largestSide(merged) <= kClusterSpread * std::max(largestSide(clusterBoxes[k]), largestSide(boxes[c])))
+                into = k;
+        }
+        if (into == clusters.size()) {
+            clusters.emplace_back();
+            clusterBoxes.emplace_back();
+        }
+        clusters[into].insert(clusters[into].end(), components[c].begin(), components[c].end());
+        clusterBoxes[into].grow(boxes[c]);
+    }
+    for (auto& cluster : clusters) std::sort(cluster.begin(), cluster.end());
+    return clusters;
+}
+
 }  // namespace cullide

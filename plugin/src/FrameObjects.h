@@ -42,6 +42,20 @@ std::vector<std::pair<std::uint32_t, std::uint32_t>> listedOverlappingPairs(
 /// Throws std::invalid_argument unless `only` is sorted, without repeats, each first < second < objectCount.
 void checkPairList(const std::vector<std::pair<std::uint32_t, std::uint32_t>>& only, std::size_t objectCount);
 
+/// How far apart two groups of objects may be and still share one view: a cluster's box extent (largest side) stays
+/// within this factor of the larger of its parts' extents.
+constexpr double kClusterSpread = 2.0;
+
+/// Groups of objects that can meet, for the visibility levels: the connected components of the overlap graph
+/// `pairs` over the objects with `member` set (each component as its sorted object indices), merged greedily in the
+/// order of their smallest object while the merged box stays within kClusterSpread of the larger part's extent. Two
+/// objects in different clusters have disjoint boxes (they cannot collide), and no cluster spans empty space much
+/// larger than what it holds: a view fitted to a cluster spends its pixels and its float precision on its objects.
+/// Clusters come sorted by their smallest object; objects with `member` clear belong to none.
+std::vector<std::vector<std::uint32_t>> clustersOf(const std::vector<std::uint8_t>& member,
+                                                   const std::vector<std::pair<std::uint32_t, std::uint32_t>>& pairs,
+                                                   const std::vector<ValidatedObject>& objects);
+
 /// True when some triangle's box, inflated by margin / 2, overlaps `box` (already inflated by margin / 2): the
 /// deterministic test for pairs with a box-only proxy (their narrow phase is the caller's).
 bool meshTouchesBox(const TriangleMesh& mesh, const Aabb& box, double margin);

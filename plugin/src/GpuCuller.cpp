@@ -88,7 +88,9 @@ private:
         }
         m_active.assign(objects.size(), 0);
         for (std::size_t i = 0; i < objects.size(); ++i) {
-            const bool participates = paper ? m_valid[i].valid && !m_valid[i].box.isEmpty() : !m_partners[i].empty();
+            // Only objects whose box meets another's can collide (both pipelines): the views are fitted to the
+            // groups that can meet (clusters, runLevels), never to a far outlier.
+            const bool participates = !m_partners[i].empty();
             m_active[i] = participates ? 1 : 0;
             stats.prepassObjectsOut += m_active[i];
         }
@@ -102,10 +104,7 @@ private:
         m_uploaded = false;
         Timer levels;
         try {
-            if (paper)
-                runPaperPipeline(stats);
-            else
-                runAutoPipeline(stats);
+            runLevels(paper, stats);
         } catch (const gl::GlError& e) {
             // A GL error mid-frame costs this frame its GPU pruning, never a contact: every triangle that the CPU
             // pre-pass keeps goes to the exact stage.
@@ -580,14 +579,61 @@ private:
         return n;
     }
 
-    /// CPU pre-pass (done in buildGroups), group boxes on the GPU, triangles of the surviving groups on the GPU;
-    /// a level whose input is small enough goes straight to the exact stage, and GPU levels are skipped where they
-    /// do not pay (Settings::gpuLevels).
-    void runAutoPipeline(Stats& stats) {
+    /// The levels, cluster by cluster (clustersOf): each cluster's geometry goes to the device relative to its own
+    /// centre and each level's views are fitted to that cluster, so objects far from each other cost what near ones
+    /// cost and their coordinates keep the float precision the error bounds assume. m_active and m_groups hold one
+    /// cluster while its levels run and are restored afterwards (also when a level throws).
+    void runLevels(bool paper, Stats& stats) {
         if (!m_gpuLevels) {
             collectDirect();
             return;
         }
+        const std::vector<std::vector<std::uint32_t>> clusters = clustersOf(m_active, m_pairs, m_valid);
+        stats.clusters += clusters.size();
+        struct Restore {
+            GpuCuller& self;
+            std::vector<std::uint8_t> active;
+            std::vector<Group> groups;
+            ~Restore() {
+                self.m_active.swap(active);
+                self.m_groups.swap(groups);
+            }
+        } restore{*this, m_active, m_groups};
+        for (const std::vector<std::uint32_t>& cluster : clusters) {
+            m_active.assign(m_valid.size(), 0);
+            for (std::uint32_t o : cluster) m_active[o] = 1;
+            m_groups.clear();
+            for (const Group& g : restore.groups)
+                if (m_active[g.object]) m_groups.push_back(g);
+            m_uploaded = false;
+            if (!rasterisable(cluster)) {
+                // Relative coordinates beyond what float positions and depths carry: no pruning, every triangle
+                // that the box pre-pass keeps goes to the exact stage (sound, and rare: extents above 1e30).
+                ++stats.unrasterisedClusters;
+                collectTriangles(m_groups, true);
+                finishFromTriangles({});
+            } else if (paper) {
+                runPaperPipeline(stats);
+            } else {
+                runAutoPipeline(stats);
+            }
+        }
+    }
+
+    /// Largest cluster extent whose coordinates, relative to its centre, the GPU levels take as floats (with room
+    /// for the views' arithmetic below FLT_MAX).
+    static constexpr double kRasterisableExtent = 1e30;
+
+    bool rasterisable(const std::vector<std::uint32_t>& cluster) const {
+        Aabb box;
+        for (std::uint32_t o : cluster) box.grow(m_valid[o].box);
+        return box.isEmpty() || box.extent().maxCoeff() <= kRasterisableExtent;
+    }
+
+    /// CPU pre-pass (done in buildGroups), group boxes on the GPU, triangles of the surviving groups on the GPU;
+    /// a level whose input is small enough goes straight to the exact stage, and GPU levels are skipped where they
+    /// do not pay (Settings::gpuLevels).
+    void runAutoPipeline(Stats& stats) {
         std::vector<std::uint32_t> proxies = activeProxies();
         std::vector<Group> groups = m_groups;
         if (m_gpuLevels && triangleCount(groups) > m_settings.exactThreshold) {

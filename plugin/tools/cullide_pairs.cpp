@@ -166,6 +166,8 @@ nlohmann::ordered_json statsToJson(const cullide::Stats& s) {
     j["prepass_objects_out"] = s.prepassObjectsOut;
     j["prepass_groups_in"] = s.prepassGroupsIn;
     j["prepass_groups_out"] = s.prepassGroupsOut;
+    j["clusters"] = s.clusters;
+    j["unrasterised_clusters"] = s.unrasterisedClusters;
     nlohmann::ordered_json levels = nlohmann::ordered_json::array();
     for (const cullide::LevelStats& l : s.levels) {
         nlohmann::ordered_json lj;

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 
 namespace cullide::test {
@@ -138,6 +139,50 @@ TEST(HardCases, InsideHugeTinyAndCrowdedPixels) {
 
 namespace cullide::test {
 namespace {
+
+/// Two overlapping unit cubes at the origin and a third far away (issue #13: the paper pipeline returned no pair for
+/// outliers from 1e13 up, the colliding cubes pruning each other, and took minutes between 1e8 and 1e12). Reliable
+/// mode must equal the reference at every magnitude, in both pipelines, at every resolution; outliers beyond float
+/// range included. Each cluster of objects that can meet gets its own views.
+TEST(HardCases, FarOutliersInEveryPipeline) {
+    auto cubeAt = [](const Vec3& corner, double size) {  // lowest corner at `corner`
+        TriangleMesh m = makeBox(Vec3::Constant(0.5 * size));
+        transformMesh(m, Eigen::Affine3d(Eigen::Translation3d(corner + Vec3::Constant(0.5 * size))));
+        return m;
+    };
+    for (double s : {1e4, 1e8, 1e12, 1e14, 1e20, 1e30, 1e38, 1e39, 1e300}) {
+        // The issue's case (a unit cube at (s, s, s)), and a pair of overlapping cubes at -s, as small as double
+        // coordinates there allow (unit cubes up to 1e12): one view over both groups would collapse them.
+        const double h = std::max(1.0, s * 1e-12);
+        const std::vector<TriangleMesh> meshes = {cubeAt(Vec3(0, 0, 0), 1), cubeAt(Vec3(0.5, 0.5, 0.5), 1),
+                                                  cubeAt(Vec3(s, s, s), 1), cubeAt(Vec3(-s, -s, -s), h),
+                                                  cubeAt(Vec3(-s + 0.5 * h, -s + 0.5 * h, -s + 0.5 * h), h)};
+        const auto objects = asObjects(meshes);
+        Result expected;
+        createReferenceCuller(Settings{})->run(objects, expected);
+        ASSERT_GE(trianglePairs(expected).size(), 36u) << s;
+        for (Pipeline pipeline : {Pipeline::Auto, Pipeline::Paper}) {
+            for (int resolution : {16, 256}) {
+                Settings settings = gpu(resolution);
+                settings.pipeline = pipeline;
+                std::string why;
+                auto culler = makeGpuCuller(settings, why);
+                if (!culler) {
+                    if (runningInCi()) ADD_FAILURE() << "CI=true but no GL: " << why;
+                    return;
+                }
+                Result got;
+                culler->run(objects, got);
+                const Comparison c = compare(expected, got);
+                const char* name = pipeline == Pipeline::Paper ? "paper" : "auto";
+                EXPECT_EQ(c.missed, 0u) << name << " " << resolution << " s=" << s << ": " << c.firstMissed;
+                EXPECT_EQ(c.spurious, 0u) << name << " s=" << s;
+                EXPECT_TRUE(c.objectPairsEqual) << name << " s=" << s;
+                EXPECT_GE(got.stats.clusters, 2u) << name << " s=" << s << ": one view for both groups";
+            }
+        }
+    }
+}
 
 TEST(HardCases, ZeroAndTenThousandObjects) {
     Settings s;

@@ -35,6 +35,10 @@ struct Stats {
     std::size_t rejectedObjects = 0;
     std::size_t prepassObjectsIn = 0;   ///< objects entering the CPU box pre-pass
     std::size_t prepassObjectsOut = 0;  ///< objects whose box overlaps another object's box
+    /// Clusters the GPU levels ran on (objects that can meet, each with its own views and upload origin).
+    std::size_t clusters = 0;
+    /// ... of which too large for float coordinates (extent above 1e30): their triangles went to the exact stage.
+    std::size_t unrasterisedClusters = 0;
     std::size_t prepassGroupsIn = 0;   ///< groups of k triangles entering the pre-pass (0 without GPU levels:
     std::size_t prepassGroupsOut = 0;  ///< that path filters triangles directly)
     std::vector<LevelStats> levels;
