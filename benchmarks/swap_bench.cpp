@@ -512,7 +512,7 @@ Row runScene(const SceneFactory& factory, int steps) {
         const auto& b = static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get())->getLastFrameStats();
         row.buildMs += b.buildMs / steps;
         row.cullMs += b.cullMs / steps;
-        row.syncMs += b.syncMs / steps;
+        row.syncMs += b.recordMs / steps;
         for (std::size_t k = 1; k < worlds.size(); ++k) worlds[k]->copyStatesFrom(*worlds[0]);
     }
     for (std::size_t k = 0; k < worlds.size(); ++k) {
@@ -529,13 +529,13 @@ void printRow(const Row& r) {
     const double best = std::min(r.ms[0], r.ms[1]);
     std::printf("%-16s %6zu %5d | %8.2f %8.2f %8.2f | %5.2fx | bp %6.2f/%6.2f nar %7.2f/%7.2f | pairs %8.0f/%8.0f | "
                 "lost %zu of %zu (checked %zu: %zu apart) extra %zu | dispatcher: culled %.1f, full %.1f "
-                "(penetrating %.1f) | object level %.2f ms, culler %.2f, pair sync %.2f; last step: %zu object pairs, "
-                "%zu carried | contact keys missing %zu of %zu, deepest point diff max %.3g mean %.3g (%zu pair-steps) | "
+                "(penetrating %.1f) | culling frame %.2f ms, culler %.2f, records %.2f; last step: %zu object pairs, "
+                "%zu pruned | contact keys missing %zu of %zu, deepest point diff max %.3g mean %.3g (%zu pair-steps) | "
                 "GImpact-convex triangles %.0f of %.0f\n",
                 r.scene.c_str(), r.bodies, r.steps, r.ms[0], r.ms[1], r.ms[2], r.ms[2] / best, r.broadphaseMs[0],
                 r.broadphaseMs[2], r.narrowMs[0], r.narrowMs[2], r.pairs[0], r.pairs[2], r.lost, r.contactPairSteps,
                 r.lostChecked, r.lostApart, r.extra, r.cullidePairs, r.fallbackPairs, r.penetrationPairs, r.buildMs, r.cullMs, r.syncMs, r.last.objectPairs,
-                r.last.carriedPairs, r.pointsMissing, r.points, r.deepestDiffMax,
+                r.last.prunedPairs, r.pointsMissing, r.points, r.deepestDiffMax,
                 r.comparedPairSteps ? r.deepestDiffSum / double(r.comparedPairSteps) : 0.0, r.comparedPairSteps,
                 r.convexTriangles, r.convexCandidates);
     std::fflush(stdout);

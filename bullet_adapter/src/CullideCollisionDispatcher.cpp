@@ -297,10 +297,17 @@ private:
     /// than btManifoldResult accepts a point.
     void processWithConvex(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
                            const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut) {
-        CullideDispatchStats& stats = cullideDispatcher(m_dispatcher).currentStats();
+        bool recordSwapped = false;
+        CullideDispatchStats* statsPtr = nullptr;
+        const PairTriangles* verdict = cullideTrianglesFor(m_dispatcher, body0Wrap, body1Wrap, recordSwapped, statsPtr);
+        CullideDispatchStats& stats = *statsPtr;
         clearCache();
         m_resultOut = resultOut;
         m_dispatchInfo = &dispatchInfo;
+        if (verdict != nullptr && verdict->pruned) {  // the culler proved the pair out of reach: no point this step
+            ++stats.clearedPairs;
+            return;
+        }
         const bool swapped = !trimeshAgainstConvex(body0Wrap, body1Wrap);
         const btCollisionObjectWrapper* meshWrap = swapped ? body1Wrap : body0Wrap;
         const btCollisionObjectWrapper* convexWrap = swapped ? body0Wrap : body1Wrap;
@@ -540,12 +547,15 @@ btCollisionAlgorithm* CullideCollisionDispatcher::findAlgorithm(const btCollisio
                                  (t0 == TRIANGLE_MESH_SHAPE_PROXYTYPE && t1 == GIMPACT_SHAPE_PROXYTYPE);
         const bool gimpactConvexPair = CullideGImpactAlgorithm::trimeshAgainstConvex(body0Wrap, body1Wrap) ||
                                        CullideGImpactAlgorithm::trimeshAgainstConvex(body1Wrap, body0Wrap);
+        // Convex-mesh pairs read the culler's triangles only with convex-mesh culling on; otherwise Bullet's own
+        // algorithm runs them without a record lookup per pair and step.
+        const bool convexMesh = m_broadphase->getConvexMeshCulling();
         if ((gimpactPair || gimpactConvexPair) && registeredIs<btGImpactCollisionAlgorithm::CreateFunc>(registered))
             replacement = &g_gimpactCreate;
-        else if (t1 == TRIANGLE_MESH_SHAPE_PROXYTYPE && culledConvex(body0Wrap) &&
+        else if (convexMesh && t1 == TRIANGLE_MESH_SHAPE_PROXYTYPE && culledConvex(body0Wrap) &&
                  registeredIs<btConvexConcaveCollisionAlgorithm::CreateFunc>(registered))
             replacement = &g_convexMeshCreate;
-        else if (t0 == TRIANGLE_MESH_SHAPE_PROXYTYPE && culledConvex(body1Wrap) &&
+        else if (convexMesh && t0 == TRIANGLE_MESH_SHAPE_PROXYTYPE && culledConvex(body1Wrap) &&
                  registeredIs<btConvexConcaveCollisionAlgorithm::SwappedCreateFunc>(registered))
             replacement = &g_meshConvexCreate;
         if (replacement != nullptr) {

@@ -75,7 +75,7 @@ MirrorRun runMirrored(TestWorld& reference, TestWorld& cullide, const MirrorOpti
             const CullideFrameStats& f = bp->getLastFrameStats();
             run.buildMs += f.buildMs;
             run.cullMs += f.cullMs;
-            run.syncMs += f.syncMs;
+            run.syncMs += f.recordMs;
             run.prepassMs += f.culler.prepassMs;
             run.uploadMs += f.culler.uploadMs;
             run.gpuLevelsMs += f.culler.gpuLevelsMs;

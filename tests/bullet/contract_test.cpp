@@ -4,6 +4,7 @@
 // algorithm pool, custom registrations, and the landscape scene against the default pipeline.
 #include "SceneSupport.h"
 
+#include <BulletCollision/BroadphaseCollision/btDbvtBroadphase.h>
 #include <BulletCollision/CollisionDispatch/btEmptyCollisionAlgorithm.h>
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <LinearMath/btPoolAllocator.h>
@@ -12,7 +13,9 @@
 
 #include <cmath>
 #include <limits>
+#include <set>
 #include <string>
+#include <vector>
 
 namespace cullide::test {
 namespace {
@@ -30,30 +33,38 @@ std::set<std::pair<int, int>> pairsOf(btCollisionWorld& w) {
 }
 
 // In a dynamics world, addCollisionObject (like addRigidBody for static bodies) gives StaticFilter and a mask without
-// it, so the overlapping static boxes and the plane do not pair, exactly as with btDbvtBroadphase: the filter
-// decides, not the static flag (tests/bullet/collision_world_test.cpp has the collision world, where they pair).
-TEST(BulletContract, StaticStaticFilteredPlanesByHalfSpace) {
+// it, so the overlapping static boxes and the plane do not pair: the filter decides, not the static flag
+// (tests/bullet/collision_world_test.cpp has the collision world, where they pair). The plane pairs with every
+// dynamic object, as its AABB is infinite: the pair cache is exactly btDbvtBroadphase's.
+TEST(BulletContract, StaticStaticFilteredPlanesAsInBullet) {
     ShapeStore shapes;
     btCollisionShape* box = shapes.box(btVector3(1, 1, 1));
     btCollisionShape* plane = shapes.plane(btVector3(0, 1, 0), 0);
     btCollisionShape* sphere = shapes.sphere(btScalar(0.5));
+    TestWorld reference(PipelineKind::Default);
     TestWorld w(PipelineKind::Cullide, referenceFactory());
-    for (int k = 0; k < 3; ++k) {
-        auto o = std::make_unique<btCollisionObject>();
-        o->setCollisionShape(k == 2 ? plane : box);
-        o->setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(btScalar(k == 1 ? 1.5 : 0), 0, 0)));
-        btCollisionObject* raw = o.get();
-        w.adopt(std::move(o));
-        w.world().addCollisionObject(raw);
+    for (TestWorld* x : {&reference, &w}) {
+        for (int k = 0; k < 3; ++k) {
+            auto o = std::make_unique<btCollisionObject>();
+            o->setCollisionShape(k == 2 ? plane : box);
+            o->setWorldTransform(
+                btTransform(btQuaternion::getIdentity(), btVector3(btScalar(k == 1 ? 1.5 : 0), 0, 0)));
+            btCollisionObject* raw = o.get();
+            x->adopt(std::move(o));
+            x->world().addCollisionObject(raw);
+        }
+        x->addBody(sphere, 1, btTransform(btQuaternion::getIdentity(), btVector3(-5, btScalar(0.49), 0)));
+        x->addBody(sphere, 1, btTransform(btQuaternion::getIdentity(), btVector3(-5, 30, 0)));
+        x->addBody(sphere, 1, btTransform(btQuaternion::getIdentity(), btVector3(-9, -3, 0)));
+        x->addBody(sphere, 1, btTransform(btQuaternion::getIdentity(), btVector3(0, btScalar(1.4), 0)));
+        x->detectCollisions();
     }
-    w.addBody(sphere, 1, btTransform(btQuaternion::getIdentity(), btVector3(-5, btScalar(0.49), 0)));  // on the plane
-    w.addBody(sphere, 1, btTransform(btQuaternion::getIdentity(), btVector3(-5, 30, 0)));             // far above
-    w.addBody(sphere, 1, btTransform(btQuaternion::getIdentity(), btVector3(-9, -3, 0)));             // below it
-    w.addBody(sphere, 1, btTransform(btQuaternion::getIdentity(), btVector3(0, btScalar(1.4), 0)));   // on the boxes
-    w.detectCollisions();
-    const std::set<std::pair<int, int>> expected = {{2, 3}, {2, 5}, {0, 6}, {1, 6}};
+    const std::set<std::pair<int, int>> expected = {{2, 3}, {2, 4}, {2, 5}, {2, 6}, {0, 6}, {1, 6}};
     EXPECT_EQ(pairsOf(w.world()), expected);
-    EXPECT_EQ(w.cullideBroadphase()->getLastFrameStats().infiniteObjects, 1u);
+    EXPECT_EQ(pairsOf(w.world()), pairsOf(reference.world()));
+    const ContactMap contacts = contactsOf(w.world());
+    EXPECT_EQ(contacts.count({2, 3}), 1u) << "the sphere resting on the plane touches it";
+    EXPECT_EQ(contacts.count({2, 4}), 0u) << "the sphere far above the plane does not";
 }
 
 TEST(BulletContract, ExternalPairCacheProxyLifetimeAndQueries) {
@@ -93,13 +104,30 @@ TEST(BulletContract, ExternalPairCacheProxyLifetimeAndQueries) {
         } collect;
         broadphase.aabbTest(btVector3(4, 4, 4), btVector3(7, 7, 7), collect);
         EXPECT_EQ(collect.hits, std::set<btBroadphaseProxy*>{c});
-        // Moving c onto a creates the pair; moving it away removes it again.
+        // Moving c onto a creates the pairs; moving it away removes them again, lazily, as btDbvtBroadphase does.
         broadphase.setAabb(c, btVector3(btScalar(0.2), 0, 0), btVector3(btScalar(0.8), 1, 1), &dispatcher);
         broadphase.calculateOverlappingPairs(&dispatcher);
         EXPECT_EQ(external.getNumOverlappingPairs(), 3);
-        broadphase.setAabb(c, btVector3(5, 5, 5), btVector3(6, 6, 6), &dispatcher);
-        broadphase.calculateOverlappingPairs(&dispatcher);
+        // The same calls on btDbvtBroadphase give the same pairs at every point.
+        btDbvtBroadphase twin;
+        btBroadphaseProxy* ta = twin.createProxy(btVector3(0, 0, 0), btVector3(1, 1, 1), BOX_SHAPE_PROXYTYPE,
+                                                 nullptr, 1, -1, &dispatcher);
+        btBroadphaseProxy* tb = twin.createProxy(btVector3(btScalar(0.5), 0, 0), btVector3(2, 1, 1),
+                                                 BOX_SHAPE_PROXYTYPE, nullptr, 1, -1, &dispatcher);
+        btBroadphaseProxy* tc = twin.createProxy(btVector3(btScalar(0.2), 0, 0), btVector3(btScalar(0.8), 1, 1),
+                                                 BOX_SHAPE_PROXYTYPE, nullptr, 1, -1, &dispatcher);
+        twin.calculateOverlappingPairs(&dispatcher);
+        EXPECT_EQ(twin.getOverlappingPairCache()->getNumOverlappingPairs(), 3);
+        for (int step = 0; step < 4; ++step) {
+            const btScalar x = btScalar(5 + step);
+            broadphase.setAabb(c, btVector3(x, 5, 5), btVector3(x + 1, 6, 6), &dispatcher);
+            twin.setAabb(tc, btVector3(x, 5, 5), btVector3(x + 1, 6, 6), &dispatcher);
+            broadphase.calculateOverlappingPairs(&dispatcher);
+            twin.calculateOverlappingPairs(&dispatcher);
+            EXPECT_EQ(external.getNumOverlappingPairs(), twin.getOverlappingPairCache()->getNumOverlappingPairs());
+        }
         EXPECT_EQ(external.getNumOverlappingPairs(), 1);
+        for (btBroadphaseProxy* p : {ta, tb, tc}) twin.destroyProxy(p, &dispatcher);
         // Destroying a proxy removes its pairs at once.
         broadphase.destroyProxy(a, &dispatcher);
         EXPECT_EQ(external.getNumOverlappingPairs(), 0);
@@ -229,6 +257,59 @@ void populateTori(TestWorld& w, ShapeStore& shapes, btScalar margin) {
 
 /// When the culler cannot be recreated with the margin a new shape needs, frames fall back to AABB pairs (and the
 /// dispatcher to Bullet's full algorithms): contacts stay right.
+/// A proxy created with a non-finite AABB and never updated (a static object whose world never updates static
+/// AABBs) is parked: the object level's tree keeps finite volumes, so proxies created and moved later still find
+/// each other; the parked proxy gets no pair until it gets a finite box, then pairs as any other.
+TEST(BulletContract, NonFiniteProxyNeverHidesOthers) {
+    btDefaultCollisionConfiguration config;
+    CullideBroadphase broadphase(Settings{}, nullptr, referenceFactory());
+    CullideCollisionDispatcher dispatcher(&config, &broadphase);
+    const btScalar nan = std::numeric_limits<btScalar>::quiet_NaN();
+    std::vector<btBroadphaseProxy*> proxies;
+    testing::internal::CaptureStderr();
+    for (int k = 0; k < 8; ++k) {
+        const btVector3 lo(btScalar(3 * k), 0, 0);
+        proxies.push_back(broadphase.createProxy(lo, lo + btVector3(1, 1, 1), BOX_SHAPE_PROXYTYPE, nullptr, 1, -1,
+                                                 &dispatcher));
+        if (k == 3)
+            proxies.push_back(broadphase.createProxy(btVector3(nan, 0, 0), btVector3(nan, 1, 1), BOX_SHAPE_PROXYTYPE,
+                                                     nullptr, 1, -1, &dispatcher));
+    }
+    const std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_NE(err.find("non-finite AABB"), std::string::npos) << err;
+    btBroadphaseProxy* parked = proxies[4];
+    broadphase.calculateOverlappingPairs(&dispatcher);
+    EXPECT_EQ(broadphase.getOverlappingPairCache()->getNumOverlappingPairs(), 0);
+    // Each box moves onto its right neighbour's place, half overlapping it: 7 pairs among the 8 valid boxes.
+    for (std::size_t i = 0; i < proxies.size(); ++i) {
+        if (proxies[i] == parked) continue;
+        btVector3 lo, hi;
+        broadphase.getAabb(proxies[i], lo, hi);
+        broadphase.setAabb(proxies[i], lo + btVector3(btScalar(1.5), 0, 0), hi + btVector3(btScalar(1.5), 0, 0),
+                           &dispatcher);
+        broadphase.setAabb(proxies[i], lo - btVector3(btScalar(1.5), 0, 0), hi - btVector3(btScalar(1.5), 0, 0),
+                           &dispatcher);
+        broadphase.setAabb(proxies[i], lo, hi + btVector3(btScalar(2.5), 0, 0), &dispatcher);
+    }
+    broadphase.calculateOverlappingPairs(&dispatcher);
+    btOverlappingPairCache* cache = broadphase.getOverlappingPairCache();
+    EXPECT_EQ(cache->getNumOverlappingPairs(), 7);
+    for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) {
+        const btBroadphasePair& pair = cache->getOverlappingPairArrayPtr()[i];
+        EXPECT_NE(pair.m_pProxy0, parked);
+        EXPECT_NE(pair.m_pProxy1, parked);
+    }
+    EXPECT_EQ(broadphase.getLastFrameStats().rejectedObjects, 1u);
+    // A finite box brings it back, with its own filter mask.
+    broadphase.setAabb(parked, btVector3(btScalar(0.5), 0, 0), btVector3(btScalar(1.5), 1, 1), &dispatcher);
+    broadphase.calculateOverlappingPairs(&dispatcher);
+    EXPECT_EQ(parked->m_collisionFilterMask, -1);
+    EXPECT_EQ(broadphase.getLastFrameStats().rejectedObjects, 0u);
+    EXPECT_NE(cache->findPair(parked, proxies[0]), nullptr);
+    EXPECT_EQ(broadphase.getRejectedCount(), 1u);
+    for (btBroadphaseProxy* p : proxies) broadphase.destroyProxy(p, &dispatcher);
+}
+
 TEST(BulletContract, CullerRecreationFailureFallsBackToAabbPairs) {
     ShapeStore shapes;
     int calls = 0;

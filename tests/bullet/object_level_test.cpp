@@ -1,9 +1,12 @@
-// The broadphase's object level (issue #12, item 3): pairs from the overlapping boxes of an incremental tree, the
-// CULLIDE levels only for pairs whose narrow phase reads triangles, and the culler's verdict deciding those pairs.
+// The broadphase's object level (issue #12, items 1 and 3): Bullet's own btDbvtBroadphase, so the pair cache is
+// exactly Bullet's; the CULLIDE levels only for pairs whose narrow phase reads triangles, and the culler's verdict
+// deciding whether those pairs make contacts.
 #include "SceneSupport.h"
 
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <gtest/gtest.h>
+
+#include <set>
 
 namespace cullide::test {
 namespace {
@@ -14,8 +17,8 @@ btTransform at(double x, double y, double z, const btQuaternion& q = btQuaternio
 
 /// Two GImpact tori (radius 2, tube 0.2): the first flat, the second upright with its lowest point dipping into the
 /// first's hole, far from its tube. Their boxes overlap, their meshes are apart: the culler proves the pair
-/// farther than its margin, so no pair reaches the narrow phase. Moved onto the first's tube (0.002 above it),
-/// the pair is back, with triangles.
+/// farther than its margin, so the pair (in the cache, as in Bullet) gets a pruned record and no contact. Moved onto
+/// the first's tube (0.002 above it), the pair is kept, with triangles, and touches.
 TEST(ObjectLevel, CulledPairIsDecidedByTheCuller) {
     ShapeStore shapes;
     btCollisionShape* torus = shapes.gimpactTorus(2, btScalar(0.2), 32, 8, btScalar(0.01));
@@ -30,7 +33,13 @@ TEST(ObjectLevel, CulledPairIsDecidedByTheCuller) {
     EXPECT_EQ(s.objectPairs, 1u);
     EXPECT_EQ(s.culledPairs, 1u);
     EXPECT_EQ(s.prunedPairs, 1u);
-    EXPECT_EQ(w.broadphase().getOverlappingPairCache()->getNumOverlappingPairs(), 0);
+    EXPECT_EQ(w.broadphase().getOverlappingPairCache()->getNumOverlappingPairs(), 1);
+    EXPECT_TRUE(contactsOf(w.world()).empty());
+    // The narrow phase took the pruned record: no Bullet algorithm ran for the pair.
+    const CullideDispatchStats& d = w.cullideDispatcher()->getLastStepStats();
+    EXPECT_EQ(d.cullidePairs, 1u);
+    EXPECT_EQ(d.clearedPairs, 1u);
+    EXPECT_EQ(d.fallbackPairs, 0u);
 
     // Lowest vertex (2, 0.202, 0), right above the first's top vertex (2, 0.2, 0).
     btTransform near = at(2, 2.2 + 0.202, 0, upright);
@@ -41,6 +50,7 @@ TEST(ObjectLevel, CulledPairIsDecidedByTheCuller) {
     EXPECT_EQ(t.prunedPairs, 0u);
     EXPECT_GT(t.trianglePairs, 0u);
     EXPECT_EQ(w.broadphase().getOverlappingPairCache()->getNumOverlappingPairs(), 1);
+    EXPECT_EQ(contactsOf(w.world()).size(), 1u);
 }
 
 /// Hulls, boxes and spheres on a BVH mesh: nobody reads their triangles (convex-mesh culling is off by default), so
@@ -93,27 +103,87 @@ TEST(ObjectLevel, FlagChangesMoveProxiesBetweenTrees) {
     EXPECT_GE(mx.x(), btScalar(1.4));
 }
 
-/// Pairs of leaves that did not move carry over between steps; a pair whose leaf moved is searched again: it goes
-/// when the boxes part, comes back when they meet, and the pairs of objects that stay put stay.
-TEST(ObjectLevel, PairsFollowMovesAndCarryOverOtherwise) {
+/// The pair cache is btDbvtBroadphase's, step by step, whatever moves, rests, changes flags or goes: a pair whose
+/// leaf moved away goes (lazily, as in Bullet), one that moved in comes, resting pairs stay.
+TEST(ObjectLevel, PairCacheIsBulletsStepByStep) {
     ShapeStore shapes;
     btCollisionShape* box = shapes.box(btVector3(btScalar(0.5), btScalar(0.5), btScalar(0.5)));
+    TestWorld reference(PipelineKind::Default);
     TestWorld w(PipelineKind::Cullide, referenceFactory());
-    w.world().setGravity(btVector3(0, 0, 0));
-    w.addBody(box, 1, at(0, 0, 0));
-    w.addBody(box, 1, at(0.9, 0, 0));
-    btRigidBody* mover = w.addBody(box, 1, at(10, 0, 0));
-    w.addBody(box, 1, at(10.9, 0, 0));
-    auto pairs = [&] { return w.broadphase().getOverlappingPairCache()->getNumOverlappingPairs(); };
-    for (int step = 0; step < 4; ++step) w.detectCollisions();  // the leaves settle
-    EXPECT_EQ(pairs(), 2);
-    EXPECT_EQ(w.cullideBroadphase()->getLastFrameStats().carriedPairs, 2u);
-    mover->setWorldTransform(at(30, 0, 0));
-    w.detectCollisions();
-    EXPECT_EQ(pairs(), 1) << "the pair of a leaf that moved away must go";
-    mover->setWorldTransform(at(0.5, 0.9, 0));
-    w.detectCollisions();
-    EXPECT_EQ(pairs(), 3) << "a leaf that moved in must pair with both resting boxes";
+    std::vector<btRigidBody*> movers[2];
+    int k = 0;
+    for (TestWorld* x : {&reference, &w}) {
+        x->world().setGravity(btVector3(0, 0, 0));
+        for (int i = 0; i < 40; ++i) {
+            btRigidBody* b = x->addBody(box, i % 5 == 0 ? 0 : 1, at(0.9 * (i % 8), 0.9 * (i / 8), 0));
+            if (i % 7 == 3) movers[k].push_back(b);
+        }
+        ++k;
+    }
+    auto pairs = [](TestWorld& x) {
+        std::set<std::pair<int, int>> out;
+        btOverlappingPairCache* cache = x.broadphase().getOverlappingPairCache();
+        for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) {
+            const btBroadphasePair& p = cache->getOverlappingPairArrayPtr()[i];
+            const int a = static_cast<btCollisionObject*>(p.m_pProxy0->m_clientObject)->getUserIndex();
+            const int b = static_cast<btCollisionObject*>(p.m_pProxy1->m_clientObject)->getUserIndex();
+            out.insert({std::min(a, b), std::max(a, b)});
+        }
+        return out;
+    };
+    for (int step = 0; step < 30; ++step) {
+        for (int side = 0; side < 2; ++side) {
+            for (std::size_t m = 0; m < movers[side].size(); ++m) {
+                btRigidBody* b = movers[side][m];
+                const double x = 0.9 * double((step + 3 * int(m)) % 12) - 2.0;
+                b->setWorldTransform(at(x, 0.9 * double(m), 0));
+                if (step == 10 + int(m)) b->setCollisionFlags(b->getCollisionFlags() | btCollisionObject::CF_STATIC_OBJECT);
+                if (step == 20 + int(m)) b->setCollisionFlags(b->getCollisionFlags() & ~btCollisionObject::CF_STATIC_OBJECT);
+            }
+        }
+        reference.detectCollisions();
+        w.detectCollisions();
+        ASSERT_EQ(pairs(w), pairs(reference)) << "step " << step;
+        ASSERT_GT(pairs(w).size(), 10u);
+    }
+    EXPECT_EQ(w.cullideBroadphase()->getLastFrameStats().culledPairs, 0u) << "boxes: nobody reads their triangles";
+}
+
+/// Two GImpact tori pushed into each other: interpenetrating, so Bullet's full algorithm runs the pair (the
+/// deep-penetration fallback), and for the next 4 steps the pair skips the culler (nothing it computes would be
+/// read), then is culled again. The contacts are Bullet's at every step.
+TEST(ObjectLevel, InterpenetratingPairsSkipTheCullerForAFewSteps) {
+    ShapeStore shapes;
+    btCollisionShape* torus = shapes.gimpactTorus(2, btScalar(0.4), 24, 8, btScalar(0.01));
+    TestWorld reference(PipelineKind::Default);
+    TestWorld w(PipelineKind::Cullide, referenceFactory());
+    const btQuaternion upright(btVector3(1, 0, 0), SIMD_HALF_PI);
+    for (TestWorld* x : {&reference, &w}) {
+        btGImpactCollisionAlgorithm::registerAlgorithm(&x->dispatcher());
+        x->world().setGravity(btVector3(0, 0, 0));
+        x->addBody(torus, 1, at(0, 0, 0));
+        x->addBody(torus, 1, at(0, 0, 0, upright));  // the rings cross at (+-2, 0, 0): the meshes intersect
+    }
+    std::vector<std::size_t> culled, skipped, penetrating;
+    for (int step = 0; step < 7; ++step) {
+        reference.detectCollisions();
+        w.detectCollisions();
+        const CullideFrameStats& s = w.cullideBroadphase()->getLastFrameStats();
+        culled.push_back(s.culledPairs);
+        skipped.push_back(s.penetratingSkipped);
+        penetrating.push_back(s.interpenetratingPairs);
+        const ContactMap a = contactsOf(reference.world());
+        const ContactMap b = contactsOf(w.world());
+        ASSERT_EQ(a.size(), 1u);
+        ASSERT_EQ(b.size(), 1u);
+        EXPECT_EQ(a.begin()->second.points, b.begin()->second.points) << "step " << step;
+        EXPECT_EQ(a.begin()->second.minDistance, b.begin()->second.minDistance) << "step " << step;
+        const CullideDispatchStats& d = w.cullideDispatcher()->getLastStepStats();
+        EXPECT_EQ(d.cullidePairs + d.fallbackPairs, 1u) << "step " << step;
+    }
+    EXPECT_EQ(culled, (std::vector<std::size_t>{1, 0, 0, 0, 0, 1, 0}));
+    EXPECT_EQ(skipped, (std::vector<std::size_t>{0, 1, 1, 1, 1, 0, 1}));
+    EXPECT_EQ(penetrating, (std::vector<std::size_t>{1, 0, 0, 0, 0, 1, 0}));
 }
 
 }  // namespace

@@ -5,30 +5,27 @@
 //     auto* dispatcher = new cullide::CullideCollisionDispatcher(config, broadphase);  // was: new btCollisionDispatcher(config)
 //
 // Design (see bullet_adapter/README.md for the details and the limits):
-// - The object level is incremental, like btDbvtBroadphase: proxies live in two Bullet btDbvts (leaves that moved
-//   recently, resting ones; fattened leaves), only leaves that moved are searched, pairs of unmoved leaves carry
-//   over. Pairs are decided by the filter alone (group/mask, the overlap filter callback), as in Bullet; the same
-//   trees answer rayTest / aabbTest (convex sweeps, contactTest).
-// - The CULLIDE levels run only for pairs whose narrow phase reads the surviving triangles: GImpact-GImpact and
-//   GImpact-triangle mesh (and hull/compound-triangle mesh with setConvexMeshCulling(true)). The culler gets those
-//   pairs only, meshes as the shape's local triangles plus the body's transform (built once per shape, shared by its
-//   bodies); a pair it proves farther apart than its margin gets no pair. Every other pair goes from the object level
-//   straight to Bullet's algorithms. The pair cache (a btHashedOverlappingPairCache, own or given) is synchronised:
-//   new pairs are added through the cache (filters, ghost pair callback), pairs that can no longer collide are
-//   removed (their algorithms freed through the dispatcher).
-// - Infinite shapes (btStaticPlaneShape, any AABB beyond 1e15) are never rasterised: planes pair by a half-space
-//   test, other huge boxes by an AABB test. Ghost objects keep Bullet's ghost semantics: they pair by AABB overlap
-//   (grown by getGhostPairMargin()) and filters only, eagerly in createProxy/setAabb like btDbvtBroadphase.
-// - A proxy with a non-finite AABB is rejected: one line on stderr per object, a counter, no pairs; nothing else
-//   is affected.
+// - The object level is Bullet's own btDbvtBroadphase, owned by this class: the pair cache holds exactly the pairs
+//   Bullet's default pipeline would (filters, the overlap filter callback, static and kinematic objects in
+//   collision-only worlds, ghost objects, planes, fattened leaves, lazy removal), objects that did not move cost
+//   nothing, and rayTest / aabbTest answer as Bullet's. A proxy with a non-finite AABB is parked (one line on stderr,
+//   a counter, no pairs, filter mask 0 while parked) instead of poisoning the tree: nothing else is affected.
+// - The CULLIDE levels run only for the cache's pairs whose narrow phase reads the surviving triangles
+//   (GImpact-GImpact, GImpact-triangle mesh; hull/compound-triangle mesh with setConvexMeshCulling(true)) or that the
+//   culler decides (GImpact against a convex shape), and that the dispatcher will process (needsCollision). The
+//   culler gets those pairs only, meshes as the shape's local triangles plus the body's transform (built once per
+//   shape, shared by its bodies; static objects world-space, cached between steps). Planes and infinite boxes are
+//   never culled. Every other pair goes from the object level straight to Bullet's algorithms.
+// - The hand-off to CullideCollisionDispatcher is a per-pair record (trianglePairsFor), valid only for the shapes
+//   and transforms the pair had in calculateOverlappingPairs(): the surviving triangles, or `pruned` for a pair the
+//   culler proved farther apart than its margin (it stays in the cache, as in Bullet; the narrow phase makes no
+//   contact for it). A pair without a record runs Bullet's own algorithm.
 // - The culler's distance margin d is what the frame's narrow phase needs, recomputed every step: for GImpact
 //   pairs 2.2 * the largest GImpact margin (plus float slack at large coordinates; GImpact's triangle routine
 //   reports points within the sum of the two margins and rebuilds its manifold every frame), for pairs with
 //   persistent convex manifolds the margins plus 1.5 * the contact breaking threshold (size-relative, as Bullet's
 //   dispatcher computes it by default). Every triangle pair that Bullet's narrow phase could turn into a contact
-//   point, or keep a persistent one alive, survives. The surviving candidate triangle pairs of GImpact-GImpact pairs
-//   and the mesh's surviving triangles of hull-, compound- and GImpact-vs-triangle-mesh pairs are kept for
-//   CullideCollisionDispatcher (trianglePairsFor); Bullet's own triangle routines are the exact test (the culler
+//   point, or keep a persistent one alive, survives. Bullet's own triangle routines are the exact test (the culler
 //   runs with Settings::exactTriangles = false). Interpenetrating GImpact pairs get Bullet's full algorithm
 //   (setDeepPenetrationFallback).
 #pragma once
@@ -85,39 +82,36 @@ struct PairTriangles {
     /// their vertices in the mesh's local frame exactly as Bullet's processAllTriangles yields them (3 per triangle).
     std::vector<BulletTriangle> meshTriangles;
     std::vector<btVector3> meshTriangleVertices;
+    /// The culler proved the pair farther apart than its margin (or rejected one of its objects): no triangle of it
+    /// can make a contact point this step, and the dispatcher makes none (the lists above are empty).
+    bool pruned = false;
 };
 
 /// Statistics of the last calculateOverlappingPairs().
 struct CullideFrameStats {
     std::size_t proxies = 0;
-    /// Object level: pairs of overlapping (fattened) boxes that the pair cache's filter admits.
+    /// Object level (Bullet's btDbvtBroadphase): pairs in the cache.
     std::size_t objectPairs = 0;
-    /// ... of which carried over from the last frame (neither leaf moved: not searched again)
-    std::size_t carriedPairs = 0;
-    /// ... of which went through the culler (their narrow phase reads triangles: GImpact-GImpact, GImpact-mesh).
+    /// ... of which went through the culler (their narrow phase reads triangles, or the culler decides them).
     std::size_t culledPairs = 0;
-    /// ... of which the culler proved farther apart than the margin: no pair.
+    /// ... of which the culler proved farther apart than the margin: recorded as pruned, no contact this step.
     std::size_t prunedPairs = 0;
+    std::size_t cullerPairs = 0;         ///< culled pairs the culler kept
     std::size_t culledObjects = 0;       ///< objects handed to the culler (those of culled pairs)
     std::size_t meshObjects = 0;         ///< ... of which with triangle geometry
     std::size_t triangles = 0;           ///< triangles handed to the culler
-    std::size_t staticObjectsSkipped = 0;  ///< static objects not handed to the culler
-    std::size_t infiniteObjects = 0;
-    std::size_t ghostObjects = 0;
-    std::size_t rejectedObjects = 0;     ///< invalid AABBs or geometry this frame
-    std::size_t cullerPairs = 0;         ///< culled pairs the culler kept
-    std::size_t infinitePairs = 0;       ///< pairs with planes / infinite boxes
-    std::size_t ghostPairs = 0;
-    std::size_t pairs = 0;               ///< pairs in the cache after the update
-    std::size_t pairsAdded = 0;
-    std::size_t pairsRemoved = 0;
+    std::size_t rejectedObjects = 0;     ///< parked (non-finite AABB) or rejected by the culler this frame
     std::size_t pcsTriangles = 0;        ///< triangles that survived culling (the triangle-level PCS), all objects
     std::size_t trianglePairs = 0;       ///< surviving triangle pairs kept for the dispatcher
     std::size_t interpenetratingPairs = 0;  ///< GImpact pairs whose meshes intersect (see setDeepPenetrationFallback)
+    /// GImpact pairs that interpenetrated in one of the last 4 steps: not culled, Bullet's full algorithm (with the
+    /// fallback on, such a pair reads nothing the culler computes; it is culled again after 4 steps).
+    std::size_t penetratingSkipped = 0;
     double margin = 0.0;                 ///< the culler's distance margin d this frame
-    double buildMs = 0.0;                ///< object level and the culling frame
+    double objectLevelMs = 0.0;          ///< btDbvtBroadphase::calculateOverlappingPairs
+    double buildMs = 0.0;                ///< finding the culled pairs and building the culling frame
     double cullMs = 0.0;                 ///< culler run
-    double syncMs = 0.0;                 ///< pair cache update
+    double recordMs = 0.0;               ///< records for the dispatcher
     double totalMs = 0.0;
     Stats culler;                        ///< the culler's own statistics
 };
@@ -161,9 +155,9 @@ public:
 
     // ---- CULLIDE ----
     /// The surviving triangles for the pair of the two wrapped objects, computed by the last
-    /// calculateOverlappingPairs(), or nullptr when there are none to trust: not a GImpact-GImpact pair or a
-    /// hull/compound/GImpact-vs-triangle-mesh pair of this broadphase, a child wrapper other than a compound's
-    /// child, or either object moved since.
+    /// calculateOverlappingPairs(), or nullptr when there are none to trust: a pair the culler did not see or kept
+    /// without triangles (a convex side), a child wrapper other than a compound's child, or either object moved or
+    /// changed shape since. A pair the culler pruned has a record with `pruned` set.
     /// `swapped` is set when body0Wrap is the record's second object.
     const PairTriangles* trianglePairsFor(const btCollisionObjectWrapper* body0Wrap,
                                           const btCollisionObjectWrapper* body1Wrap, bool& swapped) const;
@@ -172,19 +166,14 @@ public:
     /// detected every step by a content hash.
     void invalidateShape(const btCollisionShape* shape);
 
-    /// Ghost objects pair with every object whose AABB comes within this distance of theirs (default 0.1).
-    /// btDbvtBroadphase's fattened leaves and lazy pair removal give ghosts such slack, and
-    /// btKinematicCharacterController sweeps only against its ghost's pairs: use at least the distance a
-    /// character moves per step.
-    void setGhostPairMargin(btScalar margin);
-    btScalar getGhostPairMargin() const;
-
     /// GImpact-GImpact pairs whose meshes intersect (exact test on the surviving triangle pairs) get Bullet's full
     /// GImpact algorithm for that step (default: on). GImpact's clip method also makes penetration contacts from
     /// triangle pairs that are far apart but whose boxes overlap; only such pairs, deep inside the other mesh, make
     /// them, and CULLIDE's near pairs do not include them. With the fallback the contacts of interpenetrating pairs
     /// are exactly Bullet's; without it they come from the near pairs only (faster when meshes often intersect, but
-    /// the deepest penetration can be under-reported). Resting contacts within the margins are not affected.
+    /// the deepest penetration can be under-reported). Resting contacts within the margins are not affected. With
+    /// the fallback on, a pair found interpenetrating skips the culler for the next 4 steps (Bullet's full algorithm
+    /// runs it: Bullet's contacts, without paying for culling it would not read), then is culled again.
     void setDeepPenetrationFallback(bool enable);
     bool getDeepPenetrationFallback() const;
 
@@ -192,7 +181,9 @@ public:
     /// dispatcher's convex-concave algorithm reads only the mesh triangles CULLIDE kept near the hull; off, such
     /// pairs go from the object level straight to Bullet's algorithm, whose own BVH query of the mesh is already
     /// cheap: measured on 1,000 hulls over a 32K-triangle landscape (docs/benchmarks.md, cullide-swap-bench), the
-    /// culling costs more than the narrow phase it saves on the CPU path. GImpact pairs are always culled.
+    /// culling costs more than the narrow phase it saves on the CPU path. GImpact pairs are always culled. Set it
+    /// before the first step: CullideCollisionDispatcher picks the culled hull/compound-mesh algorithm when a pair's
+    /// algorithm is created (pairs created while it is off keep Bullet's own algorithm, which stays correct).
     void setConvexMeshCulling(bool enable);
     bool getConvexMeshCulling() const;
 
