@@ -283,6 +283,18 @@ std::size_t TestWorld::lastPairCount() const {
 
 // ---------------------------------------------------------------------------------------------------------------
 
+std::set<std::pair<int, int>> pairsOf(btCollisionWorld& world) {
+    std::set<std::pair<int, int>> out;
+    btOverlappingPairCache* cache = world.getPairCache();
+    for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) {
+        const btBroadphasePair& p = cache->getOverlappingPairArrayPtr()[i];
+        const int a = static_cast<btCollisionObject*>(p.m_pProxy0->m_clientObject)->getUserIndex();
+        const int b = static_cast<btCollisionObject*>(p.m_pProxy1->m_clientObject)->getUserIndex();
+        out.insert({std::min(a, b), std::max(a, b)});
+    }
+    return out;
+}
+
 ContactMap contactsOf(btCollisionWorld& world) {
     ContactMap out;
     btDispatcher* dispatcher = world.getDispatcher();

@@ -12,6 +12,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
@@ -112,6 +113,9 @@ using ContactMap = std::map<std::pair<int, int>, PairContacts>;
 
 /// Every manifold point of the world (after a detection or step), keyed by (min index, max index).
 ContactMap contactsOf(btCollisionWorld& world);
+
+/// The pairs in the world's pair cache, as (min user index, max user index).
+std::set<std::pair<int, int>> pairsOf(btCollisionWorld& world);
 
 /// Makes `to` mirror `from`: transforms, velocities, activation state of every rigid body (by index).
 void mirrorState(TestWorld& from, TestWorld& to);

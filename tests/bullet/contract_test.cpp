@@ -20,18 +20,6 @@
 namespace cullide::test {
 namespace {
 
-std::set<std::pair<int, int>> pairsOf(btCollisionWorld& w) {
-    std::set<std::pair<int, int>> out;
-    btOverlappingPairCache* cache = w.getPairCache();
-    for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) {
-        const btBroadphasePair& p = cache->getOverlappingPairArrayPtr()[i];
-        const int a = static_cast<btCollisionObject*>(p.m_pProxy0->m_clientObject)->getUserIndex();
-        const int b = static_cast<btCollisionObject*>(p.m_pProxy1->m_clientObject)->getUserIndex();
-        out.insert({std::min(a, b), std::max(a, b)});
-    }
-    return out;
-}
-
 // In a dynamics world, addCollisionObject (like addRigidBody for static bodies) gives StaticFilter and a mask without
 // it, so the overlapping static boxes and the plane do not pair: the filter decides, not the static flag
 // (tests/bullet/collision_world_test.cpp has the collision world, where they pair). The plane pairs with every

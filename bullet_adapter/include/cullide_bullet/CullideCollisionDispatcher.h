@@ -13,6 +13,8 @@
 //   from the convex shape's local box than 1.5 * (triangle margin + contact breaking threshold): they cannot make a
 //   point. Bullet's query box is the convex shape's AABB in the mesh's frame; for a ground box that is most of the
 //   mesh, and every candidate costs a GJK run. The contacts are Bullet's, point for point.
+// - A pair the broadphase recorded as pruned (the culler proved it farther apart than its margin) makes no contact:
+//   its algorithm clears its manifold and returns. A pair recorded as interpenetrating runs Bullet's full algorithm.
 // - Everything else (primitives, compound-compound and compound-convex per child, planes, soft bodies) goes to
 //   Bullet's algorithms unchanged; so does any pair for which the broadphase has no fresh triangle
 //   data (a character controller's private pair cache after the ghost moved, contactTest, another broadphase).
