@@ -376,7 +376,7 @@ struct Row {
     std::size_t contactPairSteps = 0, lost = 0, extra = 0;
     cullide::CullideFrameStats last;
     double cullidePairs = 0, fallbackPairs = 0, penetrationPairs = 0;  ///< dispatcher, per step
-    double buildMs = 0, cullMs = 0, syncMs = 0;  ///< CullideBroadphase's stages, per step
+    double buildMs = 0, cullMs = 0, recordMs = 0;  ///< CullideBroadphase's stages, per step
     /// Lost pairs explained (explainLost, the first kLostChecks), and of those the meshes without a triangle pair
     /// within the culling margin at the detected state.
     std::size_t lostChecked = 0, lostApart = 0;
@@ -512,7 +512,7 @@ Row runScene(const SceneFactory& factory, int steps) {
         const auto& b = static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get())->getLastFrameStats();
         row.buildMs += b.buildMs / steps;
         row.cullMs += b.cullMs / steps;
-        row.syncMs += b.recordMs / steps;
+        row.recordMs += b.recordMs / steps;
         for (std::size_t k = 1; k < worlds.size(); ++k) worlds[k]->copyStatesFrom(*worlds[0]);
     }
     for (std::size_t k = 0; k < worlds.size(); ++k) {
@@ -534,7 +534,7 @@ void printRow(const Row& r) {
                 "GImpact-convex triangles %.0f of %.0f\n",
                 r.scene.c_str(), r.bodies, r.steps, r.ms[0], r.ms[1], r.ms[2], r.ms[2] / best, r.broadphaseMs[0],
                 r.broadphaseMs[2], r.narrowMs[0], r.narrowMs[2], r.pairs[0], r.pairs[2], r.lost, r.contactPairSteps,
-                r.lostChecked, r.lostApart, r.extra, r.cullidePairs, r.fallbackPairs, r.penetrationPairs, r.buildMs, r.cullMs, r.syncMs, r.last.objectPairs,
+                r.lostChecked, r.lostApart, r.extra, r.cullidePairs, r.fallbackPairs, r.penetrationPairs, r.buildMs, r.cullMs, r.recordMs, r.last.objectPairs,
                 r.last.prunedPairs, r.pointsMissing, r.points, r.deepestDiffMax,
                 r.comparedPairSteps ? r.deepestDiffSum / double(r.comparedPairSteps) : 0.0, r.comparedPairSteps,
                 r.convexTriangles, r.convexCandidates);

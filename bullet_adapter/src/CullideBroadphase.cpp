@@ -162,8 +162,8 @@ struct TriangleBoxes {
 /// pairs Bullet's default pipeline would hand to its narrow phase. What is added:
 /// - a guard for non-finite AABBs (they would poison the tree's volumes for every object): such a proxy is parked
 ///   far away with a filter mask of 0 and its pairs removed until it gets a finite box again;
-/// - the culling of pairs whose narrow phase reads triangles (CullingFrame, then PairRecords): the culler's verdict
-///   and surviving triangles are recorded per pair for CullideCollisionDispatcher. A pair the culler proves farther
+/// - the culling of pairs whose narrow phase reads triangles (collectCandidates, buildCullFrame, runCuller): the
+///   culler's verdict and surviving triangles are recorded per pair for CullideCollisionDispatcher (recordVerdicts). A pair the culler proves farther
 ///   apart than the margin stays in the cache, as in Bullet, and its narrow phase reports nothing.
 struct CullideBroadphase::Impl {
     // ---- the object level ----
@@ -258,8 +258,8 @@ struct CullideBroadphase::Impl {
         cache()->removeOverlappingPairsContainingProxy(p, dispatcher);
         std::fprintf(stderr,
                      "cullide::CullideBroadphase: %s: collision object %p (proxy %d) rejected: %s. It gets no pairs "
-                     "until its AABB is finite again; every other object is unaffected. (Reported once per "
-                     "occurrence; getRejectedCount() counts every call.)\n",
+                     "until its AABB is finite again; every other object is unaffected. (Reported each time it is "
+                     "parked; getRejectedCount() counts every call.)\n",
                      where, static_cast<const void*>(objectOf(p)), p->m_uniqueId, why.c_str());
     }
 
@@ -685,7 +685,6 @@ struct CullideBroadphase::Impl {
         if (!candidates.empty()) {
             buildCullFrame();
             const bool ready = cullerReady(dispatcher);
-            stats.margin = margin;
             stats.buildMs = build.ms();
             cullide::Timer cull;
             const bool ran = ready && runCuller();

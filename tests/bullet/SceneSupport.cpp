@@ -75,7 +75,7 @@ MirrorRun runMirrored(TestWorld& reference, TestWorld& cullide, const MirrorOpti
             const CullideFrameStats& f = bp->getLastFrameStats();
             run.buildMs += f.buildMs;
             run.cullMs += f.cullMs;
-            run.syncMs += f.recordMs;
+            run.recordMs += f.recordMs;
             run.prepassMs += f.culler.prepassMs;
             run.uploadMs += f.culler.uploadMs;
             run.gpuLevelsMs += f.culler.gpuLevelsMs;
@@ -100,9 +100,9 @@ void printMirrorRun(const char* scene, const MirrorRun& run) {
                 double(run.cullidePairsFromTriangles) / n, double(run.cullideTrianglePairs) / n,
                 double(run.fallbackPairs) / n, double(run.penetrationPairs) / n);
     std::printf("  cullide broadphase breakdown (ms/step): build %.3f, cull %.3f (pre-pass %.3f, upload %.3f, GPU "
-                "levels %.3f, exact %.3f), pair sync %.3f; %.0f triangles and %.1f culler pairs/step\n",
+                "levels %.3f, exact %.3f), records %.3f; %.0f triangles and %.1f culler pairs/step\n",
                 run.buildMs / n, run.cullMs / n, run.prepassMs / n, run.uploadMs / n, run.gpuLevelsMs / n,
-                run.exactMs / n, run.syncMs / n, double(run.cullerTriangles) / n, double(run.cullerPairs) / n);
+                run.exactMs / n, run.recordMs / n, double(run.cullerTriangles) / n, double(run.cullerPairs) / n);
     const ContactAgreement& a = run.agreement;
     std::printf("  contacts: %zu pair-steps with contacts (default), %zu missing under CULLIDE, %zu over tolerance "
                 "(max |min-distance diff| %.2e), %zu pair-steps with contacts only under CULLIDE; %zu pair-steps "

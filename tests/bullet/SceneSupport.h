@@ -31,7 +31,7 @@ struct MirrorRun {
     std::size_t penetrationPairs = 0;  ///< interpenetrating GImpact pair-steps given Bullet's full algorithm
     std::size_t steps = 0;
     /// Sums of the CULLIDE broadphase's per-frame breakdown.
-    double buildMs = 0.0, cullMs = 0.0, syncMs = 0.0, prepassMs = 0.0, uploadMs = 0.0, gpuLevelsMs = 0.0,
+    double buildMs = 0.0, cullMs = 0.0, recordMs = 0.0, prepassMs = 0.0, uploadMs = 0.0, gpuLevelsMs = 0.0,
            exactMs = 0.0;
     std::size_t cullerPairs = 0, cullerTriangles = 0;
     /// Triangle-level coverage: (pair, triangle pair) keys that produced a contact point under the default
