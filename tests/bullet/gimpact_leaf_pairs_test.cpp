@@ -1,0 +1,167 @@
+// detail::findLeafPairs against Bullet's own btGImpactQuantizedBvh::find_collision: the same primitive pairs in the
+// same order, for tori in many relative poses (apart, touching, interpenetrating, coincident, scaled, one triangle).
+#include "BulletTestWorld.h"
+#include "GImpactLeafPairs.h"
+
+#include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
+#include <BulletCollision/Gimpact/btGImpactShape.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <vector>
+
+namespace cullide::test {
+namespace {
+
+std::vector<int> bulletPairs(const btGImpactBoxSet& set0, const btTransform& t0, const btGImpactBoxSet& set1,
+                             const btTransform& t1) {
+    btPairSet pairs;
+    btGImpactBoxSet::find_collision(&set0, t0, &set1, t1, pairs);
+    std::vector<int> out;
+    for (int i = 0; i < pairs.size(); ++i) {
+        out.push_back(pairs[i].m_index1);
+        out.push_back(pairs[i].m_index2);
+    }
+    return out;
+}
+
+std::vector<int> ourPairs(const btGImpactBoxSet& set0, const btTransform& t0, const btGImpactBoxSet& set1,
+                          const btTransform& t1) {
+    detail::LeafPairScratch scratch;
+    std::vector<int> out;
+    detail::findLeafPairs(set0, t0, set1, t1, scratch, out);
+    return out;
+}
+
+const btGImpactBoxSet& boxSetOf(btCollisionShape* shape) {
+    return *static_cast<btGImpactMeshShape*>(shape)->getMeshPart(0)->getBoxSet();
+}
+
+btTransform randomPose(std::mt19937& rng, btScalar spread) {
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    btQuaternion q(u(rng), u(rng), u(rng), u(rng) + 1.5f);
+    q.normalize();
+    return btTransform(q, btVector3(spread * u(rng), spread * u(rng), spread * u(rng)));
+}
+
+TEST(GImpactLeafPairs, SamePairsInBulletsOrder) {
+    ShapeStore shapes;
+    btCollisionShape* big = shapes.gimpactTorus(1.0f, 0.35f, 32, 16, 0.02f);
+    btCollisionShape* small = shapes.gimpactTorus(0.6f, 0.2f, 12, 8, 0.0f);
+    const btGImpactBoxSet* sets[] = {&boxSetOf(big), &boxSetOf(small)};
+    std::mt19937 rng(7);
+    int posesWithPairs = 0;
+    std::size_t largest = 0;
+    for (int trial = 0; trial < 300; ++trial) {
+        const btGImpactBoxSet& a = *sets[trial % 2];
+        const btGImpactBoxSet& b = *sets[(trial / 2) % 2];
+        const btScalar spread = trial < 100 ? btScalar(0.3) : trial < 200 ? btScalar(1.5) : btScalar(3.0);
+        const btTransform t0 = randomPose(rng, spread);
+        const btTransform t1 = trial % 17 == 0 ? t0 : randomPose(rng, spread);  // coincident now and then
+        const std::vector<int> expected = bulletPairs(a, t0, b, t1);
+        ASSERT_EQ(ourPairs(a, t0, b, t1), expected) << "trial " << trial;
+        if (!expected.empty()) ++posesWithPairs;
+        largest = std::max(largest, expected.size() / 2);
+    }
+    // The poses must exercise the search: most overlap, some heavily (not a test of empty lists).
+    EXPECT_GT(posesWithPairs, 150);
+    EXPECT_GT(largest, 1000u);
+}
+
+TEST(GImpactLeafPairs, FarAwayFromTheOriginAndScaled) {
+    ShapeStore shapes;
+    auto* torus = static_cast<btGImpactMeshShape*>(shapes.gimpactTorus(1.0f, 0.35f, 24, 12, 0.01f));
+    torus->setLocalScaling(btVector3(2.0f, 0.5f, 1.0f));
+    torus->updateBound();
+    const btGImpactBoxSet& set = *torus->getMeshPart(0)->getBoxSet();
+    std::mt19937 rng(11);
+    for (int trial = 0; trial < 60; ++trial) {
+        btTransform t0 = randomPose(rng, 0.5f);
+        btTransform t1 = randomPose(rng, 0.5f);
+        const btVector3 far(btScalar(1e4) * btScalar(trial), btScalar(-3e3), btScalar(2e4));
+        t0.setOrigin(t0.getOrigin() + far);
+        t1.setOrigin(t1.getOrigin() + far);
+        ASSERT_EQ(ourPairs(set, t0, set, t1), bulletPairs(set, t0, set, t1)) << "trial " << trial;
+    }
+}
+
+TEST(GImpactLeafPairs, SmallTreeAgainstLargeTree) {
+    ShapeStore shapes;
+    btCollisionShape* one = shapes.gimpactTorus(1.0f, 0.3f, 3, 3, 0.0f);  // 18 triangles, a shallow tree
+    btCollisionShape* many = shapes.gimpactTorus(1.0f, 0.3f, 16, 8, 0.0f);
+    std::mt19937 rng(3);
+    for (int trial = 0; trial < 100; ++trial) {
+        const btTransform t0 = randomPose(rng, 0.5f);
+        const btTransform t1 = randomPose(rng, 0.5f);
+        ASSERT_EQ(ourPairs(boxSetOf(one), t0, boxSetOf(many), t1), bulletPairs(boxSetOf(one), t0, boxSetOf(many), t1));
+        ASSERT_EQ(ourPairs(boxSetOf(many), t0, boxSetOf(one), t1), bulletPairs(boxSetOf(many), t0, boxSetOf(one), t1));
+    }
+}
+
+}  // namespace
+}  // namespace cullide::test
+
+namespace cullide::test {
+namespace {
+
+/// Every manifold point of the world with everything Bullet stores about it that the narrow phase sets.
+std::vector<std::vector<btScalar>> manifoldPoints(btCollisionWorld& world) {
+    std::vector<std::vector<btScalar>> out;
+    btDispatcher* d = world.getDispatcher();
+    for (int m = 0; m < d->getNumManifolds(); ++m) {
+        const btPersistentManifold* manifold = d->getManifoldByIndexInternal(m);
+        const int a = manifold->getBody0()->getUserIndex(), b = manifold->getBody1()->getUserIndex();
+        for (int i = 0; i < manifold->getNumContacts(); ++i) {
+            const btManifoldPoint& p = manifold->getContactPoint(i);
+            out.push_back({btScalar(a), btScalar(b), btScalar(p.m_partId0), btScalar(p.m_index0), btScalar(p.m_partId1),
+                           btScalar(p.m_index1), p.m_positionWorldOnA.x(), p.m_positionWorldOnA.y(),
+                           p.m_positionWorldOnA.z(), p.m_positionWorldOnB.x(), p.m_positionWorldOnB.y(),
+                           p.m_positionWorldOnB.z(), p.m_normalWorldOnB.x(), p.m_normalWorldOnB.y(),
+                           p.m_normalWorldOnB.z(), p.m_distance1});
+        }
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+// With the deep-penetration fallback on (the default), an interpenetrating GImpact pair gets Bullet's contacts: the
+// dispatcher runs Bullet's pair search and triangle routine through findLeafPairs and triangles mapped once. Every
+// manifold point, bit for bit, against Bullet's own pipeline, for crossing tori in many poses.
+TEST(GImpactInterpenetrating, ContactsAreBulletsBitForBit) {
+    ShapeStore shapes;
+    btCollisionShape* torus = shapes.gimpactTorus(2, btScalar(0.5), 32, 12, btScalar(0.01));
+    TestWorld reference(PipelineKind::Default);
+    TestWorld w(PipelineKind::Cullide, referenceFactory());
+    std::vector<btRigidBody*> bodies[2];
+    int i = 0;
+    for (TestWorld* x : {&reference, &w}) {
+        btGImpactCollisionAlgorithm::registerAlgorithm(&x->dispatcher());
+        x->world().setGravity(btVector3(0, 0, 0));
+        bodies[i].push_back(x->addBody(torus, 1, btTransform::getIdentity()));
+        bodies[i].push_back(x->addBody(torus, 1, btTransform::getIdentity()));
+        ++i;
+    }
+    std::mt19937 rng(5);
+    std::size_t points = 0;
+    std::size_t penetrating = 0;
+    for (int pose = 0; pose < 24; ++pose) {
+        const btTransform t0 = randomPose(rng, 0.3f);
+        const btTransform t1 = randomPose(rng, 0.3f);  // two rings of radius 2 around nearly one centre: they cross
+        for (int k = 0; k < 2; ++k) {
+            bodies[k][0]->setWorldTransform(t0);
+            bodies[k][1]->setWorldTransform(t1);
+        }
+        reference.detectCollisions(0);
+        w.detectCollisions(0);
+        const auto expected = manifoldPoints(reference.world());
+        ASSERT_EQ(manifoldPoints(w.world()), expected) << "pose " << pose;
+        points += expected.size();
+        penetrating += w.cullideDispatcher()->getLastStepStats().penetrationPairs;
+    }
+    EXPECT_GT(points, 24u);       // contacts in (nearly) every pose
+    EXPECT_GT(penetrating, 12u);  // and through the interpenetrating path, not the culled one
+}
+
+}  // namespace
+}  // namespace cullide::test
