@@ -2,7 +2,8 @@
 // btCollisionDispatcher), with btAxisSweep3, and with the README's two-line swap (CullideBroadphase +
 // CullideCollisionDispatcher), side by side in one process (issue #12, item 7).
 //
-//   cullide-swap-bench [--steps N] [--scene NAME]... [--json FILE] [--no-penetration-fallback]
+//   cullide-swap-bench [--steps N] [--scene NAME]... [--json FILE] [--gimpact-pair-culling]
+//                      [--no-penetration-fallback]
 //
 // The worlds run in lockstep: every step each world is stepped once (timed, the order rotating), then the default
 // world's body states are copied into the others, so all three detect collisions on identical states every step.
@@ -47,6 +48,8 @@ using Random = cullide::bench::SeededRandom;
 
 /// CullideBroadphase::setDeepPenetrationFallback for the CULLIDE world (--no-penetration-fallback clears it).
 bool g_penetrationFallback = true;
+/// CullideBroadphase::setGImpactPairCulling for the CULLIDE world (--gimpact-pair-culling sets it).
+bool g_gimpactPairCulling = false;
 
 /// Shapes and mesh data shared by the three worlds of a scene (one set, as an application would share them).
 struct Shapes {
@@ -276,6 +279,7 @@ struct World {
             auto bp = std::make_unique<cullide::CullideBroadphase>();
             if (std::getenv("SWAP_BENCH_CONVEX_MESH") != nullptr) bp->setConvexMeshCulling(true);
             bp->setDeepPenetrationFallback(g_penetrationFallback);
+            bp->setGImpactPairCulling(g_gimpactPairCulling);
             dispatcher = std::make_unique<cullide::CullideCollisionDispatcher>(&config, bp.get());
             broadphase = std::move(bp);
         } else {
@@ -580,11 +584,13 @@ int main(int argc, char** argv) {
             only.emplace_back(argv[++i]);
         } else if (a == "--no-penetration-fallback") {
             g_penetrationFallback = false;
+        } else if (a == "--gimpact-pair-culling") {
+            g_gimpactPairCulling = true;
         } else if (a == "--json" && i + 1 < argc) {
             json = argv[++i];
         } else {
             std::fprintf(stderr, "usage: cullide-swap-bench [--steps N] [--scene NAME]... [--json FILE] "
-                                 "[--no-penetration-fallback]\nscenes:");
+                                 "[--gimpact-pair-culling] [--no-penetration-fallback]\nscenes:");
             for (const SceneFactory& f : kScenes) std::fprintf(stderr, " %s", f.name);
             std::fprintf(stderr, "\n");
             return 2;

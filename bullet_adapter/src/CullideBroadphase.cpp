@@ -183,6 +183,7 @@ struct CullideBroadphase::Impl {
     bool deepPenetrationFallback = true;
     /// Hulls and compounds against triangle meshes go through the culler's levels (see trianglesConsumed).
     bool convexMeshCulling = false;
+    bool gimpactPairCulling = false;
 
     // ---- the culling frame: objects of culled pairs ----
     std::unordered_map<const btBroadphaseProxy*, CulledObject> culledObjects;
@@ -364,7 +365,7 @@ struct CullideBroadphase::Impl {
         if (!mayBe(sa) && !mayBe(sb)) return false;
         const bullet::GeometryKind ka = bullet::geometryKindOf(sa);
         const bullet::GeometryKind kb = bullet::geometryKindOf(sb);
-        if (!bullet::trianglesConsumed(ka, kb, convexMeshCulling) &&
+        if (!bullet::trianglesConsumed(ka, kb, convexMeshCulling, gimpactPairCulling) &&
             !bullet::prunedByCuller(ka, sa->isConvex(), kb, sb->isConvex()))
             return false;
         return parked.count(a) == 0 && parked.count(b) == 0 && !infiniteBox(a) && !infiniteBox(b);
@@ -827,6 +828,9 @@ bool CullideBroadphase::getDeepPenetrationFallback() const { return m_impl->deep
 
 void CullideBroadphase::setConvexMeshCulling(bool enable) { m_impl->convexMeshCulling = enable; }
 bool CullideBroadphase::getConvexMeshCulling() const { return m_impl->convexMeshCulling; }
+
+void CullideBroadphase::setGImpactPairCulling(bool enable) { m_impl->gimpactPairCulling = enable; }
+bool CullideBroadphase::getGImpactPairCulling() const { return m_impl->gimpactPairCulling; }
 
 const CullideFrameStats& CullideBroadphase::getLastFrameStats() const { return m_impl->stats; }
 std::size_t CullideBroadphase::getRejectedCount() const { return m_impl->rejectedTotal; }

@@ -258,10 +258,15 @@ public:
         CullideDispatchStats& stats = *statsPtr;
         const auto* shape0 = static_cast<const btGImpactMeshShape*>(body0Wrap->getCollisionShape());
         const auto* shape1 = static_cast<const btGImpactMeshShape*>(body1Wrap->getCollisionShape());
-        if (triangles == nullptr || !allPartsHaveBoxSets(*shape0) || !allPartsHaveBoxSets(*shape1)) {
-            // Nothing culled to trust, or a part without a box set (Bullet then tests child boxes; let it).
+        if (!allPartsHaveBoxSets(*shape0) || !allPartsHaveBoxSets(*shape1)) {
+            // A part without a box set: Bullet then tests child boxes; let it.
             ++stats.fallbackPairs;
             btGImpactCollisionAlgorithm::processCollision(body0Wrap, body1Wrap, dispatchInfo, resultOut);
+            return;
+        }
+        if (triangles == nullptr) {  // not culled (the default for GImpact-GImpact): Bullet's contacts
+            ++stats.fallbackPairs;
+            processAsBullet(body0Wrap, body1Wrap, *shape0, *shape1, dispatchInfo, resultOut);
             return;
         }
         ++stats.cullidePairs;

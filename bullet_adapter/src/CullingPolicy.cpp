@@ -4,9 +4,10 @@
 
 namespace cullide::bullet {
 
-bool trianglesConsumed(GeometryKind a, GeometryKind b, bool convexVsMesh) {
+bool trianglesConsumed(GeometryKind a, GeometryKind b, bool convexVsMesh, bool gimpactVsGimpact) {
     if (a > b) std::swap(a, b);  // enum order: None, GImpactMesh, TriangleMesh, ConvexHull, Compound
-    if (a == GeometryKind::GImpactMesh) return b == GeometryKind::GImpactMesh || b == GeometryKind::TriangleMesh;
+    if (a == GeometryKind::GImpactMesh)
+        return (gimpactVsGimpact && b == GeometryKind::GImpactMesh) || b == GeometryKind::TriangleMesh;
     if (a == GeometryKind::TriangleMesh)
         return convexVsMesh && (b == GeometryKind::ConvexHull || b == GeometryKind::Compound);
     return false;

@@ -9,10 +9,11 @@
 namespace cullide::bullet {
 
 /// Whether the pair's narrow phase reads the culler's surviving triangles (CullideCollisionDispatcher), so that the
-/// CULLIDE levels run for it: GImpact against GImpact or against a triangle mesh, and, when `convexVsMesh` is set,
-/// convex hulls and compounds against a triangle mesh. Every other pair (primitives, hull-hull, hull-GImpact, ...)
-/// goes from the object level straight to Bullet's algorithms: nobody would read its triangles.
-bool trianglesConsumed(GeometryKind a, GeometryKind b, bool convexVsMesh);
+/// CULLIDE levels run for it: GImpact against a triangle mesh, GImpact against GImpact when `gimpactVsGimpact` is set,
+/// and, when `convexVsMesh` is set, convex hulls and compounds against a triangle mesh. Every other pair (primitives,
+/// hull-hull, hull-GImpact, GImpact-GImpact by default, ...) goes from the object level straight to the dispatcher's
+/// algorithms: nobody would read its triangles.
+bool trianglesConsumed(GeometryKind a, GeometryKind b, bool convexVsMesh, bool gimpactVsGimpact);
 
 /// Whether the culler decides a pair that reads no triangles: a GImpact mesh against a convex shape (a hull, a
 /// compound of convex children, or a convex primitive: `convexA`/`convexB`). Bullet's algorithm for such a pair

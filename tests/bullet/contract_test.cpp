@@ -197,6 +197,7 @@ TEST(BulletContract, AlgorithmsFitThePoolAndCustomRegistrationsWin) {
     btCollisionShape* hull = shapes.hull(btVector3(btScalar(0.5), btScalar(0.5), btScalar(0.5)), 16, 4);
     btEmptyAlgorithm::CreateFunc empty;  // registered below; outlives the world
     TestWorld w(PipelineKind::Cullide, referenceFactory());
+    w.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
     w.cullideBroadphase()->setConvexMeshCulling(true);  // hull-ground through CULLIDE too
     btGImpactCollisionAlgorithm::registerAlgorithm(&w.dispatcher());
     w.addBody(ground, 0, btTransform::getIdentity());
@@ -307,6 +308,7 @@ TEST(BulletContract, CullerRecreationFailureFallsBackToAabbPairs) {
     };
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide, onlyOnce);
+    cullide.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
     populateTori(reference, shapes, btScalar(0.2));  // needs d > 0.4
     populateTori(cullide, shapes, btScalar(0.2));
     testing::internal::CaptureStderr();
@@ -334,6 +336,7 @@ TEST(BulletContract, CullerShrinkFailureKeepsTheSoundCuller) {
         };
         TestWorld reference(PipelineKind::Default);
         TestWorld cullide(PipelineKind::Cullide, onlyOnce);
+        cullide.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
         populateTori(reference, shapes, btScalar(0.01));  // needs d 0.022
         populateTori(cullide, shapes, btScalar(0.01));
         testing::internal::CaptureStderr();

@@ -16,19 +16,22 @@ TEST(CullingPolicy, OnlyPairsWhoseTrianglesAreReadAreCulled) {
                                 GeometryKind::ConvexHull, GeometryKind::Compound};
     for (GeometryKind a : all)
         for (GeometryKind b : all)
-            for (bool convex : {false, true}) {
-                const bool gimpact = (a == GeometryKind::GImpactMesh &&
-                                      (b == GeometryKind::GImpactMesh || b == GeometryKind::TriangleMesh)) ||
-                                     (b == GeometryKind::GImpactMesh && a == GeometryKind::TriangleMesh);
-                auto convexSide = [](GeometryKind k) {
-                    return k == GeometryKind::ConvexHull || k == GeometryKind::Compound;
-                };
-                const bool convexMesh = convex && ((convexSide(a) && b == GeometryKind::TriangleMesh) ||
-                                                   (convexSide(b) && a == GeometryKind::TriangleMesh));
-                EXPECT_EQ(bullet::trianglesConsumed(a, b, convex), gimpact || convexMesh)
-                    << int(a) << " " << int(b) << " " << convex;
-                EXPECT_EQ(bullet::trianglesConsumed(a, b, convex), bullet::trianglesConsumed(b, a, convex));
-            }
+            for (bool convex : {false, true})
+                for (bool gimpactPairs : {false, true}) {
+                    const bool gimpact = (a == GeometryKind::GImpactMesh &&
+                                          ((gimpactPairs && b == GeometryKind::GImpactMesh) ||
+                                           b == GeometryKind::TriangleMesh)) ||
+                                         (b == GeometryKind::GImpactMesh && a == GeometryKind::TriangleMesh);
+                    auto convexSide = [](GeometryKind k) {
+                        return k == GeometryKind::ConvexHull || k == GeometryKind::Compound;
+                    };
+                    const bool convexMesh = convex && ((convexSide(a) && b == GeometryKind::TriangleMesh) ||
+                                                       (convexSide(b) && a == GeometryKind::TriangleMesh));
+                    EXPECT_EQ(bullet::trianglesConsumed(a, b, convex, gimpactPairs), gimpact || convexMesh)
+                        << int(a) << " " << int(b) << " " << convex << " " << gimpactPairs;
+                    EXPECT_EQ(bullet::trianglesConsumed(a, b, convex, gimpactPairs),
+                              bullet::trianglesConsumed(b, a, convex, gimpactPairs));
+                }
 }
 
 TEST(CullingPolicy, GImpactAgainstConvexShapesIsPrunedByTheCuller) {

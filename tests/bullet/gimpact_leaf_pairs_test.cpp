@@ -125,14 +125,14 @@ std::vector<std::vector<btScalar>> manifoldPoints(btCollisionWorld& world) {
     return out;
 }
 
-// With the deep-penetration fallback on (the default), an interpenetrating GImpact pair gets Bullet's contacts: the
-// dispatcher runs Bullet's pair search and triangle routine through findLeafPairs and triangles mapped once. Every
-// manifold point, bit for bit, against Bullet's own pipeline, for crossing tori in many poses.
-TEST(GImpactInterpenetrating, ContactsAreBulletsBitForBit) {
+/// Crossing tori in many poses, Bullet's pipeline beside the CULLIDE pair: every manifold point must be the same,
+/// bit for bit. Returns how many pairs went through the dispatcher's path of interest (see the callers).
+std::size_t expectBulletsContactsBitForBit(bool gimpactPairCulling) {
     ShapeStore shapes;
     btCollisionShape* torus = shapes.gimpactTorus(2, btScalar(0.5), 32, 12, btScalar(0.01));
     TestWorld reference(PipelineKind::Default);
     TestWorld w(PipelineKind::Cullide, referenceFactory());
+    w.cullideBroadphase()->setGImpactPairCulling(gimpactPairCulling);
     std::vector<btRigidBody*> bodies[2];
     int i = 0;
     for (TestWorld* x : {&reference, &w}) {
@@ -144,7 +144,7 @@ TEST(GImpactInterpenetrating, ContactsAreBulletsBitForBit) {
     }
     std::mt19937 rng(5);
     std::size_t points = 0;
-    std::size_t penetrating = 0;
+    std::size_t viaPath = 0;
     for (int pose = 0; pose < 24; ++pose) {
         const btTransform t0 = randomPose(rng, 0.3f);
         const btTransform t1 = randomPose(rng, 0.3f);  // two rings of radius 2 around nearly one centre: they cross
@@ -155,12 +155,25 @@ TEST(GImpactInterpenetrating, ContactsAreBulletsBitForBit) {
         reference.detectCollisions(0);
         w.detectCollisions(0);
         const auto expected = manifoldPoints(reference.world());
-        ASSERT_EQ(manifoldPoints(w.world()), expected) << "pose " << pose;
+        EXPECT_EQ(manifoldPoints(w.world()), expected) << "pose " << pose;
         points += expected.size();
-        penetrating += w.cullideDispatcher()->getLastStepStats().penetrationPairs;
+        const CullideDispatchStats& d = w.cullideDispatcher()->getLastStepStats();
+        viaPath += gimpactPairCulling ? d.penetrationPairs : d.fallbackPairs;
     }
-    EXPECT_GT(points, 24u);       // contacts in (nearly) every pose
-    EXPECT_GT(penetrating, 12u);  // and through the interpenetrating path, not the culled one
+    EXPECT_GT(points, 24u);  // contacts in (nearly) every pose
+    return viaPath;
+}
+
+// The default: GImpact-GImpact pairs are not culled; the dispatcher runs Bullet's pair search and triangle routine
+// through findLeafPairs and triangles mapped once per call.
+TEST(GImpactPairs, NotCulledTheyGetBulletsContactsBitForBit) {
+    EXPECT_EQ(expectBulletsContactsBitForBit(false), 24u);
+}
+
+// With GImpact pair culling on and the deep-penetration fallback on (its default), an interpenetrating pair takes
+// the same route.
+TEST(GImpactPairs, CulledAndInterpenetratingTheyGetBulletsContactsBitForBit) {
+    EXPECT_GT(expectBulletsContactsBitForBit(true), 12u);
 }
 
 }  // namespace

@@ -50,6 +50,7 @@ TEST(BulletGImpact, ToriNoContactMissingAndContactsAgree) {
     TorusScene scene;
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide);
+    cullide.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
     scene.populate(reference);
     scene.populate(cullide);
     MirrorOptions options;
@@ -87,6 +88,7 @@ TEST(BulletGImpact, ToriOnATriangleMeshLandscape) {
     };
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide);
+    cullide.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
     populate(reference);
     populate(cullide);
     MirrorOptions options;
@@ -135,6 +137,7 @@ TEST(BulletGImpact, ToriOnBoxesWithAKinematicTorus) {
     };
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide);
+    cullide.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
     populate(reference);
     populate(cullide);
     MirrorOptions options;
@@ -183,6 +186,7 @@ TEST(BulletGImpact, ConvexShapesGetBulletsContactsFromTrianglesWithinReach) {
     };
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide);
+    cullide.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
     populate(reference);
     populate(cullide);
     MirrorOptions options;
@@ -217,6 +221,7 @@ TEST(BulletGImpact, WithoutRegisterAlgorithmMeshPairsStayEmptyLikeBullet) {
     ShapeStore shapes;
     btCollisionShape* torus = shapes.gimpactTorus(1, btScalar(0.3), 16, 8, btScalar(0.04));
     TestWorld w(PipelineKind::Cullide);
+    w.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
     w.world().setGravity(btVector3(0, 0, 0));
     w.addBody(torus, 1, btTransform::getIdentity());
     w.addBody(torus, 1, btTransform(btQuaternion(btVector3(1, 0, 0), SIMD_HALF_PI), btVector3(btScalar(1.6), 0, 0)));
@@ -286,6 +291,7 @@ TEST(BulletGImpact, DeformingMeshNeedsNoExtraCall) {
     };
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide);
+    cullide.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
     populate(reference);
     populate(cullide);
     MirrorOptions options;
@@ -343,6 +349,7 @@ TEST(BulletDeterminism, SameContactsAcrossRunsAndThreadCounts) {
         Settings settings;
         settings.threads = threads[r];
         TestWorld w(PipelineKind::Cullide, {}, settings);
+        w.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
         scene.populate(w);
         for (int step = 0; step < 150; ++step) {
             w.step();

@@ -54,6 +54,7 @@ TEST(BulletHardCases, ThinPlatesRestingFaceOnFace) {
     GImpactBox plate(btVector3(1, btScalar(0.02), btScalar(0.7)), btScalar(0.01));
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide);
+    cullide.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
     for (TestWorld* w : {&reference, &cullide}) {
         btGImpactCollisionAlgorithm::registerAlgorithm(&w->dispatcher());
         w->addBody(plane, 0, btTransform::getIdentity());
@@ -77,6 +78,7 @@ MirrorRun dropThinPlates(bool deepPenetrationFallback) {
     GImpactBox plate(btVector3(1, btScalar(0.02), btScalar(0.7)), btScalar(0.01));
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide);
+    cullide.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
     cullide.cullideBroadphase()->setDeepPenetrationFallback(deepPenetrationFallback);
     for (TestWorld* w : {&reference, &cullide}) {
         btGImpactCollisionAlgorithm::registerAlgorithm(&w->dispatcher());
@@ -114,6 +116,7 @@ TEST(BulletHardCases, GImpactSceneFarFromTheOrigin) {
     GImpactBox floor(btVector3(6, btScalar(0.5), 6), btScalar(0.04));
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide);
+    cullide.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
     const btVector3 origin(offset, btScalar(0.25) * offset, -offset);
     for (TestWorld* w : {&reference, &cullide}) {
         btGImpactCollisionAlgorithm::registerAlgorithm(&w->dispatcher());

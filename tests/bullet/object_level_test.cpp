@@ -23,6 +23,7 @@ TEST(ObjectLevel, CulledPairIsDecidedByTheCuller) {
     ShapeStore shapes;
     btCollisionShape* torus = shapes.gimpactTorus(2, btScalar(0.2), 32, 8, btScalar(0.01));
     TestWorld w(PipelineKind::Cullide, referenceFactory());
+    w.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
     btGImpactCollisionAlgorithm::registerAlgorithm(&w.dispatcher());
     w.world().setGravity(btVector3(0, 0, 0));
     w.addBody(torus, 1, at(0, 0, 0));
@@ -146,6 +147,7 @@ TEST(ObjectLevel, InterpenetratingPairsSkipTheCullerForAFewSteps) {
     btCollisionShape* torus = shapes.gimpactTorus(2, btScalar(0.4), 24, 8, btScalar(0.01));
     TestWorld reference(PipelineKind::Default);
     TestWorld w(PipelineKind::Cullide, referenceFactory());
+    w.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
     const btQuaternion upright(btVector3(1, 0, 0), SIMD_HALF_PI);
     for (TestWorld* x : {&reference, &w}) {
         btGImpactCollisionAlgorithm::registerAlgorithm(&x->dispatcher());

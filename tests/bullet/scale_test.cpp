@@ -84,6 +84,7 @@ TEST(BulletScale, GImpactTorusPile) {
     auto run = [&](bool deepPenetrationFallback) {
         TestWorld reference(PipelineKind::Default);
         TestWorld cullide(PipelineKind::Cullide);
+        cullide.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
         cullide.cullideBroadphase()->setDeepPenetrationFallback(deepPenetrationFallback);
         populate(reference);
         populate(cullide);
