@@ -2,7 +2,8 @@
 //
 //   cullide-demo [--scene breakable|env1|env2|env3] [--frames N] [--resolution N] [--mode reliable|sampled]
 //                [--seed S] [--out DIR] [--snapshot-every K] [--check-every K] [--mesh PATH]
-//                [--breakable-mesh PATH] [--objects N] [--pipeline P] [--deep-penetration-fallback on|off]
+//                [--breakable-mesh PATH] [--objects N] [--pipeline P] [--gimpact-pair-culling on|off]
+//                [--deep-penetration-fallback on|off]
 //                [--quiet] [--help]
 //
 // Writes DIR/frames.csv (one row per frame), DIR/summary.json, DIR/snapshots/frame_NNNN.png every K frames and
@@ -43,7 +44,8 @@ const char* const kUsage =
     "usage: cullide-demo [--scene breakable|env1|env2|env3] [--frames N] [--resolution N] [--mode reliable|sampled]\n"
     "                    [--seed S] [--out DIR] [--snapshot-every K] [--check-every K] [--mesh PATH]\n"
     "                    [--breakable-mesh PATH] [--objects N] [--pipeline P]\n"
-    "                    [--deep-penetration-fallback on|off] [--quiet] [--help]\n"
+    "                    [--gimpact-pair-culling on|off] [--deep-penetration-fallback on|off]\n"
+    "                    [--quiet] [--help]\n"
     "\n"
     "Runs a CULLIDE scene headless and writes per-frame figures, a summary and snapshots.\n"
     "\n"
@@ -63,10 +65,13 @@ const char* const kUsage =
     "  --objects N         object count for env1 / env2 (default 100 / 6)\n"
     "  --pipeline P        breakable: cullide (default), bullet-dbvt or bullet-axis-sweep (Bullet's own\n"
     "                      broadphase and dispatcher with GImpact, for comparison)\n"
+    "  --gimpact-pair-culling on|off\n"
+    "                      breakable, cullide: GImpact-GImpact pairs through the culler (default off:\n"
+    "                      the pieces get Bullet's GImpact contacts bit for bit, at a fraction of its cost)\n"
     "  --deep-penetration-fallback on|off\n"
-    "                      breakable, cullide: intersecting GImpact pairs get Bullet's full algorithm, so\n"
-    "                      contacts are exactly Bullet's (default on); off is faster, with fewer contacts\n"
-    "                      between interpenetrating pieces\n"
+    "                      breakable, cullide, with --gimpact-pair-culling on: intersecting GImpact pairs\n"
+    "                      get Bullet's contacts (default on); off, fewer contacts between\n"
+    "                      interpenetrating pieces\n"
     "  --quiet             no progress line\n"
     "  --help              show this help\n"
     "\n"
@@ -116,6 +121,7 @@ long long parseInteger(const std::string& flag, const std::string& value, long l
 Options parse(int argc, char** argv, bool& help) {
     Options o;
     bool fallbackGiven = false;
+    bool cullingGiven = false;
     for (int i = 1; i < argc; ++i) {
         const std::string a = argv[i];
         auto value = [&]() -> std::string {
@@ -159,6 +165,12 @@ Options parse(int argc, char** argv, bool& help) {
                 o.runner.pipeline != "bullet-axis-sweep")
                 throw UsageError("--pipeline expects cullide, bullet-dbvt or bullet-axis-sweep, got '" +
                                  o.runner.pipeline + "'");
+        } else if (a == "--gimpact-pair-culling") {
+            const std::string v = value();
+            if (v != "on" && v != "off")
+                throw UsageError("--gimpact-pair-culling expects on or off, got '" + v + "'");
+            o.runner.gimpactPairCulling = v == "on";
+            cullingGiven = true;
         } else if (a == "--deep-penetration-fallback") {
             const std::string v = value();
             if (v != "on" && v != "off")
@@ -177,8 +189,11 @@ Options parse(int argc, char** argv, bool& help) {
     const bool breakable = o.runner.scene == "breakable";
     if (!breakable && (!o.runner.mesh.empty() || !o.runner.breakableMesh.empty() || o.runner.pipeline != "cullide"))
         throw UsageError("--mesh, --breakable-mesh and --pipeline apply to --scene breakable only");
-    if (fallbackGiven && (!breakable || o.runner.pipeline != "cullide"))
-        throw UsageError("--deep-penetration-fallback applies to --scene breakable with --pipeline cullide only");
+    if ((fallbackGiven || cullingGiven) && (!breakable || o.runner.pipeline != "cullide"))
+        throw UsageError("--gimpact-pair-culling or --deep-penetration-fallback: each applies to --scene breakable "
+                         "with --pipeline cullide only");
+    if (fallbackGiven && !o.runner.gimpactPairCulling)
+        throw UsageError("--deep-penetration-fallback applies with --gimpact-pair-culling on only");
     if (o.runner.objects > 0 && o.runner.scene != "env1" && o.runner.scene != "env2")
         throw UsageError("--objects applies to --scene env1 and env2 only");
     return o;

@@ -193,6 +193,7 @@ private:
         b.fallingMesh = o.mesh;
         b.breakableMesh = o.breakableMesh;
         b.deepPenetrationFallback = o.deepPenetrationFallback;
+        b.gimpactPairCulling = o.gimpactPairCulling;
         if (o.pipeline == "bullet-dbvt") b.pipeline = CollisionPipeline::BulletDbvt;
         else if (o.pipeline == "bullet-axis-sweep") b.pipeline = CollisionPipeline::BulletAxisSweep;
         else if (o.pipeline != "cullide") throw std::invalid_argument("unknown pipeline '" + o.pipeline + "'");

@@ -25,6 +25,7 @@ struct RunnerOptions {
     int objects = 0;                  ///< env1/env2 object count (0 = the paper's)
     std::string pipeline = "cullide"; ///< breakable: cullide | bullet-dbvt | bullet-axis-sweep
     bool deepPenetrationFallback = true; ///< breakable, cullide: --deep-penetration-fallback on|off
+    bool gimpactPairCulling = false;     ///< breakable, cullide: --gimpact-pair-culling on|off
 };
 
 class SceneRunner {

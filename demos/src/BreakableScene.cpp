@@ -148,6 +148,7 @@ struct BreakableScene::Impl {
         case CollisionPipeline::Cullide: {
             auto bp = std::make_unique<CullideBroadphase>(options.culler);
             bp->setDeepPenetrationFallback(options.deepPenetrationFallback);
+            bp->setGImpactPairCulling(options.gimpactPairCulling);
             cullideBp = bp.get();
             broadphase = std::move(bp);
             auto d = std::make_unique<CullideCollisionDispatcher>(config.get(), cullideBp);

@@ -241,6 +241,9 @@ TEST(DemoCli, BadFlagsAndMeshesGiveClearErrors) {
     EXPECT_EQ(runDemo("--deep-penetration-fallback maybe", log), 2);
     EXPECT_EQ(runDemo("--pipeline bullet-dbvt --deep-penetration-fallback off", log), 2);
     EXPECT_NE(slurp(log).find("applies to --scene breakable with --pipeline cullide only"), std::string::npos);
+    EXPECT_EQ(runDemo("--gimpact-pair-culling maybe", log), 2);
+    EXPECT_EQ(runDemo("--deep-penetration-fallback off", log), 2);
+    EXPECT_NE(slurp(log).find("applies with --gimpact-pair-culling on only"), std::string::npos);
 
     std::ofstream(out / "bad.off") << "OFF\n3 1 0\n0 0 0\n1 0 0\n";  // truncated
     const int status = runDemo("--mesh " + (out / "bad.off").string() + " --frames 1 --out " + out.string(), log);

@@ -32,9 +32,11 @@ struct BreakableOptions {
     double breakImpulse = -1;   ///< total contact impulse (N s) that breaks it; < 0: scaled to the falling mass
     CollisionPipeline pipeline = CollisionPipeline::Cullide;
     Settings culler;            ///< CULLIDE settings (pipeline Cullide)
-    /// CullideBroadphase::setDeepPenetrationFallback (pipeline Cullide): intersecting GImpact pairs get Bullet's
-    /// full algorithm, so contacts are exactly Bullet's; off: faster, interpenetrating pieces see fewer contacts.
+    /// CullideBroadphase::setDeepPenetrationFallback (pipeline Cullide, with gimpactPairCulling): intersecting GImpact
+    /// pairs get Bullet's contacts; off: interpenetrating pieces see fewer contacts.
     bool deepPenetrationFallback = true;
+    /// Cullide pipeline: CullideBroadphase::setGImpactPairCulling (off: the pieces get Bullet's GImpact contacts).
+    bool gimpactPairCulling = false;
 };
 
 /// What one step did.
