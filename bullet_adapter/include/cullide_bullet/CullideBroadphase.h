@@ -11,8 +11,8 @@
 //   nothing, and rayTest / aabbTest answer as Bullet's. A proxy with a non-finite AABB is parked (one line on stderr,
 //   a counter, no pairs, filter mask 0 while parked) instead of poisoning the tree: nothing else is affected.
 // - The CULLIDE levels run only for the cache's pairs whose narrow phase reads the surviving triangles
-//   (GImpact-GImpact, GImpact-triangle mesh; hull/compound-triangle mesh with setConvexMeshCulling(true)) or that the
-//   culler decides (GImpact against a convex shape), and that the dispatcher will process (needsCollision). The
+//   (GImpact-triangle mesh; GImpact-GImpact with setGImpactPairCulling(true); hull/compound-triangle mesh with
+//   setConvexMeshCulling(true)) or that the culler decides (GImpact against a convex shape), and that the dispatcher will process (needsCollision). The
 //   culler gets those pairs only, meshes as the shape's local triangles plus the body's transform (built once per
 //   shape, shared by its bodies; static objects world-space, cached between steps). Planes and infinite boxes are
 //   never culled. Every other pair goes from the object level straight to Bullet's algorithms.
@@ -26,8 +26,9 @@
 //   persistent convex manifolds the margins plus 1.5 * the contact breaking threshold (size-relative, as Bullet's
 //   dispatcher computes it by default). Every triangle pair that Bullet's narrow phase could turn into a contact
 //   point, or keep a persistent one alive, survives. Bullet's own triangle routines are the exact test (the culler
-//   runs with Settings::exactTriangles = false). Interpenetrating GImpact pairs get Bullet's full algorithm
-//   (setDeepPenetrationFallback).
+//   runs with Settings::exactTriangles = false). GImpact-GImpact pairs (by default not culled, and culled ones that
+//   interpenetrate: setDeepPenetrationFallback) get Bullet's GImpact contacts bit for bit: the dispatcher runs
+//   Bullet's pair search and triangle routine, reproduced at a fraction of Bullet's cost.
 #pragma once
 
 #include "cullide/Culler.h"
@@ -166,8 +167,9 @@ public:
     /// detected every step by a content hash.
     void invalidateShape(const btCollisionShape* shape);
 
-    /// GImpact-GImpact pairs whose meshes intersect (exact test on the surviving triangle pairs) get Bullet's full
-    /// GImpact algorithm for that step (default: on). GImpact's clip method also makes penetration contacts from
+    /// With setGImpactPairCulling(true): GImpact-GImpact pairs whose meshes intersect (exact test on the surviving
+    /// triangle pairs) get Bullet's GImpact contacts for that step (default: on; without GImpact pair culling every
+    /// GImpact-GImpact pair gets them and this setting changes nothing). GImpact's clip method also makes penetration contacts from
     /// triangle pairs that are far apart but whose boxes overlap; only such pairs, deep inside the other mesh, make
     /// them, and CULLIDE's near pairs do not include them. With the fallback the contacts of interpenetrating pairs
     /// are exactly Bullet's; without it they come from the near pairs only (faster when meshes often intersect, but
@@ -181,7 +183,8 @@ public:
     /// dispatcher's convex-concave algorithm reads only the mesh triangles CULLIDE kept near the hull; off, such
     /// pairs go from the object level straight to Bullet's algorithm, whose own BVH query of the mesh is already
     /// cheap: measured on 1,000 hulls over a 32K-triangle landscape (docs/benchmarks.md, cullide-swap-bench), the
-    /// culling costs more than the narrow phase it saves on the CPU path. GImpact pairs are always culled. Set it
+    /// culling costs more than the narrow phase it saves on the CPU path. GImpact-convex and GImpact-mesh pairs are
+    /// always culled (GImpact-GImpact: setGImpactPairCulling). Set it
     /// before the first step: CullideCollisionDispatcher picks the culled hull/compound-mesh algorithm when a pair's
     /// algorithm is created (pairs created while it is off keep Bullet's own algorithm, which stays correct).
     void setConvexMeshCulling(bool enable);
