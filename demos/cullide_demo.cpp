@@ -128,6 +128,11 @@ Options parse(int argc, char** argv, bool& help) {
             if (i + 1 >= argc) throw UsageError(a + " needs a value");
             return argv[++i];
         };
+        auto onOff = [&]() {
+            const std::string v = value();
+            if (v != "on" && v != "off") throw UsageError(a + " expects on or off, got '" + v + "'");
+            return v == "on";
+        };
         if (a == "--help" || a == "-h") {
             help = true;
         } else if (a == "--scene") {
@@ -166,16 +171,10 @@ Options parse(int argc, char** argv, bool& help) {
                 throw UsageError("--pipeline expects cullide, bullet-dbvt or bullet-axis-sweep, got '" +
                                  o.runner.pipeline + "'");
         } else if (a == "--gimpact-pair-culling") {
-            const std::string v = value();
-            if (v != "on" && v != "off")
-                throw UsageError("--gimpact-pair-culling expects on or off, got '" + v + "'");
-            o.runner.gimpactPairCulling = v == "on";
+            o.runner.gimpactPairCulling = onOff();
             cullingGiven = true;
         } else if (a == "--deep-penetration-fallback") {
-            const std::string v = value();
-            if (v != "on" && v != "off")
-                throw UsageError("--deep-penetration-fallback expects on or off, got '" + v + "'");
-            o.runner.deepPenetrationFallback = v == "on";
+            o.runner.deepPenetrationFallback = onOff();
             fallbackGiven = true;
         } else if (a == "--quiet") {
             o.quiet = true;
