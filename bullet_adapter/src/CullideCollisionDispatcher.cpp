@@ -232,7 +232,7 @@ bool convexCanTouch(const btTriangleShapeEx& triangle, const ConvexReach& reach)
 }
 
 /// GImpact pairs on CULLIDE's lists. GImpact-GImpact: the surviving triangle pairs go straight to Bullet's
-/// triangle-triangle routine (collide_sat_triangles), no BVH traversal. GImpact-triangle mesh: Bullet's own
+/// triangle-triangle routine (satTriangles: collide_sat_triangles' loop), no BVH traversal. GImpact-triangle mesh: Bullet's own
 /// gimpact_vs_concave (per mesh triangle: a BVH query of the GImpact mesh and convex-convex tests), driven with the
 /// mesh's surviving triangles only. Same size as btGImpactCollisionAlgorithm.
 class CullideGImpactAlgorithm final : public btGImpactCollisionAlgorithm {
@@ -308,10 +308,11 @@ public:
             bulletCandidates(body0Wrap->getWorldTransform(), *part0, body1Wrap->getWorldTransform(), *part1,
                              leafIndex, ordered, begin, end);
             stats.trianglePairs += interleaved.size() / 2;
-            // collide_sat_triangles locks the parts' child shapes itself.
-            if (!interleaved.empty())
-                collide_sat_triangles(body0Wrap, body1Wrap, part0, part1, interleaved.data(),
-                                      static_cast<int>(interleaved.size() / 2));
+            if (!interleaved.empty()) {
+                world0.begin(part0->getNumChildShapes());
+                world1.begin(part1->getNumChildShapes());
+                satTriangles(body0Wrap, body1Wrap, *part0, *part1);
+            }
             begin = end;
         }
         if (getLastManifold() != nullptr)
@@ -321,8 +322,8 @@ public:
     }
 
     /// Bullet's GImpact-GImpact algorithm, contact for contact, at a fraction of its cost: per part pair in Bullet's
-    /// order, Bullet's box-set pairs in Bullet's order (findLeafPairs: found from the leaves that can take part
-    /// instead of by descending both trees), through Bullet's own triangle routine (the conservative plane test,
+    /// order, Bullet's box-set pairs in Bullet's order (findLeafPairs: Bullet's descent with each node box mapped
+    /// into the other tree's frame once per call), through Bullet's own triangle routine (the conservative plane test,
     /// then the clip method), with each triangle mapped to world space and given its plane once per call instead of
     /// once per pair it is in. Same inputs to the same routines in the same order: the same manifold.
     void processAsBullet(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
@@ -349,7 +350,8 @@ public:
         if (getLastManifold() != nullptr) m_resultOut->refreshContactPoints();
     }
 
-    /// Bullet's collide_sat_triangles over `interleaved`, the triangles taken from world0 / world1.
+    /// Bullet's collide_sat_triangles over `interleaved` (same routines, same order, same contacts), the triangles
+    /// taken from world0 / world1 (begun for these parts by the caller) instead of fetched and mapped per pair.
     void satTriangles(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
                       const btGImpactMeshShapePart& part0, const btGImpactMeshShapePart& part1) {
         const btTransform& trans0 = body0Wrap->getWorldTransform();

@@ -41,7 +41,8 @@ struct CullideDispatchStats {
     std::size_t pairsDispatched = 0;    ///< pairs in the dispatched caches (all dispatchAllCollisionPairs calls)
     std::size_t cullidePairs = 0;       ///< pairs processed from CULLIDE's triangle lists
     std::size_t trianglePairs = 0;      ///< triangle pairs (or mesh triangles for convex-mesh) handed over
-    std::size_t fallbackPairs = 0;      ///< triangle-capable pairs processed by Bullet's full algorithm instead
+    std::size_t fallbackPairs = 0;      ///< triangle-capable pairs given Bullet's full algorithm instead (its own, or
+                                        ///< for GImpact-GImpact its reproduction with Bullet's contacts)
     std::size_t clearedPairs = 0;       ///< pairs with no surviving triangle: manifolds cleared
     std::size_t penetrationPairs = 0;   ///< interpenetrating GImpact pairs given Bullet's full algorithm (included
                                         ///< in cullidePairs; see CullideBroadphase::setDeepPenetrationFallback)
