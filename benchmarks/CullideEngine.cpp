@@ -51,6 +51,15 @@ void CullideEngine::run(const BenchFrame& frame, FrameOutput& out) {
     out.bytesUploaded = s.bytesUploaded;
     out.bytesReadBack = s.bytesReadBack;
     out.gpuDeviceBytes = s.gpuDeviceBytes;
+    out.draws = s.draws;
+    if (s.gpuTimingValid && !s.levels.empty()) out.gpuTimerMs = s.gpuMs;
+    out.levels = nlohmann::json::array();
+    for (const LevelStats& l : s.levels) {
+        nlohmann::json level = {{"name", l.name}, {"items", l.itemsPerIteration}, {"draws", l.draws},
+                                {"cpu_ms", l.cpuMs}};
+        if (l.gpuTimingValid) level["gpu_ms"] = l.gpuMs;
+        out.levels.push_back(level);
+    }
     for (const ObjectPair& p : m_result.pairs) {
         if (!p.hasTriangles) continue;
         for (const TrianglePair& t : p.triangles) out.pairs.addTriangle(p.a, t.a, p.b, t.b);

@@ -11,8 +11,9 @@
 namespace cullide::bench {
 
 std::vector<std::string> engineNames() {
-    std::vector<std::string> names = {"exact",           "cullide",     "cullide-1t", "cullide-gpu",
-                                      "cullide-sampled", "bullet-dbvt", "bullet-sap"};
+    std::vector<std::string> names = {"exact",          "cullide",         "cullide-1t",  "cullide-cpu",
+                                      "cullide-gpu",    "cullide-raster",  "cullide-sampled", "bullet-dbvt",
+                                      "bullet-sap"};
 #ifdef CULLIDE_BENCH_FCL
     names.push_back("fcl");
     names.push_back("fcl-aabb");
@@ -30,9 +31,14 @@ std::unique_ptr<Engine> makeEngine(const std::string& name, const EngineOptions&
         s.threads = 1;
         return std::make_unique<CullideEngine>(s, false);
     }
-    if (name == "cullide-gpu" || name == "cullide-sampled") {
+    if (name == "cullide-cpu") {  // the CPU path alone: what Auto weighs the GPU levels against
+        s.gpuLevels = GpuLevels::Never;
+        return std::make_unique<CullideEngine>(s, false);
+    }
+    if (name == "cullide-gpu" || name == "cullide-raster" || name == "cullide-sampled") {
         s.gpuLevels = GpuLevels::Always;
         if (name == "cullide-sampled") s.mode = Mode::Sampled;
+        if (name == "cullide-raster") s.backend = Backend::Raster;
         return std::make_unique<CullideEngine>(s, false);
     }
     if (name == "bullet-dbvt") return std::make_unique<BulletEngine>(BulletEngine::Broadphase::Dbvt);

@@ -30,6 +30,9 @@ struct FrameOutput {
     std::size_t bytesUploaded = 0;
     std::size_t bytesReadBack = 0;
     std::size_t gpuDeviceBytes = 0;  ///< culler's buffers and images on its GL device
+    std::size_t draws = 0;           ///< GL draws and dispatches (CULLIDE)
+    std::optional<double> gpuTimerMs;  ///< GPU time of the levels from timer queries, where valid (CULLIDE)
+    nlohmann::json levels;           ///< per GPU level: items per iteration, draws, CPU and GPU ms (CULLIDE)
 
     void clear() { *this = FrameOutput{}; }
 };

@@ -19,9 +19,9 @@ using nlohmann::json;
 
 const std::vector<std::string> kSceneOrder = {"env1", "env2", "env3", "env3-deform", "stack", "landscape",
                                               "breakable"};
-const std::vector<std::string> kEngineOrder = {"exact",           "cullide",     "cullide-fast", "cullide-1t",
-                                               "cullide-gpu",     "cullide-sampled", "bullet-dbvt", "bullet-sap",
-                                               "fcl",             "fcl-aabb"};
+const std::vector<std::string> kEngineOrder = {"exact",          "cullide",        "cullide-fast",    "cullide-1t",
+                                               "cullide-cpu",    "cullide-gpu",    "cullide-raster",  "cullide-sampled",
+                                               "bullet-dbvt",    "bullet-sap",     "fcl",             "fcl-aabb"};
 const std::set<std::string> kPeers = {"bullet-dbvt", "bullet-sap", "fcl", "fcl-aabb"};
 
 std::optional<double> number(const json& j, const std::string& key) {
@@ -71,7 +71,9 @@ std::string engineLabel(const std::string& e, const json& r) {
     if (e == "cullide") return "**CULLIDE reliable** (default settings)";
     if (e == "cullide-1t") return "CULLIDE reliable, 1 thread";
     if (e == "cullide-fast") return "CULLIDE reliable, deep-penetration fallback off (Bullet adapter)";
+    if (e == "cullide-cpu") return "CULLIDE reliable, GPU levels off (CPU path)";
     if (e == "cullide-gpu") return "CULLIDE reliable, GPU levels forced, " + std::to_string(res) + "²";
+    if (e == "cullide-raster") return "CULLIDE reliable, GPU levels forced, raster back-end, " + std::to_string(res) + "²";
     if (e == "cullide-sampled") return "CULLIDE sampled, GPU levels forced, " + std::to_string(res) + "²";
     const bool stepping = r.value("mode", "") == "bullet";
     if (e == "bullet-dbvt") return stepping ? "Bullet btDbvtBroadphase (own dispatcher)" : "Bullet btDbvtBroadphase + GImpact";

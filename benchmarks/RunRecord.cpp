@@ -29,6 +29,9 @@ void RunRecord::add(const FrameOutput& out, const PairSet* exact) {
     m_maxReadBack = std::max(m_maxReadBack, out.bytesReadBack);
     m_maxDevice = std::max(m_maxDevice, out.gpuDeviceBytes);
     m_sumUploaded += out.bytesUploaded;
+    m_draws.push_back(static_cast<double>(out.draws));
+    if (out.gpuTimerMs) m_gpuTimerMs.push_back(*out.gpuTimerMs);
+    if (!out.levels.is_null()) m_lastLevels = out.levels;
     if (exact != nullptr) {
         m_compared = true;
         m_triangles += compareTriangles(exact->triangles(), out.pairs.triangles());
@@ -68,6 +71,10 @@ void RunRecord::write(nlohmann::json& r) const {
     r["gpu_device_bytes_max"] = m_maxDevice;
     r["bytes_uploaded_mean"] = m_total.empty() ? 0.0 : static_cast<double>(m_sumUploaded) / static_cast<double>(m_total.size());
     r["bytes_read_back_max"] = m_maxReadBack;
+    r["draws_median"] = median(m_draws);
+    // GPU timer: only when every timed frame had a valid one (a median of some frames would read as all).
+    if (!m_gpuTimerMs.empty() && m_gpuTimerMs.size() == m_total.size()) r["gpu_timer_ms_median"] = median(m_gpuTimerMs);
+    if (!m_lastLevels.is_null() && !m_lastLevels.empty()) r["levels_last_frame"] = m_lastLevels;
 }
 
 }  // namespace cullide::bench

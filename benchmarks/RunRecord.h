@@ -32,6 +32,8 @@ private:
     bool m_hasCandidates = false;
     std::size_t m_contacts = 0;
     std::size_t m_maxUploaded = 0, m_maxReadBack = 0, m_sumUploaded = 0, m_maxDevice = 0;
+    std::vector<double> m_draws, m_gpuTimerMs;
+    nlohmann::json m_lastLevels;  ///< the last timed frame's GPU levels
 };
 
 double median(std::vector<double> v);

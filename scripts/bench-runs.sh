@@ -4,8 +4,10 @@
 # RUN is cullide-bench-run; OUT gets results.jsonl (one record per run), truth/*.bin (the exact answers the other
 # engines' errors are measured against), failures.txt (failing runs; a failing run is listed, not fatal) and
 # stderr.txt. Each (scene, engine) runs as its own process, so its peak memory is its own.
-# Environment: BENCH_RUN_TIMEOUT (seconds per run, default 900); BENCH_DEADLINE (epoch seconds, optional): runs
-# that would start after it are skipped and listed in failures.txt, so a time-limited caller still gets a report.
+# Environment: BENCH_RUN_TIMEOUT (seconds per run, default 900); BENCH_SWEEP_RESOLUTIONS (the resolution sweep's
+# resolutions, default 32 ... 2048; the GPU bundle adds 4096 on hardware devices); BENCH_DEADLINE (epoch seconds,
+# optional): runs that would start after it are skipped and listed in failures.txt, so a time-limited caller still
+# gets a report.
 set -euo pipefail
 usage() { echo "usage: scripts/bench-runs.sh RUN OUT [--quick]" >&2; exit 2; }
 [ $# -ge 2 ] || usage
@@ -44,7 +46,7 @@ bench() {
 }
 
 has_engine() { "$run" --list-engines | grep -x "$1" >/dev/null; }
-engines="exact cullide cullide-1t cullide-gpu cullide-sampled bullet-dbvt bullet-sap"
+engines="exact cullide cullide-1t cullide-cpu cullide-gpu cullide-raster cullide-sampled bullet-dbvt bullet-sap"
 for e in fcl fcl-aabb; do has_engine $e && engines="$engines $e"; done
 peers="bullet-dbvt bullet-sap"
 for e in fcl fcl-aabb; do has_engine $e && peers="$peers $e"; done
@@ -61,8 +63,9 @@ else
   steps=300
   # Every resolution of a scene on the same frames (error sums comparable along the sweep).
   sweep=""
-  for r in 32 64 128 256 512 1024 2048; do sweep="$sweep env1:$r:3"; done
-  for r in 32 64 128 256 512 1024 2048; do sweep="$sweep env3-deform:$r:2"; done
+  resolutions=${BENCH_SWEEP_RESOLUTIONS:-32 64 128 256 512 1024 2048}
+  for r in $resolutions; do sweep="$sweep env1:$r:3"; done
+  for r in $resolutions; do sweep="$sweep env3-deform:$r:2"; done
   objects="25 50 100 250 500 1000"; tris="200 1000 2000 5000 10000 20000"; scale_frames=5
   scale_engines="cullide cullide-gpu bullet-dbvt"
   breakable_steps=300; breakable_sample=30

@@ -31,10 +31,16 @@ scripts/fetch_meshes.sh || true
 # bundle's bin/ first on PATH).
 dir=build-gpu
 targets=(cullide_gl_tests cullide_bullet_tests cullide-bench-run cullide-bench-report cullide-demo cullide-pairs)
-cmake -S . -B $dir -G Ninja -DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_BUILD_TYPE=Release \
+launcher=()
+command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)   # optional: speeds up rebuilds
+cmake -S . -B $dir -G Ninja "${launcher[@]}" -DCMAKE_BUILD_TYPE=Release \
   "-DCMAKE_CXX_FLAGS_RELEASE=-O2 -DNDEBUG" "-DCMAKE_CXX_FLAGS=-include $root/scripts/gpu-bundle/pairs-exe.h" \
   -DCULLIDE_BUILD_CGAL_ORACLE=OFF -DCULLIDE_BUILD_TESTS=ON -DCULLIDE_BUILD_BENCHMARKS=ON >/dev/null
-cmake --build $dir -j"$(nproc)" --target "${targets[@]}" >/dev/null
+if ! cmake --build $dir -j"$(nproc)" --target "${targets[@]}" >$dir/build.log 2>&1; then
+  grep -E -A8 'error|FAILED' $dir/build.log | head -60 >&2
+  echo "gpu-run: ERROR: the build failed (whole log: $dir/build.log)" >&2
+  exit 1
+fi
 echo "gpu-run: built in $(( $(date +%s) - t0 )) s"
 
 rm -rf "$dest"

@@ -104,6 +104,9 @@ esac
 renderer=$(printf '%s' "$probe" | sed -n 's/.*"renderer": *"\([^"]*\)".*/\1/p')
 egl_device=$(printf '%s' "$probe" | sed -n 's/.*"device": *"\([^"]*\)".*/\1/p')
 
+# On a hardware device the resolution sweep goes on to 4096² (issue #15); on llvmpipe it stops at 2048².
+[ $class = gpu ] && export BENCH_SWEEP_RESOLUTIONS=${BENCH_SWEEP_RESOLUTIONS:-32 64 128 256 512 1024 2048 4096}
+
 # 2. Tests on the device, and the demo.
 mkdir -p "$out/tmp"
 export TMPDIR="$out/tmp"
