@@ -53,6 +53,10 @@ for p in "${programs[@]}"; do
   install -m 755 "$f" "$dest/bin/"
 done
 
+# egl-diag: what the target's EGL client offers (client extensions, devices, displays, a 4.5 core context, with
+# EGL_KHR_debug messages); run.sh runs it when the probe finds no hardware device.
+cc -O1 -o "$dest/bin/egl-diag" scripts/gpu-bundle/egl-diag.c -ldl
+
 # Libraries: everything the programs and the GL client libraries load, except glibc's own (the target's).
 is_glibc() {
   case "$1" in

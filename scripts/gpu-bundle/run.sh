@@ -104,6 +104,10 @@ esac
 renderer=$(printf '%s' "$probe" | sed -n 's/.*"renderer": *"\([^"]*\)".*/\1/p')
 egl_device=$(printf '%s' "$probe" | sed -n 's/.*"device": *"\([^"]*\)".*/\1/p')
 
+if [ $class = cpu ] && [ -x "$here/bin/egl-diag" ]; then
+  echo "no hardware device: what the EGL client offers (egl-diag):"
+  timeout 60 "$here/bin/egl-diag" 2>&1 | cut -c1-400 | sed 's/^/  /'
+fi
 # On a hardware device the resolution sweep goes on to 4096² (issue #15); on llvmpipe it stops at 2048².
 [ $class = gpu ] && export BENCH_SWEEP_RESOLUTIONS=${BENCH_SWEEP_RESOLUTIONS:-32 64 128 256 512 1024 2048 4096}
 

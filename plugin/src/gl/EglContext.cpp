@@ -113,8 +113,12 @@ EglContext::EglContext(const std::string& preferenceArg) {
     const bool wantSurfaceless = preference == "surfaceless";
     bool matchedDevice = false;
 
-    if (!wantSurfaceless && hasExtension(clientExtensions, "EGL_EXT_platform_device") &&
-        hasExtension(clientExtensions, "EGL_EXT_device_enumeration")) {
+    // Device enumeration: EGL_EXT_device_enumeration, or EGL_EXT_device_base (enumeration and query in one), which
+    // is all NVIDIA's EGL offers (driver 580: no separate EGL_EXT_device_enumeration).
+    const bool enumeration = hasExtension(clientExtensions, "EGL_EXT_device_enumeration") ||
+                             hasExtension(clientExtensions, "EGL_EXT_device_base");
+    const bool platformDevice = hasExtension(clientExtensions, "EGL_EXT_platform_device");
+    if (!wantSurfaceless && platformDevice && enumeration) {
         EGLint count = 0;
         eglQueryDevicesEXT(0, nullptr, &count);
         std::vector<EGLDeviceEXT> devices(static_cast<std::size_t>(count > 0 ? count : 0));
@@ -145,7 +149,9 @@ EglContext::EglContext(const std::string& preferenceArg) {
             if (display != EGL_NO_DISPLAY && tryDisplay(display, description, reasons)) return;
         }
     } else if (!wantSurfaceless) {
-        reasons += "EGL_EXT_platform_device is not offered by the EGL client; ";
+        reasons += platformDevice ? "the EGL client offers no device enumeration (EGL_EXT_device_enumeration or "
+                                    "EGL_EXT_device_base); "
+                                  : "EGL_EXT_platform_device is not offered by the EGL client; ";
     }
     const bool allowSurfaceless = preference.empty() || wantSurfaceless || preference == "software";
     if (allowSurfaceless && hasExtension(clientExtensions, "EGL_MESA_platform_surfaceless")) {
