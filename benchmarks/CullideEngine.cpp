@@ -82,6 +82,11 @@ nlohmann::json CullideEngine::describe() const {
     j["threads"] = m_settings.threads;
     j["renderer"] = m_result.stats.renderer;
     j["device"] = m_result.stats.device;
+    if (!m_result.stats.autoDecision.empty()) {  // GpuLevels::Auto: its decision after the last frame, and why
+        j["auto_decision"] = m_result.stats.autoDecision;
+        j["auto_cpu_ms"] = m_result.stats.autoCpuMs;
+        j["auto_gpu_ms"] = m_result.stats.autoGpuMs;
+    }
     return j;
 }
 

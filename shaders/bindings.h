@@ -34,7 +34,8 @@
 #define CULLIDE_LOC_PRIM_BASE 11    /* uint: first primitive of this dispatch (dispatches are split at the group-count limit) */
 
 #define CULLIDE_COMPUTE_GROUP_SIZE 64 /* local_size_x of cull.comp */
-/* The C++ side splits a primitive's footprint into bands of at most this many pixels per compute invocation... */
+/* The C++ side splits a primitive's footprint into bands of at most this many pixels per compute invocation (on a
+ * hardware GPU far fewer: enough bands to fill the device, see VisibilityPass.cpp)... */
 #define CULLIDE_PIXELS_PER_INVOCATION 4096
 /* ...so no invocation comes near llvmpipe's limit of 65535 loop iterations per invocation (shared by all loops;
  * past it loops silently stop). An invocation that would still exceed this bound does nothing and counts itself

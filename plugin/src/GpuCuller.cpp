@@ -1,4 +1,5 @@
 // CULLIDE: object, sub-object (group) and triangle levels of image-space visibility pruning, then the exact stage.
+#include "AutoLevels.h"
 #include "ExactStage.h"
 #include "FloatRounding.h"
 #include "FrameObjects.h"
@@ -96,8 +97,8 @@ private:
         }
         m_objects = &m_world.resolve(objects, m_active, &m_pool);  // world-space meshes of the kept objects
         m_survivingTriangles.assign(objects.size(), {});
-        m_gpuLevels = m_pass != nullptr && (paper || m_settings.gpuLevels == GpuLevels::Always ||
-                                            (m_settings.gpuLevels == GpuLevels::Auto && !m_context->isSoftware()));
+        m_autoActive = false;
+        m_gpuLevels = m_pass != nullptr && chooseGpuLevels(paper, stats);
         buildGroups(!paper, stats);
         stats.prepassMs = prepass.ms();
 
@@ -129,7 +130,29 @@ private:
         result.pcsTriangles.swap(m_survivingTriangles);  // reassigned at the start of the next frame
         stats.gpuDeviceBytes = m_pass ? m_pass->deviceBytes() : 0;
         stats.totalMs = total.ms();
+        if (m_autoActive) recordAutoFrame(stats);
         m_objects = nullptr;
+    }
+
+    /// Whether this frame runs the GPU levels (a GL device is there): always in the paper pipeline and with
+    /// GpuLevels::Always; with GpuLevels::Auto, as AutoLevels decides from timing both paths on this scene.
+    bool chooseGpuLevels(bool paper, Stats& stats) {
+        m_autoActive = !paper && m_settings.gpuLevels == GpuLevels::Auto;
+        if (!m_autoActive) return paper || m_settings.gpuLevels == GpuLevels::Always;
+        std::size_t triangles = 0;
+        for (std::size_t i = 0; i < m_active.size(); ++i)
+            if (m_active[i] && m_valid[i].isMesh) triangles += (*m_objects)[i].mesh->triangles.size();
+        m_autoPath = m_auto.choose(triangles);
+        stats.autoDecision = m_auto.decision();
+        return m_autoPath == AutoLevels::Path::Gpu;
+    }
+
+    /// A frame that fell back to the CPU path after a GL error is no timing of the GPU levels: not recorded.
+    void recordAutoFrame(Stats& stats) {
+        if (stats.gpuFallbacks == 0) m_auto.record(m_autoPath, stats.totalMs);
+        stats.autoDecision = m_auto.decision();
+        stats.autoCpuMs = m_auto.cpuMs();
+        stats.autoGpuMs = m_auto.gpuMs();
     }
 
     /// The GL side (context and visibility pass), unless GPU levels are off (GpuLevels::Never: no EGL at all). Without
@@ -793,6 +816,9 @@ private:
     std::size_t m_regionVertices = 0;
     std::size_t m_regionTriangles = 0;
     bool m_uploaded = false;
+    AutoLevels m_auto;             ///< GpuLevels::Auto: the timing trial and its decision
+    AutoLevels::Path m_autoPath = AutoLevels::Path::Cpu;  ///< the path AutoLevels chose for this frame
+    bool m_autoActive = false;     ///< this frame's path was AutoLevels' choice
     bool m_gpuLevels = false;  ///< whether GPU levels run this frame (Settings::gpuLevels, the device, the pipeline)
     gl::GpuGeometry m_geometry;
     gl::LevelItems m_items;

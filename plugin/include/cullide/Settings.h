@@ -33,9 +33,11 @@ enum class Backend {
 };
 
 enum class GpuLevels {
-    /// Run the GPU visibility levels where they pay: on hardware devices. On software renderers (llvmpipe) a level
-    /// costs more than the exact work it saves on every scene measured (docs/performance.md), so the CPU pre-passes
-    /// and the exact stage do the work there. Results are identical either way.
+    /// Run the GPU visibility levels where they pay, by measurement: the first four frames of a scene (and again
+    /// when its triangle count halves or doubles) alternate the CPU path and the GPU levels, and the faster runs
+    /// from then on (Stats::autoDecision, autoCpuMs, autoGpuMs). The same rule on every device. Results are
+    /// identical either way (with Settings::exactTriangles false the candidate supersets differ). Without a GL
+    /// device: the CPU path.
     Auto,
     /// Always run the GPU levels (tests, benchmarks, the paper-faithful pipeline).
     Always,

@@ -62,6 +62,20 @@ std::uint32_t bitsFor(std::uint32_t maxValue) {
 constexpr double kTimerFactor = 1.02;
 constexpr double kTimerSlackMs = 0.25;
 
+/// Compute back-end: pixels of a primitive's footprint scanned per invocation. Software renderers (llvmpipe) run
+/// a few invocations per core, so long bands cost nothing there and keep the records few. A GPU needs the work
+/// spread over many threads: a band of 4,096 pixels is 4,096 dependent image atomics in one thread, which made the
+/// group level take 7-18 ms of GPU time per frame on an H100 (docs/benchmarks.md). There, bands are as short as
+/// needed for about kTargetInvocations records (each run on three view axes), but at least kMinPixelsPerInvocation
+/// pixels, so that the per-iteration record upload stays bounded.
+constexpr double kTargetInvocations = 131072.0;
+constexpr double kMinPixelsPerInvocation = 32.0;
+double pixelsPerInvocation(double footprintPixels, bool software) {
+    if (software) return CULLIDE_PIXELS_PER_INVOCATION;
+    return std::clamp(std::ceil(footprintPixels / kTargetInvocations), kMinPixelsPerInvocation,
+                      double{CULLIDE_PIXELS_PER_INVOCATION});
+}
+
 enum Buffer { kPositions, kIndices, kBoxes, kPrims, kOwners, kFlags, kRecords, kCounters, kBufferCount };
 constexpr std::size_t kRecordBytes = 7 * 16;  // PrimRecord in common.glsl
 
@@ -82,6 +96,7 @@ struct VisibilityPass::Impl {
     std::size_t maxGroups = 65535;  ///< GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]
     double coordinateBound = 0.0;
     std::vector<std::uint32_t> primScratch;
+    std::vector<double> footprintScratch;  ///< compute back-end: pixels of each alive primitive's largest footprint
     const GpuGeometry* geometry = nullptr;
     GLuint overflows = 0;  ///< compute invocations of the last iteration that refused to run (see bindings.h)
 
@@ -225,23 +240,34 @@ struct VisibilityPass::Impl {
             depthPad[a] = static_cast<float>(margin / extent[a] + relative + std::ldexp(1.0, -20));
         }
         // Primitives of the alive items; on the compute back-end each is split into bands of at most
-        // CULLIDE_PIXELS_PER_INVOCATION pixels of its largest footprint over the three views.
-        primScratch.clear();
+        // pixelsPerInvocation() pixels of its largest footprint over the three views.
         const bool split = settings.backend == Backend::Compute;
+        footprintScratch.clear();
+        double footprintPixels = 0.0;
+        for (std::size_t i = 0; split && i < items.size(); ++i) {
+            if (!alive[i]) continue;
+            for (std::uint32_t p = items.primBegin[i]; p < items.primBegin[i + 1]; ++p) {
+                const Vec3 size = primExtent(items.prims[p]);
+                double pixels = 0.0;
+                for (int a = 0; a < 3; ++a) {
+                    const int u = (a + 1) % 3, v = (a + 2) % 3;
+                    pixels = std::max(pixels, (size[u] * pixelScale[u] + 2.0 * halfSize[u] + 3.0) *
+                                                  (size[v] * pixelScale[v] + 2.0 * halfSize[v] + 3.0));
+                }
+                footprintScratch.push_back(pixels);
+                footprintPixels += pixels;
+            }
+        }
+        const double perInvocation = pixelsPerInvocation(footprintPixels, context.isSoftware());
+        primScratch.clear();
+        std::size_t footprint = 0;
         for (std::size_t i = 0; i < items.size(); ++i) {
             if (!alive[i]) continue;
             for (std::uint32_t p = items.primBegin[i]; p < items.primBegin[i + 1]; ++p) {
                 std::uint32_t bands = 1;
                 if (split) {
-                    const Vec3 size = primExtent(items.prims[p]);
-                    double pixels = 0.0;
-                    for (int a = 0; a < 3; ++a) {
-                        const int u = (a + 1) % 3, v = (a + 2) % 3;
-                        pixels = std::max(pixels, (size[u] * pixelScale[u] + 2.0 * halfSize[u] + 3.0) *
-                                                      (size[v] * pixelScale[v] + 2.0 * halfSize[v] + 3.0));
-                    }
                     bands = static_cast<std::uint32_t>(
-                        std::min(1e6, std::ceil(pixels / CULLIDE_PIXELS_PER_INVOCATION)));
+                        std::min(1e6, std::ceil(footprintScratch[footprint++] / perInvocation)));
                     bands = std::max(bands, 1u);
                 }
                 for (std::uint32_t band = 0; band < bands; ++band) {

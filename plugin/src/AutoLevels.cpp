@@ -1,0 +1,33 @@
+#include "AutoLevels.h"
+
+namespace cullide {
+
+AutoLevels::Path AutoLevels::choose(std::size_t triangles) {
+    m_pending = false;
+    if (triangles == 0) return Path::Cpu;  // nothing for the levels: no trial frame, no decision needed
+    const bool resized = triangles > 2 * m_triangles || 2 * triangles < m_triangles;
+    if (m_step == 0 || resized) {  // a new trial (also when the scene jumps in size during one)
+        m_step = 0;
+        m_triangles = triangles;
+    }
+    if (!measuring()) return m_decision;
+    m_pending = true;
+    return trialPath(m_step);
+}
+
+void AutoLevels::record(Path path, double ms) {
+    if (!m_pending || path != trialPath(m_step)) return;
+    m_pending = false;
+    if (m_step >= 2) (path == Path::Cpu ? m_trialCpuMs : m_trialGpuMs) = ms;  // steps 0, 1: warm-ups
+    if (++m_step < kTrialFrames) return;
+    m_cpuMs = m_trialCpuMs;
+    m_gpuMs = m_trialGpuMs;
+    m_decision = m_gpuMs < m_cpuMs ? Path::Gpu : Path::Cpu;
+}
+
+std::string AutoLevels::decision() const {
+    if (measuring()) return "measuring";
+    return m_decision == Path::Gpu ? "gpu" : "cpu";
+}
+
+}  // namespace cullide

@@ -1,0 +1,46 @@
+// GpuLevels::Auto: whether a frame runs the GPU visibility levels, decided by timing both paths on the scene itself.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+namespace cullide {
+
+/// The trial: the first frames of a scene alternate the two paths (CPU, GPU, CPU, GPU); the first frame of each is
+/// a warm-up (static caches, the first upload of the device's resident region) and is not compared; the second of
+/// each is timed. From then on the faster path runs, until the scene's triangle count leaves [half, twice] the
+/// count it was measured at; then the trial starts again. Both paths give the same pairs, so the trial frames are
+/// ordinary frames: they cost at most one slower path's frame per timed trial frame and warm-up.
+/// The same rule on every device: a GPU that loses to the CPU path, and a software renderer that wins, are handled
+/// alike.
+class AutoLevels {
+public:
+    enum class Path { Cpu, Gpu };
+
+    /// The path for the next frame of a scene with `triangles` triangles (those the levels would see). A frame
+    /// without triangles runs the CPU path and is no trial frame.
+    Path choose(std::size_t triangles);
+    /// The frame just run on `path` (as returned by choose()) took `ms` (wall time of the whole frame).
+    void record(Path path, double ms);
+
+    /// A trial is under way (or none has started: the first frame with triangles starts one).
+    bool measuring() const { return m_step < kTrialFrames; }
+    /// "measuring", or "gpu" / "cpu": the faster path of the last trial.
+    std::string decision() const;
+    /// The timed trial frames of the last completed trial, in ms (0 before the first completes).
+    double cpuMs() const { return m_cpuMs; }
+    double gpuMs() const { return m_gpuMs; }
+
+private:
+    static constexpr int kTrialFrames = 4;
+    static Path trialPath(int step) { return step % 2 == 0 ? Path::Cpu : Path::Gpu; }
+
+    int m_step = 0;                   ///< trial frames done; kTrialFrames = decided
+    bool m_pending = false;           ///< the path last chosen is a trial frame, not yet recorded
+    std::size_t m_triangles = 0;      ///< triangle count of the scene when the trial started
+    double m_trialCpuMs = 0.0, m_trialGpuMs = 0.0;
+    double m_cpuMs = 0.0, m_gpuMs = 0.0;
+    Path m_decision = Path::Cpu;
+};
+
+}  // namespace cullide
