@@ -216,10 +216,12 @@ void ReportWriter::write() {
             "*Missed* = exact pairs not reported, *extra* = reported pairs that do not intersect. The "
             "false-positive ratio is CULLIDE's cost of culling: candidate triangle pairs handed to the exact test "
             "divided by the exact pairs. Reliable mode must miss nothing.\n\n"
-            "**GPU levels on llvmpipe.** With `GpuLevels::Auto` (the default) the visibility levels run only on "
-            "hardware devices; on llvmpipe the default path is the CPU box pre-pass plus the exact stage, on "
-            "which resolution has no effect. The resolution sweep therefore forces the GPU levels "
-            "(`GpuLevels::Always`) and shows the default path as a reference line.\n\n"
+            "**GPU levels and `Auto`.** With `GpuLevels::Auto` (the default) the culler times both paths on the "
+            "scene's first frames (CPU path, GPU levels, CPU path, GPU levels; the last two compared) and runs the "
+            "faster; section 5 of each machine lists the decision and both timings. Where the CPU path wins, "
+            "resolution has no effect on the default path, so the resolution sweep forces the GPU levels "
+            "(`GpuLevels::Always`) and shows the default path as a reference line. The trial frames are among the "
+            "timed frames: they show in the max column, not in the median.\n\n"
             "**Memory.** Peak resident memory (VmHWM) of the process that ran the (scene, engine) pair, scene "
             "generation included. GL device bytes: `Stats::gpuDeviceBytes`, what the culler holds on its GL device "
             "(buffer capacities, which only grow, plus the four view images, allocated even when no GPU level runs) "
@@ -232,6 +234,7 @@ void ReportWriter::write() {
         sweep(c);
         scaling(c);
         memory(c);
+        gpuLevels(c);
     }
     gpuComparison();
     m_md << "## Reproduce\n\n```sh\nscripts/bench.sh            # full run, writes this page\nscripts/bench.sh --quick    "
@@ -625,6 +628,46 @@ void ReportWriter::memory(const Class& c) {
         }
     m_md << "\nPeak resident memory includes the scene generator's meshes (every process holds them) and, for "
             "CULLIDE, the GL driver (llvmpipe allocates its images in host memory).\n\n";
+}
+
+void ReportWriter::gpuLevels(const Class& c) {
+    m_md << "### 5. GPU levels and the Auto decision (" << c.name << ")\n\n"
+            "`Auto`: the decision after the last frame and the timed trial frames behind it (whole-frame ms). GPU "
+            "levels forced: the levels' wall time (CPU side included: records, uploads, waiting for the flags), "
+            "their GPU time from timer queries (– where the driver's timer is absent or implausible) and the "
+            "draws and dispatches per frame (medians); per level, the last frame's items per iteration and its "
+            "CPU / GPU ms.\n\n| scene | Auto decision | trial: CPU path ms | trial: GPU levels ms | engine | levels "
+            "wall ms | levels GPU ms | draws | per level (last frame): items per iteration, CPU / GPU ms |\n"
+            "|---|---|---|---|---|---|---|---|---|\n";
+    std::ostringstream rows;
+    for (const auto& scene : scenes(c, "side")) {
+        const json* a = find(c, "side", scene, "cullide");
+        if (a == nullptr || !a->contains("auto_decision")) continue;
+        for (const std::string e : {"cullide-gpu", "cullide-raster"}) {
+            const json* r = find(c, "side", scene, e);
+            if (r == nullptr) continue;
+            double wall = 0.0;
+            for (const auto& stage : r->value("stages", json::array()))
+                if (stage.at(0) == "gpu levels") wall = stage.at(1).get<double>();
+            std::string levels;
+            for (const auto& l : r->value("levels_last_frame", json::array())) {
+                std::string items;
+                for (const auto& n : l.value("items", json::array()))
+                    items += (items.empty() ? "" : " → ") + count(n.get<double>());
+                levels += (levels.empty() ? "" : "; ") + l.value("name", std::string()) + " " + items + ", " +
+                          ms(l.value("cpu_ms", 0.0)) + " / " +
+                          (l.contains("gpu_ms") ? ms(l.value("gpu_ms", 0.0)) : std::string("–"));
+            }
+            rows << "| " << scene << " | " << a->value("auto_decision", std::string()) << " | "
+                 << ms(a->value("auto_cpu_ms", 0.0)) << " | " << ms(a->value("auto_gpu_ms", 0.0)) << " | " << e
+                 << " | " << ms(wall) << " | "
+                 << (number(*r, "gpu_timer_ms_median") ? ms(*number(*r, "gpu_timer_ms_median")) : "–") << " | "
+                 << optCount(*r, "draws_median") << " | " << levels << " |\n";
+        }
+    }
+    m_md << (rows.str().empty() ? "| – | (these records predate the measured `Auto` decision) | | | | | | | |\n"
+                                : rows.str())
+         << "\n";
 }
 
 void ReportWriter::gpuComparison() {

@@ -33,6 +33,7 @@ private:
     void sweep(const Class& c);
     void scaling(const Class& c);
     void memory(const Class& c);
+    void gpuLevels(const Class& c);
     void gpuComparison();
     void plotSide(const Class& c);
     void plotSweep(const Class& c);
