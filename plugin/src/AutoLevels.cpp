@@ -6,11 +6,16 @@ AutoLevels::Path AutoLevels::choose(std::size_t triangles) {
     m_pending = false;
     if (triangles == 0) return Path::Cpu;  // nothing for the levels: no trial frame, no decision needed
     const bool resized = triangles > 2 * m_triangles || 2 * triangles < m_triangles;
-    if (m_step == 0 || resized) {  // a new trial (also when the scene jumps in size during one)
+    // A new trial: the first, a size jump during one, or a size change once the decision has held long enough
+    // (a scene whose colliding set keeps changing size would otherwise pay for the slower path every few frames).
+    if (m_step == 0 || (resized && (measuring() || m_framesDecided >= kMinFramesBetweenTrials))) {
         m_step = 0;
         m_triangles = triangles;
     }
-    if (!measuring()) return m_decision;
+    if (!measuring()) {
+        ++m_framesDecided;
+        return m_decision;
+    }
     m_pending = true;
     return trialPath(m_step);
 }
@@ -23,6 +28,7 @@ void AutoLevels::record(Path path, double ms) {
     m_cpuMs = m_trialCpuMs;
     m_gpuMs = m_trialGpuMs;
     m_decision = m_gpuMs < m_cpuMs ? Path::Gpu : Path::Cpu;
+    m_framesDecided = 0;
 }
 
 std::string AutoLevels::decision() const {

@@ -9,7 +9,8 @@ namespace cullide {
 /// The trial: the first frames of a scene alternate the two paths (CPU, GPU, CPU, GPU); the first frame of each is
 /// a warm-up (static caches, the first upload of the device's resident region) and is not compared; the second of
 /// each is timed. From then on the faster path runs, until the scene's triangle count leaves [half, twice] the
-/// count it was measured at; then the trial starts again. Both paths give the same pairs, so the trial frames are
+/// count it was measured at, once the decision has held for kMinFramesBetweenTrials frames; then the trial starts
+/// again. So a trial's slower frames cost at most 2 in every kMinFramesBetweenTrials + 4. Both paths give the same pairs, so the trial frames are
 /// ordinary frames: they cost at most one slower path's frame per timed trial frame and warm-up.
 /// The same rule on every device: a GPU that loses to the CPU path, and a software renderer that wins, are handled
 /// alike.
@@ -33,9 +34,11 @@ public:
 
 private:
     static constexpr int kTrialFrames = 4;
+    static constexpr int kMinFramesBetweenTrials = 120;
     static Path trialPath(int step) { return step % 2 == 0 ? Path::Cpu : Path::Gpu; }
 
     int m_step = 0;                   ///< trial frames done; kTrialFrames = decided
+    int m_framesDecided = 0;          ///< frames run on the decision since the last trial
     bool m_pending = false;           ///< the path last chosen is a trial frame, not yet recorded
     std::size_t m_triangles = 0;      ///< triangle count of the scene when the trial started
     double m_trialCpuMs = 0.0, m_trialGpuMs = 0.0;

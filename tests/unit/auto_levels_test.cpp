@@ -49,10 +49,14 @@ TEST(AutoLevels, MeasuresAgainWhenTheSceneHalvesOrDoubles) {
     EXPECT_EQ(a.choose(2000), Path::Cpu);  // within [half, twice]: the decision holds
     EXPECT_EQ(a.choose(500), Path::Cpu);
     EXPECT_FALSE(a.measuring());
-    // Doubled and more: a new trial, and this time the GPU wins.
+    // Doubled, but too soon after the trial: the decision holds (a colliding set that keeps changing size must not
+    // pay for trials every few frames).
+    for (int frame = 2; frame < 120; ++frame) EXPECT_EQ(a.choose(frame % 2 == 0 ? 5000 : 1000), Path::Cpu) << frame;
+    EXPECT_FALSE(a.measuring());
+    // Doubled and more, 120 frames on: a new trial, and this time the GPU wins.
     runTrial(a, 2001, 9.0, 2.0);
     EXPECT_EQ(a.decision(), "gpu");
-    EXPECT_EQ(a.choose(2001), Path::Gpu);
+    for (int frame = 0; frame < 120; ++frame) EXPECT_EQ(a.choose(2001), Path::Gpu);
     // Less than half: measured again.
     runTrial(a, 1000, 2.0, 9.0);
     EXPECT_EQ(a.decision(), "cpu");
