@@ -65,7 +65,7 @@ constexpr double kTimerSlackMs = 0.25;
 /// Compute back-end: pixels of a primitive's footprint scanned per invocation. Software renderers (llvmpipe) run
 /// a few invocations per core, so long bands cost nothing there and keep the records few. A GPU needs the work
 /// spread over many threads: a band of 4,096 pixels is 4,096 dependent image atomics in one thread, which made the
-/// group level take 7-18 ms of GPU time per frame on an H100 (docs/benchmarks.md). There, bands are as short as
+/// group level take 7-18 ms of GPU time per frame on an H100 (docs/performance.md). There, bands are as short as
 /// needed for about kTargetInvocations records (each run on three view axes), but at least kMinPixelsPerInvocation
 /// pixels, so that the per-iteration record upload stays bounded.
 constexpr double kTargetInvocations = 131072.0;
