@@ -10,8 +10,8 @@ namespace cullide {
 /// a warm-up (static caches, the first upload of the device's resident region) and is not compared; the second of
 /// each is timed. From then on the faster path runs, until the scene's triangle count leaves [half, twice] the
 /// count it was measured at, once the decision has held for kMinFramesBetweenTrials frames; then the trial starts
-/// again. So a trial's slower frames cost at most 2 in every kMinFramesBetweenTrials + 4. Both paths give the same pairs, so the trial frames are
-/// ordinary frames: they cost at most one slower path's frame per timed trial frame and warm-up.
+/// again. Both paths give the same pairs, so trial frames are ordinary frames; a trial costs at most two frames on
+/// the slower path per kMinFramesBetweenTrials + 4 frames.
 /// The same rule on every device: a GPU that loses to the CPU path, and a software renderer that wins, are handled
 /// alike.
 class AutoLevels {
