@@ -11,7 +11,20 @@
 #define CULLIDE_SSBO_ITEM_OWNER 4  /* uint[itemCount]: owner (compact object id within the level) */
 #define CULLIDE_SSBO_FLAGS 5       /* uint[itemCount]: per-view "not fully visible" bits, atomicOr */
 #define CULLIDE_SSBO_RECORDS 6     /* PrimRecord[3 * primCount]: per (view axis, primitive) setup, raster back-end */
-#define CULLIDE_SSBO_COUNTERS 7    /* uint[1]: compute invocations that would exceed CULLIDE_MAX_LOOP_ITERATIONS */
+#define CULLIDE_SSBO_COUNTERS 7    /* uint[CULLIDE_COUNTER_COUNT]: per iteration, see CULLIDE_COUNTER_* */
+#define CULLIDE_SSBO_ALIVE 8       /* uint[itemCount]: 1 = the item is still in the level's set (kept on the device) */
+#define CULLIDE_SSBO_ITEM_BOUNDS 9 /* float[6 * itemCount]: item box, min xyz, max xyz (upload-origin relative) */
+#define CULLIDE_SSBO_PRIMS_OUT 10  /* uvec4[primCount]: compact.comp: the records of the items still alive */
+
+/* Counters, reset before every iteration. */
+#define CULLIDE_COUNTER_OVERFLOWS 0 /* compute invocations that would exceed CULLIDE_MAX_LOOP_ITERATIONS */
+#define CULLIDE_COUNTER_ALIVE 1     /* items alive after the iteration (survive.comp) */
+#define CULLIDE_COUNTER_OWNER_MIN 2 /* smallest and largest owner id among them */
+#define CULLIDE_COUNTER_OWNER_MAX 3
+#define CULLIDE_COUNTER_LO 4        /* 3 entries: min xyz of their boxes, as order-preserving float bits */
+#define CULLIDE_COUNTER_HI 7        /* 3 entries: max xyz of their boxes, likewise */
+#define CULLIDE_COUNTER_RECORDS 10  /* records compact.comp kept */
+#define CULLIDE_COUNTER_COUNT 11
 
 /* Per-pixel images (r32ui), three views side by side: width 3 * resolution, height resolution. */
 #define CULLIDE_IMAGE_NEAR1 0  /* min over items of (quantized nearest depth << idBits | owner) */
@@ -32,6 +45,7 @@
 #define CULLIDE_LOC_PRIM_COUNT 9    /* uint: primitives in the draw/dispatch (compute back-end) */
 #define CULLIDE_LOC_AXES 10         /* uint: bit mask of the view axes in use (x = 1, y = 2, z = 4) */
 #define CULLIDE_LOC_PRIM_BASE 11    /* uint: first primitive of this dispatch (dispatches are split at the group-count limit) */
+#define CULLIDE_LOC_REQUIRED 12     /* uint: survive.comp: the flag bits an item needs to stay alive */
 
 #define CULLIDE_COMPUTE_GROUP_SIZE 64 /* local_size_x of cull.comp */
 /* The C++ side splits a primitive's footprint into bands of at most this many pixels per compute invocation (on a
@@ -39,7 +53,7 @@
 #define CULLIDE_PIXELS_PER_INVOCATION 4096
 /* ...so no invocation comes near llvmpipe's limit of 65535 loop iterations per invocation (shared by all loops;
  * past it loops silently stop). An invocation that would still exceed this bound does nothing and counts itself
- * in CULLIDE_SSBO_COUNTERS; the C++ side then discards that iteration's pruning (conservative). */
+ * in CULLIDE_COUNTER_OVERFLOWS; that iteration prunes nothing (conservative) and the level ends. */
 #define CULLIDE_MAX_LOOP_ITERATIONS 60000
 
 #define CULLIDE_PASS_NEAREST 0  /* write NEAR1 / FAR1 */

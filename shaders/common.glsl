@@ -7,6 +7,7 @@ layout(std430, binding = CULLIDE_SSBO_INDICES) readonly buffer Indices { uint in
 layout(std430, binding = CULLIDE_SSBO_BOXES) readonly buffer Boxes { float boxes[]; };
 layout(std430, binding = CULLIDE_SSBO_PRIMS) readonly buffer Prims { uvec4 prims[]; };
 layout(std430, binding = CULLIDE_SSBO_ITEM_OWNER) readonly buffer Owners { uint owners[]; };
+layout(std430, binding = CULLIDE_SSBO_ALIVE) readonly buffer Alive { uint alive[]; };
 
 layout(location = CULLIDE_LOC_PASS) uniform int u_pass;
 layout(location = CULLIDE_LOC_RESOLUTION) uniform int u_resolution;
@@ -20,6 +21,9 @@ layout(location = CULLIDE_LOC_CONSERVATIVE) uniform int u_conservative;
 layout(location = CULLIDE_LOC_PRIM_COUNT) uniform uint u_primCount;
 layout(location = CULLIDE_LOC_AXES) uniform uint u_axes;
 layout(location = CULLIDE_LOC_PRIM_BASE) uniform uint u_primBase;
+
+// Items pruned by an earlier iteration of the level are neither drawn nor occluders.
+bool primAlive(uint index) { return alive[prims[index].y] != 0u; }
 
 bool axisEnabled(int axis) { return ((u_axes >> uint(axis)) & 1u) != 0u; }
 

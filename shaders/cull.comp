@@ -4,13 +4,13 @@
 // on a GPU it avoids the fixed-function path.
 
 layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
-layout(std430, binding = CULLIDE_SSBO_COUNTERS) coherent buffer Counters { uint overflows; };
+layout(std430, binding = CULLIDE_SSBO_COUNTERS) coherent buffer Counters { uint counters[]; };
 
 void main() {
     uint index = u_primBase + gl_GlobalInvocationID.x;
     if (index >= u_primCount) return;
     int axis = int(gl_GlobalInvocationID.y);
-    if (!axisEnabled(axis)) return;
+    if (!axisEnabled(axis) || !primAlive(index)) return;
     uint band = prims[index].z;
     uint bands = prims[index].w;
     Prim p = makePrim(index, axis);
@@ -23,7 +23,7 @@ void main() {
     uint total = width * uint(last.y - first.y + 1);
     if (band >= total) return;
     if ((total - band + bands - 1u) / bands > uint(CULLIDE_MAX_LOOP_ITERATIONS)) {
-        atomicAdd(overflows, 1u);
+        atomicAdd(counters[CULLIDE_COUNTER_OVERFLOWS], 1u);
         return;
     }
     uint bits = 0u;

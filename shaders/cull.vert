@@ -14,7 +14,8 @@ void main() {
     vec2 ext = (rect.zw + grow) - lo;
     int corner = gl_VertexID % 3;
     vec2 px = corner == 0 ? lo : (corner == 1 ? lo + vec2(2.0 * ext.x + 1.0, 0.0) : lo + vec2(0.0, 2.0 * ext.y + 1.0));
-    if (!axisEnabled(axis)) px = vec2(-4.0);  // a disabled view: a degenerate triangle outside the target
+    // A disabled view or a pruned item: a degenerate triangle outside the target.
+    if (!axisEnabled(axis) || alive[records[record].ids.x] == 0u) px = vec2(-4.0);
     float width = float(3 * u_resolution);
     gl_Position = vec4(((px.x + float(axis * u_resolution)) / width) * 2.0 - 1.0,
                        (px.y / float(u_resolution)) * 2.0 - 1.0, 0.0, 1.0);

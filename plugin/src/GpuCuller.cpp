@@ -263,19 +263,21 @@ private:
     /// Orders an object's triangles along a Morton curve of their centroids, so that k consecutive ones are close
     /// together whatever the file order (scanned meshes and soups are not stored spatially). Per frame, O(n).
     void spatialOrder(std::uint32_t o, std::vector<std::uint32_t>& order) const {
+        thread_local std::vector<std::uint64_t> keys;  // per worker: objects are ordered in parallel
+        thread_local std::vector<std::uint64_t> tmp;
         const TriangleMesh& mesh = meshOf(o);
         const Aabb& box = m_valid[o].box;
         const Vec3 scale = (box.extent().array().max(1e-300)).inverse() * 1023.0;
-        m_mortonScratch.clear();
+        keys.clear();
         for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
             const auto& tri = mesh.triangles[t];
             const Vec3 c = ((mesh.vertices[tri[0]] + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]) / 3.0 - box.min)
                                .cwiseProduct(scale);
-            m_mortonScratch.push_back(morton::key(morton::code(c[0], c[1], c[2]), t));
+            keys.push_back(morton::key(morton::code(c[0], c[1], c[2]), t));
         }
-        morton::sortByCode(m_mortonScratch, m_mortonTmp);
-        order.resize(m_mortonScratch.size());
-        for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(m_mortonScratch[i]);
+        morton::sortByCode(keys, tmp);
+        order.resize(keys.size());
+        for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(keys[i]);
     }
 
     /// Triangle boxes of new static meshes; with GPU levels also every active mesh's boxes, its spatial order and
@@ -288,10 +290,16 @@ private:
         m_boxesOf.assign(m_valid.size(), nullptr);
         m_needBoxes.assign(m_valid.size(), 0);
         const auto k = static_cast<std::uint32_t>(m_settings.groupSize);
+        if (m_gpuLevels) {  // the CPU path has no groups (collectDirect)
+            m_pool.parallelFor(m_valid.size(), 1, [&](std::size_t begin, std::size_t end) {
+                for (std::size_t o = begin; o < end; ++o)
+                    if (m_active[o] && isMesh(static_cast<std::uint32_t>(o)))
+                        spatialOrder(static_cast<std::uint32_t>(o), m_order[o]);
+            });
+        }
         for (std::uint32_t o = 0; o < m_valid.size(); ++o) {
             if (!m_active[o] || !isMesh(o)) continue;
             const TriangleMesh& mesh = meshOf(o);
-            if (m_gpuLevels) spatialOrder(o, m_order[o]);  // the CPU path has no groups (collectDirect)
             StaticEntry* e = m_staticEntry[o];
             if (e != nullptr) {
                 m_boxesOf[o] = &e->boxes;
@@ -388,33 +396,36 @@ private:
         m_geometry.boxes.clear();
         m_baseTriangle.assign(m_valid.size(), 0);
         m_objectBox.assign(m_valid.size(), 0);
-        auto appendMesh = [&](std::uint32_t o) {
-            const TriangleMesh& mesh = meshOf(o);
-            const auto baseVertex = static_cast<std::uint32_t>(m_geometry.positions.size() / 3);
-            m_baseTriangle[o] = static_cast<std::uint32_t>(m_geometry.indices.size() / 3);
-            for (const Vec3& v : mesh.vertices) {
-                const Vec3 r = v.allFinite() ? Vec3(v - m_origin) : Vec3::Zero();  // unused vertices may be NaN
-                for (int a = 0; a < 3; ++a) m_geometry.positions.push_back(static_cast<float>(r[a]));
-            }
-            for (const auto& t : mesh.triangles)
-                for (std::uint32_t index : t) m_geometry.indices.push_back(baseVertex + index);
-        };
         // Static meshes: in the region already, or appended to it now (sent this frame, kept afterwards).
+        m_appended.clear();
+        std::size_t vertices = m_regionVertices;
+        std::size_t triangles = m_regionTriangles;
+        auto append = [&](std::uint32_t o) {
+            m_appended.push_back({o, static_cast<std::uint32_t>(vertices), static_cast<std::uint32_t>(triangles)});
+            m_baseTriangle[o] = static_cast<std::uint32_t>(triangles);
+            vertices += meshOf(o).vertices.size();
+            triangles += meshOf(o).triangles.size();
+        };
         for (std::uint32_t o = 0; o < m_valid.size(); ++o) {
             StaticEntry* e = m_staticEntry[o];
             if (!m_active[o] || !isMesh(o) || e == nullptr) continue;
             if (e->regionEpoch != m_regionEpoch) {
-                appendMesh(o);
+                append(o);
                 e->regionEpoch = m_regionEpoch;
                 e->regionBaseTriangle = m_baseTriangle[o];
             }
             m_baseTriangle[o] = e->regionBaseTriangle;
         }
-        m_regionVertices = m_geometry.positions.size() / 3;
-        m_regionTriangles = m_geometry.indices.size() / 3;
+        m_regionVertices = vertices;
+        m_regionTriangles = triangles;
         // Everything else, every frame.
         for (std::uint32_t o = 0; o < m_valid.size(); ++o)
-            if (m_active[o] && isMesh(o) && m_staticEntry[o] == nullptr) appendMesh(o);
+            if (m_active[o] && isMesh(o) && m_staticEntry[o] == nullptr) append(o);
+        m_geometry.positions.resize(3 * vertices);
+        m_geometry.indices.resize(3 * triangles);
+        m_pool.parallelFor(m_appended.size(), 1, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t i = begin; i < end; ++i) writeMesh(m_appended[i]);
+        });
         double bound = 0.0;
         for (std::uint32_t o = 0; o < m_valid.size(); ++o)
             if (m_active[o]) m_objectBox[o] = appendBox(m_valid[o].box, bound);
@@ -422,6 +433,26 @@ private:
         for (std::size_t g = 0; g < m_groups.size(); ++g) m_groupBox[g] = appendBox(m_groups[g].box, bound);
         m_geometry.coordinateBound = bound;
         m_pass->upload(m_geometry, stats);
+    }
+
+    /// Where a mesh goes in the frame's position and index arrays.
+    struct MeshSlot {
+        std::uint32_t object;
+        std::uint32_t baseVertex;
+        std::uint32_t baseTriangle;
+    };
+
+    /// A mesh's vertices (relative to the origin, as floats) and its triangles' global vertex indices.
+    void writeMesh(const MeshSlot& slot) {
+        const TriangleMesh& mesh = meshOf(slot.object);
+        float* position = &m_geometry.positions[3 * std::size_t{slot.baseVertex}];
+        for (const Vec3& v : mesh.vertices) {
+            const Vec3 r = v.allFinite() ? Vec3(v - m_origin) : Vec3::Zero();  // unused vertices may be NaN
+            for (int a = 0; a < 3; ++a) *position++ = static_cast<float>(r[a]);
+        }
+        std::uint32_t* index = &m_geometry.indices[3 * std::size_t{slot.baseTriangle}];
+        for (const auto& t : mesh.triangles)
+            for (std::uint32_t k : t) *index++ = slot.baseVertex + k;
     }
 
     std::uint32_t appendBox(const Aabb& worldBox, double& bound) {
@@ -805,11 +836,10 @@ private:
     std::vector<StaticEntry*> m_staticEntry;          ///< per object: its entry (null: not static or not cached)
     std::vector<std::uint8_t> m_known;                ///< per object: validation kept from an earlier frame
     std::uint64_t m_frame = 0;
-    mutable std::vector<std::uint64_t> m_mortonScratch;
-    mutable std::vector<std::uint64_t> m_mortonTmp;
     std::vector<std::uint32_t> m_groupBox;
     std::vector<std::uint32_t> m_objectBox;
     std::vector<std::uint32_t> m_baseTriangle;
+    std::vector<MeshSlot> m_appended;  ///< uploadGeometry: the meshes written this frame
     Vec3 m_origin = Vec3::Zero();
     std::uint64_t m_regionEpoch = 0;  ///< bumped whenever the resident static region is rebuilt (0: none yet)
     double m_regionExtent = 0.0;      ///< extent of the active objects when the region's origin was chosen

@@ -11,6 +11,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -141,6 +142,21 @@ TEST(Snapshot, OrientationIsYUpAndRowZeroIsTheTop) {
                           blue));
     EXPECT_TRUE(isShadeOf(at(image, mid, static_cast<int>(yCentre - 1 * scale)), green));
     EXPECT_EQ(at(image, mid, static_cast<int>(yCentre + 1 * scale)), kWhite);
+}
+
+// The depth test decides what shows, not the draw order: the box drawn with its triangles in reverse order gives
+// the same image, up to a few pixels along edges where two faces meet at equal depth.
+TEST(Snapshot, DrawOrderDoesNotChangeTheImage) {
+    CULLIDE_SNAPSHOT_RENDERER_OR_SKIP(renderer);
+    const TriangleMesh box = scenes::makeBox(Vec3(1, 1, 1));
+    TriangleMesh reversed = box;
+    std::reverse(reversed.triangles.begin(), reversed.triangles.end());
+    SnapshotView view;
+    const Image forward = renderer->render({{&box, kRed}}, view);
+    const Image backward = renderer->render({{&reversed, kRed}}, view);
+    const std::size_t boxPixels = differingPixels(forward, renderer->render({}, view));
+    ASSERT_GT(boxPixels, 1000u);
+    EXPECT_LT(differingPixels(forward, backward), boxPixels / 50) << "of " << boxPixels << " box pixels";
 }
 
 TEST(Snapshot, HighlightedAndMarkedTrianglesChangeColour) {

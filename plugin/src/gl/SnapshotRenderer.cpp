@@ -360,6 +360,15 @@ private:
             glNamedRenderbufferStorage(m_depth, GL_DEPTH_COMPONENT24, width, height);
         }
         glNamedFramebufferRenderbuffer(depthTarget, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, m_depth);
+        // Without depth bits the depth test passes everything and the last triangle drawn shows: refuse.
+        GLint depthBits = 0;
+        glGetNamedFramebufferAttachmentParameteriv(depthTarget, GL_DEPTH_ATTACHMENT,
+                                                   GL_FRAMEBUFFER_ATTACHMENT_DEPTH_SIZE, &depthBits);
+        if (depthBits < 16) {
+            deleteTargets();
+            throw std::runtime_error("cullide: the snapshot depth buffer has " + std::to_string(depthBits) +
+                                     " bits (" + std::to_string(m_samples) + " samples)");
+        }
         for (GLuint fb : {m_framebuffer, m_multisampleFramebuffer}) {
             if (fb == 0) continue;
             const GLenum status = glCheckNamedFramebufferStatus(fb, GL_DRAW_FRAMEBUFFER);

@@ -4,10 +4,12 @@
 #include "gl/EglContext.h"
 #include "gl/GlApi.h"
 #include "gl/GlProgram.h"
+#include "FloatRounding.h"
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 #include <initializer_list>
 #include <string>
@@ -76,8 +78,53 @@ double pixelsPerInvocation(double footprintPixels, bool software) {
                       double{CULLIDE_PIXELS_PER_INVOCATION});
 }
 
-enum Buffer { kPositions, kIndices, kBoxes, kPrims, kOwners, kFlags, kRecords, kCounters, kBufferCount };
+enum Buffer {
+    kPositions,
+    kIndices,
+    kBoxes,
+    kPrims,
+    kPrimsNext,  ///< compact.comp's output; swapped with kPrims after every iteration
+    kOwners,
+    kFlags,
+    kRecords,
+    kCounters,
+    kAlive,
+    kItemBounds,
+    kBufferCount
+};
 constexpr std::size_t kRecordBytes = 7 * 16;  // PrimRecord in common.glsl
+
+/// The view of one iteration: an orthographic box, as the shaders' uniforms.
+struct View {
+    Aabb box;  ///< relative to the upload origin
+    float lo[3], pixelScale[3], depthScale[3], halfSize[3], depthPad[3];
+};
+
+/// survive.comp's counters after an iteration (see bindings.h).
+struct IterationResult {
+    std::uint32_t overflows = 0;
+    std::uint32_t alive = 0;
+    std::uint32_t ownerMin = 0;
+    std::uint32_t ownerMax = 0;
+    std::uint32_t records = 0;  ///< the alive items' records (now in kPrims)
+    Aabb bounds;  ///< of the alive items (float boxes, so never smaller than their double boxes)
+};
+
+/// Inverse of survive.comp's orderedBits.
+float fromOrderedBits(std::uint32_t key) {
+    const std::uint32_t bits = (key & 0x80000000u) != 0 ? (key & 0x7FFFFFFFu) : ~key;
+    float f = 0.0f;
+    std::memcpy(&f, &bits, sizeof f);
+    return f;
+}
+
+/// The flag bits an item needs to stay alive: both sides of every enabled axis.
+std::uint32_t requiredFlags(unsigned axes) {
+    std::uint32_t required = 0;
+    for (unsigned a = 0; a < 3; ++a)
+        if (axes & (1u << a)) required |= 3u << (2 * a);
+    return required;
+}
 
 }  // namespace
 
@@ -86,6 +133,8 @@ struct VisibilityPass::Impl {
     Settings settings;
     GLuint program = 0;
     GLuint setupProgram = 0;  // raster back-end only
+    GLuint surviveProgram = 0;
+    GLuint compactProgram = 0;
     GLuint vao = 0;
     GLuint framebuffer = 0;
     GLuint images[4] = {};
@@ -97,8 +146,9 @@ struct VisibilityPass::Impl {
     double coordinateBound = 0.0;
     std::vector<std::uint32_t> primScratch;
     std::vector<double> footprintScratch;  ///< compute back-end: pixels of each alive primitive's largest footprint
+    std::vector<float> boundsScratch;
+    std::vector<std::uint32_t> aliveScratch;
     const GpuGeometry* geometry = nullptr;
-    GLuint overflows = 0;  ///< compute invocations of the last iteration that refused to run (see bindings.h)
 
     /// Extent of a primitive (a box, or a triangle of the uploaded geometry).
     Vec3 primExtent(std::uint32_t ref) const {
@@ -113,7 +163,6 @@ struct VisibilityPass::Impl {
         }
         return b.extent();
     }
-    std::vector<std::uint32_t> flagScratch;
 
     Impl(EglContext& c, const Settings& s) : context(c), settings(s) {
         context.makeCurrent();
@@ -134,6 +183,8 @@ struct VisibilityPass::Impl {
             }
             program = linkProgram({vs, fs}, "the visibility raster program");
         }
+        surviveProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"survive.comp"})}, "the survivor program");
+        compactProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"compact.comp"})}, "the compaction program");
         glCreateVertexArrays(1, &vao);
         glCreateBuffers(kBufferCount, buffers);
         const GLsizei width = 3 * settings.resolution;
@@ -147,6 +198,7 @@ struct VisibilityPass::Impl {
         GLint limit = 65535;
         glGetIntegeri_v(GL_MAX_COMPUTE_WORK_GROUP_COUNT, 0, &limit);
         maxGroups = static_cast<std::size_t>(std::max(1, limit));
+        reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * CULLIDE_COUNTER_COUNT);
         checkGlError("creating the visibility pass");
     }
 
@@ -159,14 +211,17 @@ struct VisibilityPass::Impl {
         glDeleteVertexArrays(1, &vao);
         glDeleteProgram(program);
         if (setupProgram) glDeleteProgram(setupProgram);
+        glDeleteProgram(surviveProgram);
+        glDeleteProgram(compactProgram);
     }
 
-    /// (primitive, axis) invocations in dispatches of at most GL_MAX_COMPUTE_WORK_GROUP_COUNT[0] groups each.
-    void dispatchAll(std::size_t primCount) const {
-        const std::size_t groups = (primCount + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
+    /// `count` invocations (times `layers` in y) in dispatches of at most GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]
+    /// groups each; the program reads its first index from CULLIDE_LOC_PRIM_BASE.
+    void dispatchAll(std::size_t count, GLuint layers) const {
+        const std::size_t groups = (count + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
         for (std::size_t first = 0; first < groups; first += maxGroups) {
             glUniform1ui(CULLIDE_LOC_PRIM_BASE, static_cast<GLuint>(first * CULLIDE_COMPUTE_GROUP_SIZE));
-            glDispatchCompute(static_cast<GLuint>(std::min<std::size_t>(maxGroups, groups - first)), 3, 1);
+            glDispatchCompute(static_cast<GLuint>(std::min<std::size_t>(maxGroups, groups - first)), layers, 1);
         }
         glUniform1ui(CULLIDE_LOC_PRIM_BASE, 0);
     }
@@ -174,7 +229,7 @@ struct VisibilityPass::Impl {
     void draw(int pass, std::size_t primCount, LevelStats& level, Stats& stats) {
         glUniform1i(CULLIDE_LOC_PASS, pass);
         if (settings.backend == Backend::Compute) {
-            dispatchAll(primCount);
+            dispatchAll(primCount, 3);
         } else {
             const ThirdPartyLeakScope ignoreMesaDrawLeak;
             glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(3 * 3 * primCount));  // 3 views x primCount records
@@ -185,62 +240,77 @@ struct VisibilityPass::Impl {
         stats.draws += 1;
     }
 
-    void setUniforms(std::size_t primCount, std::uint32_t idBits, const float* lo, const float* pixelScale,
-                     const float* depthScale, const float* halfSize, const float* depthPad) const {
+    void setUniforms(std::size_t primCount, std::uint32_t idBits, const View& view) const {
         glUniform1i(CULLIDE_LOC_RESOLUTION, settings.resolution);
-        glUniform3fv(CULLIDE_LOC_VIEW_LO, 1, lo);
-        glUniform3fv(CULLIDE_LOC_PIXEL_SCALE, 1, pixelScale);
-        glUniform3fv(CULLIDE_LOC_DEPTH_SCALE, 1, depthScale);
-        glUniform3fv(CULLIDE_LOC_HALF_SIZE, 1, halfSize);
-        glUniform3fv(CULLIDE_LOC_DEPTH_PAD, 1, depthPad);
+        glUniform3fv(CULLIDE_LOC_VIEW_LO, 1, view.lo);
+        glUniform3fv(CULLIDE_LOC_PIXEL_SCALE, 1, view.pixelScale);
+        glUniform3fv(CULLIDE_LOC_DEPTH_SCALE, 1, view.depthScale);
+        glUniform3fv(CULLIDE_LOC_HALF_SIZE, 1, view.halfSize);
+        glUniform3fv(CULLIDE_LOC_DEPTH_PAD, 1, view.depthPad);
         glUniform1ui(CULLIDE_LOC_ID_BITS, idBits);
         glUniform1i(CULLIDE_LOC_CONSERVATIVE, settings.mode == Mode::Reliable ? 1 : 0);
         glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(primCount));
         glUniform1ui(CULLIDE_LOC_AXES, settings.axes);
     }
 
-    /// One iteration over `alive` items: returns the flags of all items.
-    void runIteration(const LevelItems& items, const std::vector<std::uint8_t>& alive, LevelStats& level,
-                      Stats& stats) {
-        // The view box fitted to the alive items.
-        Aabb view;
-        std::uint32_t maxOwner = 0;
-        for (std::size_t i = 0; i < items.size(); ++i) {
-            if (!alive[i]) continue;
-            view.grow(items.bounds[i]);
-            maxOwner = std::max(maxOwner, items.owner[i]);
-        }
-        // View box: the survivors' bounds grown by the margin and a little, so that every dilated fragment and
-        // every conservative depth range stays inside the image and inside [0, 1].
+    /// The view box fitted to `bounds` (the alive items' bounds), grown by the margin and a little, so that every
+    /// dilated fragment and every conservative depth range stays inside the image and inside [0, 1].
+    View fitView(const Aabb& bounds) const {
+        View v;
         const double margin = 0.5 * settings.margin;  // each item is dilated by half: together the full margin
-        const Vec3 extent0 = view.extent();
-        const double scale = std::max(extent0.maxCoeff(), 1e-30);
-        const double grow = margin + 1e-4 * scale;
-        view = view.inflated(grow);
-        Vec3 extent = view.extent();
+        const double scale = std::max(bounds.extent().maxCoeff(), 1e-30);
+        v.box = bounds.inflated(margin + 1e-4 * scale);
+        Vec3 extent = v.box.extent();
         const double minExtent = std::max(1e-6 * extent.maxCoeff(), 1e-30);
         for (int a = 0; a < 3; ++a) {
             if (extent[a] < minExtent) {
-                view.min[a] -= 0.5 * minExtent;
-                view.max[a] += 0.5 * minExtent;
+                v.box.min[a] -= 0.5 * minExtent;
+                v.box.max[a] += 0.5 * minExtent;
             }
         }
-        extent = view.extent();
+        extent = v.box.extent();
         const double res = settings.resolution;
-        const double bound = std::max(coordinateBound, view.min.cwiseAbs().cwiseMax(view.max.cwiseAbs()).maxCoeff());
-        float lo[3], pixelScale[3], depthScale[3], halfSize[3], depthPad[3];
+        const double bound =
+            std::max(coordinateBound, v.box.min.cwiseAbs().cwiseMax(v.box.max.cwiseAbs()).maxCoeff());
         for (int a = 0; a < 3; ++a) {
             // Float error of positions (relative to the origin) and of the projection, as a fraction of the
             // extent: a few ulps of `bound`, generously over-estimated (docs/reliability.md).
             const double relative = std::ldexp(1.0, -18) * (1.0 + bound / extent[a]);
-            lo[a] = static_cast<float>(view.min[a]);
-            pixelScale[a] = static_cast<float>(res / extent[a]);
-            depthScale[a] = static_cast<float>(1.0 / extent[a]);
-            halfSize[a] = static_cast<float>(0.5 + margin * res / extent[a] + 1e-3 + relative * res);
-            depthPad[a] = static_cast<float>(margin / extent[a] + relative + std::ldexp(1.0, -20));
+            v.lo[a] = static_cast<float>(v.box.min[a]);
+            v.pixelScale[a] = static_cast<float>(res / extent[a]);
+            v.depthScale[a] = static_cast<float>(1.0 / extent[a]);
+            v.halfSize[a] = static_cast<float>(0.5 + margin * res / extent[a] + 1e-3 + relative * res);
+            v.depthPad[a] = static_cast<float>(margin / extent[a] + relative + std::ldexp(1.0, -20));
         }
-        // Primitives of the alive items; on the compute back-end each is split into bands of at most
-        // pixelsPerInvocation() pixels of its largest footprint over the three views.
+        return v;
+    }
+
+    /// Sends what the survivor pass needs of the level's items: their owners, float boxes (rounded outwards) and
+    /// the alive set (every item).
+    void beginLevel(const LevelItems& items, Stats& stats) {
+        const std::size_t n = items.size();
+        uploadBuffer(buffers[kOwners], capacity[kOwners], items.owner.data(), n * 4);
+        boundsScratch.resize(6 * n);
+        for (std::size_t i = 0; i < n; ++i) {
+            for (int a = 0; a < 3; ++a) {
+                boundsScratch[6 * i + static_cast<std::size_t>(a)] = floatDown(items.bounds[i].min[a]);
+                boundsScratch[6 * i + 3 + static_cast<std::size_t>(a)] = floatUp(items.bounds[i].max[a]);
+            }
+        }
+        uploadBuffer(buffers[kItemBounds], capacity[kItemBounds], boundsScratch.data(), boundsScratch.size() * 4);
+        stats.bytesUploaded += n * 4 + boundsScratch.size() * 4;
+        reserveBuffer(buffers[kFlags], capacity[kFlags], n * 4);
+        reserveBuffer(buffers[kAlive], capacity[kAlive], n * 4);
+        const GLuint one = 1;
+        glClearNamedBufferSubData(buffers[kAlive], GL_R32UI, 0, static_cast<GLsizeiptr>(n * 4), GL_RED_INTEGER,
+                                  GL_UNSIGNED_INT, &one);
+    }
+
+    /// The records of the alive items' primitives for `view`; on the compute back-end each primitive is split into
+    /// bands of at most pixelsPerInvocation() pixels of its largest footprint over the three views. Returns the
+    /// record count. Records of items that die later stay: the shaders skip them.
+    std::size_t buildRecords(const LevelItems& items, const std::vector<std::uint8_t>& alive, const View& view,
+                             Stats& stats) {
         const bool split = settings.backend == Backend::Compute;
         footprintScratch.clear();
         double footprintPixels = 0.0;
@@ -251,8 +321,8 @@ struct VisibilityPass::Impl {
                 double pixels = 0.0;
                 for (int a = 0; a < 3; ++a) {
                     const int u = (a + 1) % 3, v = (a + 2) % 3;
-                    pixels = std::max(pixels, (size[u] * pixelScale[u] + 2.0 * halfSize[u] + 3.0) *
-                                                  (size[v] * pixelScale[v] + 2.0 * halfSize[v] + 3.0));
+                    pixels = std::max(pixels, (size[u] * view.pixelScale[u] + 2.0 * view.halfSize[u] + 3.0) *
+                                                  (size[v] * view.pixelScale[v] + 2.0 * view.halfSize[v] + 3.0));
                 }
                 footprintScratch.push_back(pixels);
                 footprintPixels += pixels;
@@ -278,63 +348,105 @@ struct VisibilityPass::Impl {
                 }
             }
         }
-        const std::size_t primCount = primScratch.size() / 4;
         uploadBuffer(buffers[kPrims], capacity[kPrims], primScratch.data(), primScratch.size() * 4);
         stats.bytesUploaded += primScratch.size() * 4;
+        return primScratch.size() / 4;
+    }
 
-        const std::uint32_t idBits = bitsFor(maxOwner);  // <= 16: prune() skips levels with more owners
-
-        glUseProgram(program);
-        setUniforms(primCount, idBits, lo, pixelScale, depthScale, halfSize, depthPad);
-
+    /// Binds what every pass reads and writes and clears the images, the flags and the counters.
+    void prepareIteration(std::size_t itemCount) {
         const GLuint empty[2] = {0xFFFFFFFFu, 0u};
         glClearTexImage(images[CULLIDE_IMAGE_NEAR1], 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[0]);
         glClearTexImage(images[CULLIDE_IMAGE_NEAR2], 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[0]);
         glClearTexImage(images[CULLIDE_IMAGE_FAR1], 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
         glClearTexImage(images[CULLIDE_IMAGE_FAR2], 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
-        glClearNamedBufferSubData(buffers[kFlags], GL_R32UI, 0, static_cast<GLsizeiptr>(items.size() * 4),
+        glClearNamedBufferSubData(buffers[kFlags], GL_R32UI, 0, static_cast<GLsizeiptr>(itemCount * 4),
                                   GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
+        GLuint counters[CULLIDE_COUNTER_COUNT] = {};
+        counters[CULLIDE_COUNTER_OWNER_MIN] = 0xFFFFFFFFu;
+        for (int a = 0; a < 3; ++a) counters[CULLIDE_COUNTER_LO + a] = 0xFFFFFFFFu;
+        glNamedBufferSubData(buffers[kCounters], 0, sizeof counters, counters);
         for (GLuint unit = 0; unit < 4; ++unit)
             glBindImageTexture(unit, images[unit], 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32UI);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_POSITIONS, buffers[kPositions]);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_INDICES, buffers[kIndices]);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_BOXES, buffers[kBoxes]);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_PRIMS, buffers[kPrims]);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_ITEM_OWNER, buffers[kOwners]);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_FLAGS, buffers[kFlags]);
-        reserveBuffer(buffers[kCounters], capacity[kCounters], 4);
-        glClearNamedBufferSubData(buffers[kCounters], GL_R32UI, 0, 4, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_COUNTERS, buffers[kCounters]);
+        const std::pair<GLuint, Buffer> bindings[] = {
+            {CULLIDE_SSBO_POSITIONS, kPositions}, {CULLIDE_SSBO_INDICES, kIndices},
+            {CULLIDE_SSBO_BOXES, kBoxes},         {CULLIDE_SSBO_PRIMS, kPrims},
+            {CULLIDE_SSBO_ITEM_OWNER, kOwners},   {CULLIDE_SSBO_FLAGS, kFlags},
+            {CULLIDE_SSBO_COUNTERS, kCounters},   {CULLIDE_SSBO_ALIVE, kAlive},
+            {CULLIDE_SSBO_ITEM_BOUNDS, kItemBounds}};
+        for (const auto& [binding, buffer] : bindings) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffers[buffer]);
         glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
         glViewport(0, 0, 3 * settings.resolution, settings.resolution);
         glDisable(GL_DEPTH_TEST);
         glDisable(GL_CULL_FACE);
         glBindVertexArray(vao);
+    }
 
+    /// One iteration on the device: the three passes over the alive items' records, the survivor pass, and the
+    /// compaction of the records to those of the items still alive. Reads back only the counters (44 bytes).
+    IterationResult runIteration(const View& view, std::uint32_t idBits, std::size_t primCount, std::size_t itemCount,
+                                 LevelStats& level, Stats& stats) {
+        prepareIteration(itemCount);
         const auto timedSpan = Clock::now();
         if (timer) glBeginQuery(GL_TIME_ELAPSED, timer);
         if (settings.backend == Backend::Raster) {
             reserveBuffer(buffers[kRecords], capacity[kRecords], 3 * primCount * kRecordBytes);
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_RECORDS, buffers[kRecords]);
             glUseProgram(setupProgram);
-            setUniforms(primCount, idBits, lo, pixelScale, depthScale, halfSize, depthPad);
-            dispatchAll(primCount);
+            setUniforms(primCount, idBits, view);
+            dispatchAll(primCount, 3);
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-            glUseProgram(program);
             level.draws += 1;
             stats.draws += 1;
         }
+        glUseProgram(program);
+        setUniforms(primCount, idBits, view);
         draw(CULLIDE_PASS_NEAREST, primCount, level, stats);
         draw(CULLIDE_PASS_SECOND, primCount, level, stats);
         draw(CULLIDE_PASS_FLAG, primCount, level, stats);
+        glUseProgram(surviveProgram);
+        glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(itemCount));
+        glUniform1ui(CULLIDE_LOC_REQUIRED, requiredFlags(settings.axes));
+        dispatchAll(itemCount, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        reserveBuffer(buffers[kPrimsNext], capacity[kPrimsNext], primCount * 16);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_PRIMS_OUT, buffers[kPrimsNext]);
+        glUseProgram(compactProgram);
+        glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(primCount));
+        dispatchAll(primCount, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        level.draws += 2;
+        stats.draws += 2;
         if (timer) glEndQuery(GL_TIME_ELAPSED);
         glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-        flagScratch.resize(items.size());
-        glGetNamedBufferSubData(buffers[kFlags], 0, static_cast<GLsizeiptr>(items.size() * 4), flagScratch.data());
-        glGetNamedBufferSubData(buffers[kCounters], 0, 4, &overflows);
-        stats.bytesReadBack += items.size() * 4 + 4;
+        GLuint counters[CULLIDE_COUNTER_COUNT] = {};
+        glGetNamedBufferSubData(buffers[kCounters], 0, sizeof counters, counters);
+        stats.bytesReadBack += sizeof counters;
         recordGpuTime(timer ? timerResultMs(timer, msSince(timedSpan)) : -1.0, level, stats);
         checkGlError("a visibility iteration");
+        IterationResult r;
+        r.overflows = counters[CULLIDE_COUNTER_OVERFLOWS];
+        r.alive = counters[CULLIDE_COUNTER_ALIVE];
+        r.ownerMin = counters[CULLIDE_COUNTER_OWNER_MIN];
+        r.ownerMax = counters[CULLIDE_COUNTER_OWNER_MAX];
+        r.records = counters[CULLIDE_COUNTER_RECORDS];
+        std::swap(buffers[kPrims], buffers[kPrimsNext]);
+        std::swap(capacity[kPrims], capacity[kPrimsNext]);
+        for (int a = 0; a < 3; ++a) {
+            r.bounds.min[a] = fromOrderedBits(counters[CULLIDE_COUNTER_LO + a]);
+            r.bounds.max[a] = fromOrderedBits(counters[CULLIDE_COUNTER_HI + a]);
+        }
+        return r;
+    }
+
+    /// The device's alive set, as 0/1 per item.
+    void readAlive(std::size_t itemCount, std::vector<std::uint8_t>& alive, Stats& stats) {
+        aliveScratch.resize(itemCount);
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        glGetNamedBufferSubData(buffers[kAlive], 0, static_cast<GLsizeiptr>(itemCount * 4), aliveScratch.data());
+        stats.bytesReadBack += itemCount * 4;
+        alive.resize(itemCount);
+        for (std::size_t i = 0; i < itemCount; ++i) alive[i] = aliveScratch[i] != 0 ? 1 : 0;
     }
 
     /// The GPU time of the span just timed by `query`, in ms, or -1 when it is not available or not plausible:
@@ -343,7 +455,7 @@ struct VisibilityPass::Impl {
     /// TIME_ELAPSED result, with either back-end, is the end time stamp less a start that was never stamped (0),
     /// i.e. CLOCK_MONOTONIC — the machine's uptime; its later results are plausible.
     static double timerResultMs(GLuint query, double wallMs) {
-        // The flags were just read back, so waiting for the result costs next to nothing; a driver that still
+        // The counters were just read back, so waiting for the result costs next to nothing; a driver that still
         // says it is not available has no trustworthy result.
         GLuint64 ns = 0;
         glGetQueryObjectui64v(query, GL_QUERY_RESULT, &ns);
@@ -401,52 +513,84 @@ void VisibilityPass::forgetUploads() {
     for (std::size_t& v : m_impl->valid) v = 0;
 }
 
+namespace {
+
+/// Distinct owners among the items, or 0 when owner ids need more than 16 bits (no pruning then).
+std::size_t distinctOwners(const LevelItems& items) {
+    const std::uint32_t maxOwner = *std::max_element(items.owner.begin(), items.owner.end());
+    if (maxOwner >= 65536) return 0;
+    std::vector<std::uint8_t> seen(maxOwner + std::size_t{1}, 0);
+    std::size_t owners = 0;
+    for (std::uint32_t o : items.owner) {
+        if (!seen[o]) ++owners;
+        seen[o] = 1;
+    }
+    return owners;
+}
+
+/// The records are rebuilt (bands fitted to the new view) when the view has shrunk to a quarter along some axis:
+/// each pixel band of a record grows with the square of the view's shrinking.
+bool recordsStale(const Aabb& view, const Aabb& recordedView) {
+    const Vec3 now = view.extent(), then = recordedView.extent();
+    for (int a = 0; a < 3; ++a)
+        if (4.0 * now[a] < then[a]) return true;
+    return false;
+}
+
+}  // namespace
+
 void VisibilityPass::prune(const LevelItems& items, std::vector<std::uint8_t>& survivors, LevelStats& level,
                            Stats& stats) {
     Impl& s = *m_impl;
     const auto t0 = Clock::now();
-    survivors.assign(items.size(), 1);
-    if (items.size() == 0) return;
+    const std::size_t n = items.size();
+    survivors.assign(n, 1);
+    if (n == 0) return;
+    level.itemsPerIteration.push_back(n);
+    const std::size_t owners = distinctOwners(items);
+    if (owners == 0) return;  // owner ids need more than 16 bits: no pruning (conservative)
+    if (owners < 2) {         // nothing to collide with
+        std::fill(survivors.begin(), survivors.end(), 0);
+        level.itemsPerIteration.push_back(0);
+        return;
+    }
     s.context.makeCurrent();
-    uploadBuffer(s.buffers[kOwners], s.capacity[kOwners], items.owner.data(), items.owner.size() * 4);
-    stats.bytesUploaded += items.owner.size() * 4;
-    reserveBuffer(s.buffers[kFlags], s.capacity[kFlags], items.size() * 4);
-    std::vector<std::uint8_t> next(items.size());
-    std::vector<std::uint32_t> ownerCount;
+    s.beginLevel(items, stats);
+    Aabb bounds;
+    for (const Aabb& b : items.bounds) bounds.grow(b);
+    View view = s.fitView(bounds);
+    std::uint32_t maxOwner = *std::max_element(items.owner.begin(), items.owner.end());
+    // The alive set lives on the device: an iteration reads back its counters only, the level its set once.
+    std::size_t primCount = s.buildRecords(items, survivors, view, stats);
+    Aabb recordedView = view.box;
+    std::size_t alive = n;
+    bool allPruned = false;
     for (int iteration = 0; iteration < s.settings.maxIterations; ++iteration) {
-        std::size_t alive = 0;
-        std::uint32_t owners = 0;
-        ownerCount.assign(items.size() ? *std::max_element(items.owner.begin(), items.owner.end()) + 1 : 0, 0);
-        for (std::size_t i = 0; i < items.size(); ++i) {
-            if (!survivors[i]) continue;
-            ++alive;
-            if (ownerCount[items.owner[i]]++ == 0) ++owners;
-        }
+        const IterationResult r = s.runIteration(view, bitsFor(maxOwner), primCount, n, level, stats);
+        if (r.overflows != 0) break;  // some footprint was not scanned: the iteration pruned nothing
+        if (r.alive == alive) break;  // the set only shrinks: the same size is the same set
+        alive = r.alive;
         level.itemsPerIteration.push_back(alive);
-        if (ownerCount.size() > 65536) break;  // owner ids need more than 16 bits: no pruning (conservative)
-        if (owners < 2) {  // nothing left to collide with
-            std::fill(survivors.begin(), survivors.end(), 0);
+        if (alive == 0) break;
+        if (r.ownerMin == r.ownerMax) {  // one owner left: nothing to collide with
+            allPruned = true;
             level.itemsPerIteration.push_back(0);
             break;
         }
-        s.runIteration(items, survivors, level, stats);
-        std::uint32_t required = 0;  // both sides of every enabled axis
-        for (unsigned a = 0; a < 3; ++a)
-            if (s.settings.axes & (1u << a)) required |= 3u << (2 * a);
-        if (s.overflows != 0) break;  // some footprint was not scanned: keep every item (conservative)
-        bool changed = false;
-        for (std::size_t i = 0; i < items.size(); ++i) {
-            next[i] = survivors[i] && (s.flagScratch[i] & required) == required;
-            changed |= next[i] != survivors[i];
-        }
-        survivors.swap(next);
-        if (!changed) break;
-        if (iteration + 1 == s.settings.maxIterations) {
-            std::size_t left = 0;
-            for (auto v : survivors) left += v;
-            level.itemsPerIteration.push_back(left);
+        if (iteration + 1 == s.settings.maxIterations) break;
+        view = s.fitView(r.bounds);
+        maxOwner = r.ownerMax;
+        primCount = r.records;
+        if (recordsStale(view.box, recordedView)) {
+            s.readAlive(n, survivors, stats);
+            primCount = s.buildRecords(items, survivors, view, stats);
+            recordedView = view.box;
         }
     }
+    if (allPruned)
+        std::fill(survivors.begin(), survivors.end(), 0);
+    else
+        s.readAlive(n, survivors, stats);
     level.cpuMs += msSince(t0);
 }
 

@@ -1,0 +1,56 @@
+// After an iteration's flag pass: an alive item that is not hidden in every enabled view leaves the set (nothing
+// leaves when an invocation overflowed). The items still alive are counted and their owner range and bounds
+// gathered, so that the C++ side reads a few counters, not the set, to fit the next iteration's view.
+layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
+layout(std430, binding = CULLIDE_SSBO_FLAGS) readonly buffer Flags { uint flags[]; };
+layout(std430, binding = CULLIDE_SSBO_ALIVE) buffer Alive { uint alive[]; };
+layout(std430, binding = CULLIDE_SSBO_ITEM_OWNER) readonly buffer Owners { uint owners[]; };
+layout(std430, binding = CULLIDE_SSBO_ITEM_BOUNDS) readonly buffer Bounds { float bounds[]; };
+layout(std430, binding = CULLIDE_SSBO_COUNTERS) coherent buffer Counters { uint counters[]; };
+layout(location = CULLIDE_LOC_PRIM_COUNT) uniform uint u_itemCount;
+layout(location = CULLIDE_LOC_PRIM_BASE) uniform uint u_itemBase;
+layout(location = CULLIDE_LOC_REQUIRED) uniform uint u_required;
+
+// Float bits whose unsigned order is the floats' order (for atomicMin / atomicMax).
+uint orderedBits(float f) {
+    uint u = floatBitsToUint(f);
+    return (u & 0x80000000u) != 0u ? ~u : (u | 0x80000000u);
+}
+
+// Per work group first (shared-memory atomics), then one global atomic per counter and group.
+shared uint s_counters[CULLIDE_COUNTER_COUNT];
+
+void main() {
+    uint lane = gl_LocalInvocationID.x;
+    if (lane < uint(CULLIDE_COUNTER_COUNT)) {
+        bool minimum = lane == uint(CULLIDE_COUNTER_OWNER_MIN) || (lane >= uint(CULLIDE_COUNTER_LO) &&
+                                                                   lane < uint(CULLIDE_COUNTER_HI));
+        s_counters[lane] = minimum ? 0xFFFFFFFFu : 0u;
+    }
+    barrier();
+    uint i = u_itemBase + gl_GlobalInvocationID.x;
+    if (i < u_itemCount && alive[i] != 0u) {
+        bool hidden = (flags[i] & u_required) == u_required;
+        if (!hidden && counters[CULLIDE_COUNTER_OVERFLOWS] == 0u) {
+            alive[i] = 0u;
+        } else {
+            atomicAdd(s_counters[CULLIDE_COUNTER_ALIVE], 1u);
+            atomicMin(s_counters[CULLIDE_COUNTER_OWNER_MIN], owners[i]);
+            atomicMax(s_counters[CULLIDE_COUNTER_OWNER_MAX], owners[i]);
+            for (uint k = 0u; k < 3u; ++k) {
+                atomicMin(s_counters[CULLIDE_COUNTER_LO + k], orderedBits(bounds[6u * i + k]));
+                atomicMax(s_counters[CULLIDE_COUNTER_HI + k], orderedBits(bounds[6u * i + 3u + k]));
+            }
+        }
+    }
+    barrier();
+    if (lane == 0u && s_counters[CULLIDE_COUNTER_ALIVE] != 0u) {
+        atomicAdd(counters[CULLIDE_COUNTER_ALIVE], s_counters[CULLIDE_COUNTER_ALIVE]);
+        atomicMin(counters[CULLIDE_COUNTER_OWNER_MIN], s_counters[CULLIDE_COUNTER_OWNER_MIN]);
+        atomicMax(counters[CULLIDE_COUNTER_OWNER_MAX], s_counters[CULLIDE_COUNTER_OWNER_MAX]);
+        for (uint k = 0u; k < 3u; ++k) {
+            atomicMin(counters[CULLIDE_COUNTER_LO + k], s_counters[CULLIDE_COUNTER_LO + k]);
+            atomicMax(counters[CULLIDE_COUNTER_HI + k], s_counters[CULLIDE_COUNTER_HI + k]);
+        }
+    }
+}
