@@ -2,14 +2,18 @@
 // btCollisionDispatcher), with btAxisSweep3, and with the README's two-line swap (CullideBroadphase +
 // CullideCollisionDispatcher), side by side in one process (issue #12, item 7).
 //
-//   cullide-swap-bench [--steps N] [--scene NAME]... [--json FILE] [--gimpact-pair-culling]
+//   cullide-swap-bench [--steps N] [--env-frames N] [--scene NAME]... [--json FILE] [--gimpact-pair-culling]
 //                      [--no-penetration-fallback]
+//
+// Scenes: rigid-body dynamics worlds of the kinds Bullet's own benchmarks use, and the paper's environments as
+// collision-only btCollisionWorlds (*-world; the first min(--steps, --env-frames) frames, default 40).
 //
 // The worlds run in lockstep: every step each world is stepped once (timed, the order rotating), then the default
 // world's body states are copied into the others, so all three detect collisions on identical states every step.
 // Their timings are comparable step by step, and "lost pairs" are exact: object pairs with contact points after the
 // default world's step but not after the CULLIDE world's (on the same state). Prints one table row per scene;
 // --json writes the figures (docs/benchmarks.md, scripts/bench.sh).
+#include "BenchScene.h"
 #include "SeededRandom.h"
 #include "cullide/Timer.h"
 #include "cullide/TriangleTest.h"
@@ -260,6 +264,37 @@ public:
     double broadphaseMs = 0, narrowMs = 0;
 };
 
+/// Object pairs (lower user index first) with contact points in the dispatcher's manifolds.
+std::set<std::pair<int, int>> contactPairsOf(btDispatcher& dispatcher) {
+    std::set<std::pair<int, int>> out;
+    for (int k = 0; k < dispatcher.getNumManifolds(); ++k) {
+        const btPersistentManifold* m = dispatcher.getManifoldByIndexInternal(k);
+        if (m->getNumContacts() == 0) continue;
+        const int a = m->getBody0()->getUserIndex(), b = m->getBody1()->getUserIndex();
+        out.emplace(std::min(a, b), std::max(a, b));
+    }
+    return out;
+}
+
+/// Contact points by object pair (lower user index first): (triangle key, distance) per point, the key being both
+/// sides' (part, index) as the narrow phase set them, in the pair's order.
+using PointKey = std::array<int, 4>;
+using ContactPoints = std::map<std::pair<int, int>, std::vector<std::pair<PointKey, double>>>;
+ContactPoints contactPointsOf(btDispatcher& dispatcher) {
+    ContactPoints out;
+    for (int k = 0; k < dispatcher.getNumManifolds(); ++k) {
+        const btPersistentManifold* m = dispatcher.getManifoldByIndexInternal(k);
+        const int a = m->getBody0()->getUserIndex(), b = m->getBody1()->getUserIndex();
+        for (int c = 0; c < m->getNumContacts(); ++c) {
+            const btManifoldPoint& pt = m->getContactPoint(c);
+            const PointKey key = a < b ? PointKey{pt.m_partId0, pt.m_index0, pt.m_partId1, pt.m_index1}
+                                       : PointKey{pt.m_partId1, pt.m_index1, pt.m_partId0, pt.m_index0};
+            out[{std::min(a, b), std::max(a, b)}].emplace_back(key, double(pt.getDistance()));
+        }
+    }
+    return out;
+}
+
 /// One pipeline's world of a scene.
 struct World {
     Pipeline pipeline;
@@ -323,34 +358,8 @@ struct World {
         narrowPairs += static_cast<std::size_t>(broadphase->getOverlappingPairCache()->getNumOverlappingPairs());
     }
 
-    std::set<std::pair<int, int>> contactPairs() const {
-        std::set<std::pair<int, int>> out;
-        for (int k = 0; k < dispatcher->getNumManifolds(); ++k) {
-            const btPersistentManifold* m = dispatcher->getManifoldByIndexInternal(k);
-            if (m->getNumContacts() == 0) continue;
-            const int a = m->getBody0()->getUserIndex(), b = m->getBody1()->getUserIndex();
-            out.emplace(std::min(a, b), std::max(a, b));
-        }
-        return out;
-    }
-
-    /// Contact points by object pair (lower user index first): (triangle key, distance) per point, the key being
-    /// both sides' (part, index) as the narrow phase set them, in the pair's order.
-    using PointKey = std::array<int, 4>;
-    std::map<std::pair<int, int>, std::vector<std::pair<PointKey, double>>> contactPoints() const {
-        std::map<std::pair<int, int>, std::vector<std::pair<PointKey, double>>> out;
-        for (int k = 0; k < dispatcher->getNumManifolds(); ++k) {
-            const btPersistentManifold* m = dispatcher->getManifoldByIndexInternal(k);
-            const int a = m->getBody0()->getUserIndex(), b = m->getBody1()->getUserIndex();
-            for (int c = 0; c < m->getNumContacts(); ++c) {
-                const btManifoldPoint& pt = m->getContactPoint(c);
-                const PointKey key = a < b ? PointKey{pt.m_partId0, pt.m_index0, pt.m_partId1, pt.m_index1}
-                                           : PointKey{pt.m_partId1, pt.m_index1, pt.m_partId0, pt.m_index0};
-                out[{std::min(a, b), std::max(a, b)}].emplace_back(key, double(pt.getDistance()));
-            }
-        }
-        return out;
-    }
+    std::set<std::pair<int, int>> contactPairs() const { return contactPairsOf(*dispatcher); }
+    ContactPoints contactPoints() const { return contactPointsOf(*dispatcher); }
 
     /// Takes over another world's body states (lockstep).
     void copyStatesFrom(const World& from) {
@@ -392,9 +401,7 @@ struct Row {
 };
 
 /// Adds one step's contact error (see Row).
-void compareContacts(const World& reference, const World& cullideWorld, Row& row) {
-    const auto want = reference.contactPoints();
-    const auto got = cullideWorld.contactPoints();
+void compareContacts(const ContactPoints& want, const ContactPoints& got, Row& row) {
     for (const auto& [pair, points] : want) {
         const auto it = got.find(pair);
         if (it == got.end()) continue;  // a lost pair: counted as such
@@ -506,7 +513,7 @@ Row runScene(const SceneFactory& factory, int steps) {
             if (row.lostChecked < kLostChecks) explainLost(*worlds[0], *worlds[2], p, s, detectedAt, row);
         }
         for (const auto& p : got) row.extra += want.count(p) ? 0 : 1;
-        compareContacts(*worlds[0], *worlds[2], row);
+        compareContacts(worlds[0]->contactPoints(), worlds[2]->contactPoints(), row);
         const auto& d = static_cast<cullide::CullideCollisionDispatcher*>(worlds[2]->dispatcher.get())->getLastStepStats();
         row.cullidePairs += double(d.cullidePairs) / steps;
         row.fallbackPairs += double(d.fallbackPairs) / steps;
@@ -524,6 +531,186 @@ Row runScene(const SceneFactory& factory, int steps) {
         row.broadphaseMs[k] = worlds[k]->world->broadphaseMs / steps;
         row.narrowMs[k] = worlds[k]->world->narrowMs / steps;
         row.pairs[k] = double(worlds[k]->narrowPairs) / steps;
+    }
+    row.last = static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get())->getLastFrameStats();
+    return row;
+}
+
+/// The paper's environments as an application that uses Bullet as a collision library would model them: a
+/// btCollisionWorld of plain btCollisionObjects (default flags) with GImpact mesh shapes (margin 0: the task is the
+/// intersecting triangles, as in the side-by-side runs), moved every frame — rigid objects by their transform,
+/// deforming ones by new vertices (postUpdate + updateBound). Each world owns its shapes, so each pays its own
+/// updates; a frame's time is the update plus performDiscreteCollisionDetection.
+struct CollisionSceneSpec {
+    const char* name;
+    const char* environment;  ///< BenchScene name
+    const char* what;
+};
+const CollisionSceneSpec kCollisionScenes[] = {
+    {"env1-world", "env1", "env1 (100 deforming objects, 200 triangles each) in a btCollisionWorld"},
+    {"env2-world", "env2", "env2 (6 deforming tori, 20K triangles each) in a btCollisionWorld"},
+    {"env3-world", "env3", "env3 (rigid bunny 75K through a static dragon 20K) in a btCollisionWorld"},
+    {"env3-deform-world", "env3-deform", "env3 with the bunny deforming, in a btCollisionWorld"}};
+
+using cullide::bench::Motion;
+
+/// One object's GImpact shape and the mesh arrays it reads (vertices rewritten when the object deforms).
+struct MeshBody {
+    std::vector<btScalar> vertices;
+    std::vector<int> indices;
+    std::unique_ptr<btTriangleIndexVertexArray> array;
+    std::unique_ptr<btGImpactMeshShape> shape;
+    std::unique_ptr<btCollisionObject> object;
+    Motion motion = Motion::Deforming;
+};
+
+void copyVertices(const cullide::TriangleMesh& mesh, std::vector<btScalar>& out) {
+    out.resize(3 * mesh.vertices.size());
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+        for (int k = 0; k < 3; ++k) out[3 * i + std::size_t(k)] = btScalar(mesh.vertices[i][k]);
+}
+
+btTransform toBullet(const Eigen::Isometry3d& pose) {
+    const Eigen::Matrix3d r = pose.rotation();
+    const Eigen::Vector3d t = pose.translation();
+    return btTransform(btMatrix3x3(btScalar(r(0, 0)), btScalar(r(0, 1)), btScalar(r(0, 2)), btScalar(r(1, 0)),
+                                   btScalar(r(1, 1)), btScalar(r(1, 2)), btScalar(r(2, 0)), btScalar(r(2, 1)),
+                                   btScalar(r(2, 2))),
+                       btVector3(btScalar(t.x()), btScalar(t.y()), btScalar(t.z())));
+}
+
+/// One pipeline's collision world of an environment.
+struct CollisionWorld {
+    Pipeline pipeline;
+    btDefaultCollisionConfiguration config;
+    std::unique_ptr<btBroadphaseInterface> broadphase;
+    std::unique_ptr<btCollisionDispatcher> dispatcher;
+    std::unique_ptr<btCollisionWorld> world;
+    std::vector<MeshBody> bodies;
+    double stepMs = 0, updateMs = 0, broadphaseMs = 0, narrowMs = 0;
+    std::size_t narrowPairs = 0;
+
+    CollisionWorld(Pipeline p, const cullide::bench::BenchFrame& first) : pipeline(p) {
+        if (p == Pipeline::Cullide) {
+            auto bp = std::make_unique<cullide::CullideBroadphase>();
+            bp->setDeepPenetrationFallback(g_penetrationFallback);
+            bp->setGImpactPairCulling(g_gimpactPairCulling);
+            dispatcher = std::make_unique<cullide::CullideCollisionDispatcher>(&config, bp.get());
+            broadphase = std::move(bp);
+        } else {
+            dispatcher = std::make_unique<btCollisionDispatcher>(&config);
+            if (p == Pipeline::Dbvt) {
+                broadphase = std::make_unique<btDbvtBroadphase>();
+            } else {  // the first frame's bounds, three times their size (the environments stay inside a box)
+                cullide::Aabb box;
+                for (const auto& mesh : *first.world)
+                    for (const cullide::Vec3& v : mesh.vertices) box.grow(v);
+                const cullide::Vec3 c = 0.5 * (box.min + box.max);
+                const double half = 1.5 * box.extent().maxCoeff() + 1.0;
+                const auto bt = [](const cullide::Vec3& v) { return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z())); };
+                broadphase = std::make_unique<btAxisSweep3>(bt(c - cullide::Vec3::Constant(half)),
+                                                            bt(c + cullide::Vec3::Constant(half)));
+            }
+        }
+        btGImpactCollisionAlgorithm::registerAlgorithm(dispatcher.get());
+        world = std::make_unique<btCollisionWorld>(dispatcher.get(), broadphase.get(), &config);
+        bodies.resize(first.local->size());
+        for (std::size_t i = 0; i < bodies.size(); ++i) addBody(first, i);
+    }
+    ~CollisionWorld() {
+        for (MeshBody& b : bodies) world->removeCollisionObject(b.object.get());
+    }
+
+    void addBody(const cullide::bench::BenchFrame& first, std::size_t i) {
+        MeshBody& b = bodies[i];
+        b.motion = (*first.motion)[i];
+        const cullide::TriangleMesh& mesh = b.motion == Motion::Deforming ? (*first.world)[i] : (*first.local)[i];
+        copyVertices(mesh, b.vertices);
+        for (const auto& t : mesh.triangles)
+            for (std::uint32_t k : t) b.indices.push_back(int(k));
+        btIndexedMesh part;
+        part.m_numTriangles = int(mesh.triangles.size());
+        part.m_triangleIndexBase = reinterpret_cast<const unsigned char*>(b.indices.data());
+        part.m_triangleIndexStride = 3 * int(sizeof(int));
+        part.m_numVertices = int(mesh.vertices.size());
+        part.m_vertexBase = reinterpret_cast<const unsigned char*>(b.vertices.data());
+        part.m_vertexStride = 3 * int(sizeof(btScalar));
+        part.m_vertexType = sizeof(btScalar) == sizeof(float) ? PHY_FLOAT : PHY_DOUBLE;
+        b.array = std::make_unique<btTriangleIndexVertexArray>();
+        b.array->addIndexedMesh(part, PHY_INTEGER);
+        b.shape = std::make_unique<btGImpactMeshShape>(b.array.get());
+        b.shape->setMargin(0);
+        b.shape->updateBound();
+        b.object = std::make_unique<btCollisionObject>();
+        b.object->setCollisionShape(b.shape.get());
+        b.object->setUserIndex(int(i));
+        b.object->setWorldTransform(b.motion == Motion::Deforming ? btTransform::getIdentity()
+                                                                  : toBullet(first.poses[i]));
+        world->addCollisionObject(b.object.get());
+    }
+
+    /// The frame's motion, then collision detection (timed together, and in parts).
+    void step(const cullide::bench::BenchFrame& frame) {
+        Timer total;
+        for (std::size_t i = 0; i < bodies.size(); ++i) {
+            MeshBody& b = bodies[i];
+            if (b.motion == Motion::Deforming) {
+                copyVertices((*frame.world)[i], b.vertices);
+                b.shape->postUpdate();
+                b.shape->updateBound();
+            } else if (b.motion == Motion::Rigid) {
+                b.object->setWorldTransform(toBullet(frame.poses[i]));
+            }
+        }
+        updateMs += total.ms();
+        Timer t;
+        world->updateAabbs();
+        world->computeOverlappingPairs();
+        broadphaseMs += t.ms();
+        t = Timer();
+        dispatcher->dispatchAllCollisionPairs(broadphase->getOverlappingPairCache(), world->getDispatchInfo(),
+                                              dispatcher.get());
+        narrowMs += t.ms();
+        stepMs += total.ms();
+        narrowPairs += std::size_t(broadphase->getOverlappingPairCache()->getNumOverlappingPairs());
+    }
+};
+
+Row runCollisionScene(const CollisionSceneSpec& spec, int frames) {
+    cullide::bench::SceneParams params;
+    params.name = spec.environment;
+    cullide::bench::BenchScene scene(params);
+    const cullide::bench::BenchFrame first = scene.frame(0);
+    std::vector<std::unique_ptr<CollisionWorld>> worlds;
+    for (Pipeline p : kPipelines) worlds.push_back(std::make_unique<CollisionWorld>(p, first));
+    Row row;
+    row.scene = spec.name;
+    row.what = spec.what;
+    row.bodies = first.local->size();
+    row.steps = frames;
+    for (int f = 0; f < frames; ++f) {
+        const cullide::bench::BenchFrame frame = scene.frame(f);
+        for (std::size_t k = 0; k < worlds.size(); ++k) worlds[(k + std::size_t(f)) % worlds.size()]->step(frame);
+        const auto want = contactPairsOf(*worlds[0]->dispatcher);
+        const auto got = contactPairsOf(*worlds[2]->dispatcher);
+        row.contactPairSteps += want.size();
+        for (const auto& p : want) row.lost += got.count(p) ? 0 : 1;
+        for (const auto& p : got) row.extra += want.count(p) ? 0 : 1;
+        compareContacts(contactPointsOf(*worlds[0]->dispatcher), contactPointsOf(*worlds[2]->dispatcher), row);
+        const auto& d = static_cast<cullide::CullideCollisionDispatcher*>(worlds[2]->dispatcher.get())->getLastStepStats();
+        row.cullidePairs += double(d.cullidePairs) / frames;
+        row.fallbackPairs += double(d.fallbackPairs) / frames;
+        row.penetrationPairs += double(d.penetrationPairs) / frames;
+        const auto& b = static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get())->getLastFrameStats();
+        row.buildMs += b.buildMs / frames;
+        row.cullMs += b.cullMs / frames;
+        row.recordMs += b.recordMs / frames;
+    }
+    for (std::size_t k = 0; k < worlds.size(); ++k) {
+        row.ms[k] = worlds[k]->stepMs / frames;
+        row.broadphaseMs[k] = worlds[k]->broadphaseMs / frames;
+        row.narrowMs[k] = worlds[k]->narrowMs / frames;
+        row.pairs[k] = double(worlds[k]->narrowPairs) / frames;
     }
     row.last = static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get())->getLastFrameStats();
     return row;
@@ -574,6 +761,7 @@ void writeJson(const std::string& path, const std::vector<Row>& rows) {
 
 int main(int argc, char** argv) {
     int steps = 120;
+    int envFrames = 40;  // the environments' frames are heavier than a rigid step (env3: ~100K triangles moving)
     std::vector<std::string> only;
     std::string json;
     for (int i = 1; i < argc; ++i) {
@@ -582,6 +770,8 @@ int main(int argc, char** argv) {
             steps = std::max(1, std::atoi(argv[++i]));
         } else if (a == "--scene" && i + 1 < argc) {
             only.emplace_back(argv[++i]);
+        } else if (a == "--env-frames" && i + 1 < argc) {
+            envFrames = std::max(1, std::atoi(argv[++i]));
         } else if (a == "--no-penetration-fallback") {
             g_penetrationFallback = false;
         } else if (a == "--gimpact-pair-culling") {
@@ -589,15 +779,18 @@ int main(int argc, char** argv) {
         } else if (a == "--json" && i + 1 < argc) {
             json = argv[++i];
         } else {
-            std::fprintf(stderr, "usage: cullide-swap-bench [--steps N] [--scene NAME]... [--json FILE] "
+            std::fprintf(stderr, "usage: cullide-swap-bench [--steps N] [--env-frames N] [--scene NAME]... [--json FILE] "
                                  "[--gimpact-pair-culling] [--no-penetration-fallback]\nscenes:");
             for (const SceneFactory& f : kScenes) std::fprintf(stderr, " %s", f.name);
+            for (const CollisionSceneSpec& c : kCollisionScenes) std::fprintf(stderr, " %s", c.name);
             std::fprintf(stderr, "\n");
             return 2;
         }
     }
     for (const std::string& name : only) {
-        if (std::none_of(std::begin(kScenes), std::end(kScenes), [&](const SceneFactory& f) { return name == f.name; })) {
+        if (std::none_of(std::begin(kScenes), std::end(kScenes), [&](const SceneFactory& f) { return name == f.name; }) &&
+            std::none_of(std::begin(kCollisionScenes), std::end(kCollisionScenes),
+                         [&](const CollisionSceneSpec& c) { return name == c.name; })) {
             std::fprintf(stderr, "cullide-swap-bench: unknown scene '%s'\n", name.c_str());
             return 2;
         }
@@ -608,6 +801,11 @@ int main(int argc, char** argv) {
     for (const SceneFactory& f : kScenes) {
         if (!only.empty() && std::find(only.begin(), only.end(), f.name) == only.end()) continue;
         rows.push_back(runScene(f, steps));
+        printRow(rows.back());
+    }
+    for (const CollisionSceneSpec& c : kCollisionScenes) {
+        if (!only.empty() && std::find(only.begin(), only.end(), c.name) == only.end()) continue;
+        rows.push_back(runCollisionScene(c, std::min(steps, envFrames)));
         printRow(rows.back());
     }
     if (!json.empty()) writeJson(json, rows);
