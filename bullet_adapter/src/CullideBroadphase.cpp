@@ -360,7 +360,7 @@ struct CullideBroadphase::Impl {
         // Every culled pair has a GImpact shape, or a triangle mesh with convex-mesh culling on: most pairs stop here.
         auto mayBe = [&](const btCollisionShape* s) {
             const int type = s->getShapeType();
-            return type == GIMPACT_SHAPE_PROXYTYPE || (convexMeshCulling && type == TRIANGLE_MESH_SHAPE_PROXYTYPE);
+            return type == GIMPACT_SHAPE_PROXYTYPE || (convexMeshCulling && bullet::isTriangleMeshType(type));
         };
         if (!mayBe(sa) && !mayBe(sb)) return false;
         const bullet::GeometryKind ka = bullet::geometryKindOf(sa);

@@ -1,5 +1,6 @@
 #include "cullide_bullet/CullideCollisionDispatcher.h"
 #include "GImpactLeafPairs.h"
+#include "ShapeGeometry.h"
 #include "cullide/Timer.h"
 
 #include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
@@ -645,8 +646,8 @@ btCollisionAlgorithm* CullideCollisionDispatcher::findAlgorithm(const btCollisio
         const btCollisionAlgorithmCreateFunc* registered = m_doubleDispatchContactPoints[t0][t1];
         btCollisionAlgorithmCreateFunc* replacement = nullptr;
         const bool gimpactPair = (t0 == GIMPACT_SHAPE_PROXYTYPE &&
-                                  (t1 == GIMPACT_SHAPE_PROXYTYPE || t1 == TRIANGLE_MESH_SHAPE_PROXYTYPE)) ||
-                                 (t0 == TRIANGLE_MESH_SHAPE_PROXYTYPE && t1 == GIMPACT_SHAPE_PROXYTYPE);
+                                  (t1 == GIMPACT_SHAPE_PROXYTYPE || bullet::isTriangleMeshType(t1))) ||
+                                 (bullet::isTriangleMeshType(t0) && t1 == GIMPACT_SHAPE_PROXYTYPE);
         const bool gimpactConvexPair = CullideGImpactAlgorithm::trimeshAgainstConvex(body0Wrap, body1Wrap) ||
                                        CullideGImpactAlgorithm::trimeshAgainstConvex(body1Wrap, body0Wrap);
         // Convex-mesh pairs read the culler's triangles only with convex-mesh culling on; otherwise Bullet's own
@@ -654,10 +655,10 @@ btCollisionAlgorithm* CullideCollisionDispatcher::findAlgorithm(const btCollisio
         const bool convexMesh = m_broadphase->getConvexMeshCulling();
         if ((gimpactPair || gimpactConvexPair) && registeredIs<btGImpactCollisionAlgorithm::CreateFunc>(registered))
             replacement = &g_gimpactCreate;
-        else if (convexMesh && t1 == TRIANGLE_MESH_SHAPE_PROXYTYPE && culledConvex(body0Wrap) &&
+        else if (convexMesh && bullet::isTriangleMeshType(t1) && culledConvex(body0Wrap) &&
                  registeredIs<btConvexConcaveCollisionAlgorithm::CreateFunc>(registered))
             replacement = &g_convexMeshCreate;
-        else if (convexMesh && t0 == TRIANGLE_MESH_SHAPE_PROXYTYPE && culledConvex(body1Wrap) &&
+        else if (convexMesh && bullet::isTriangleMeshType(t0) && culledConvex(body1Wrap) &&
                  registeredIs<btConvexConcaveCollisionAlgorithm::SwappedCreateFunc>(registered))
             replacement = &g_meshConvexCreate;
         if (replacement != nullptr) {

@@ -4,6 +4,7 @@
 #include <BulletCollision/CollisionShapes/btCompoundShape.h>
 #include <BulletCollision/CollisionShapes/btConvexHullShape.h>
 #include <BulletCollision/CollisionShapes/btStridingMeshInterface.h>
+#include <BulletCollision/CollisionShapes/btScaledBvhTriangleMeshShape.h>
 #include <BulletCollision/CollisionShapes/btTriangleMeshShape.h>
 #include <BulletCollision/Gimpact/btGImpactShape.h>
 #include <LinearMath/btConvexHullComputer.h>
@@ -116,6 +117,15 @@ std::uint64_t hashSubpart(std::uint64_t h, const btStridingMeshInterface& mesh, 
 
 }  // namespace
 
+const btTriangleMeshShape* triangleMeshOf(const btCollisionShape* shape) {
+    if (shape == nullptr) return nullptr;
+    if (shape->getShapeType() == TRIANGLE_MESH_SHAPE_PROXYTYPE) return static_cast<const btTriangleMeshShape*>(shape);
+    if (shape->getShapeType() == SCALED_TRIANGLE_MESH_SHAPE_PROXYTYPE)
+        return const_cast<btScaledBvhTriangleMeshShape*>(static_cast<const btScaledBvhTriangleMeshShape*>(shape))
+            ->getChildShape();  // logically const; Bullet's accessor is not
+    return nullptr;
+}
+
 std::uint64_t sourceHashOf(const btCollisionShape* shape) {
     std::uint64_t h = 0xcbf29ce484222325ull;
     if (const btGImpactMeshShape* mesh = asGImpactMesh(shape)) {
@@ -125,8 +135,10 @@ std::uint64_t sourceHashOf(const btCollisionShape* shape) {
             h = hashSubpart(h, *manager->m_meshInterface, manager->m_part);
         }
     } else if (geometryKindOf(shape) == GeometryKind::TriangleMesh) {
-        const btStridingMeshInterface& striding = *static_cast<const btTriangleMeshShape*>(shape)->getMeshInterface();
+        const btStridingMeshInterface& striding = *triangleMeshOf(shape)->getMeshInterface();
         for (int s = 0; s < striding.getNumSubParts(); ++s) h = hashSubpart(h, striding, s);
+        // A scaled wrapper's child can be rescaled on its own (its mesh interface's scaling).
+        h = hashBytes(h, reinterpret_cast<const unsigned char*>(striding.getScaling().m_floats), 3 * sizeof(btScalar));
     } else if (geometryKindOf(shape) == GeometryKind::ConvexHull) {
         const auto* hull = static_cast<const btConvexHullShape*>(shape);
         h = hashBytes(h, reinterpret_cast<const unsigned char*>(hull->getUnscaledPoints()),
@@ -310,6 +322,8 @@ GeometryKind geometryKindOf(const btCollisionShape* shape) {
             return asGImpactMesh(shape) != nullptr ? GeometryKind::GImpactMesh : GeometryKind::None;
         case TRIANGLE_MESH_SHAPE_PROXYTYPE:
             return GeometryKind::TriangleMesh;
+        case SCALED_TRIANGLE_MESH_SHAPE_PROXYTYPE:
+            return triangleMeshOf(shape) != nullptr ? GeometryKind::TriangleMesh : GeometryKind::None;
         case CONVEX_HULL_SHAPE_PROXYTYPE:
             return GeometryKind::ConvexHull;
         case COMPOUND_SHAPE_PROXYTYPE:
@@ -335,10 +349,15 @@ std::shared_ptr<ShapeTriangles> buildShapeTriangles(const btCollisionShape* shap
             break;
         }
         case GeometryKind::TriangleMesh: {
-            const auto* mesh = static_cast<const btTriangleMeshShape*>(shape);
+            const btTriangleMeshShape* mesh = triangleMeshOf(shape);
             out->sourceCount = meshVertexCount(*mesh->getMeshInterface());
             buildTriangleMesh(*mesh->getMeshInterface(), *out);
-            out->margin = shape->getMargin();
+            if (mesh != shape) {
+                // btScaledBvhTriangleMeshShape: its callback multiplies the child's triangles by its own scaling.
+                const btVector3 scaling = shape->getLocalScaling();
+                for (btVector3& v : out->vertices) v = v * scaling;
+            }
+            out->margin = shape->getMargin();  // the wrapper's own margin is what the concave algorithms use
             break;
         }
         case GeometryKind::ConvexHull: {
@@ -373,8 +392,7 @@ bool stillMatches(const ShapeTriangles& geometry, const btCollisionShape* shape,
             sameSize = gimpactVertexCount(*asGImpactMesh(shape)) == geometry.sourceCount;
             break;
         case GeometryKind::TriangleMesh:
-            sameSize = meshVertexCount(*static_cast<const btTriangleMeshShape*>(shape)->getMeshInterface()) ==
-                       geometry.sourceCount;
+            sameSize = meshVertexCount(*triangleMeshOf(shape)->getMeshInterface()) == geometry.sourceCount;
             break;
         case GeometryKind::ConvexHull:
             sameSize = static_cast<const btConvexHullShape*>(shape)->getNumPoints() == geometry.sourceCount;

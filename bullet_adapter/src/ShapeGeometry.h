@@ -4,6 +4,7 @@
 #include "cullide/Types.h"
 #include "cullide_bullet/CullideBroadphase.h"
 
+#include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
 #include <LinearMath/btVector3.h>
 
 #include <cstdint>
@@ -11,13 +12,15 @@
 #include <vector>
 
 class btCollisionShape;
+class btTriangleMeshShape;
 
 namespace cullide::bullet {
 
 enum class GeometryKind {
     None,         ///< no triangle geometry: the culler sees the broadphase AABB
     GImpactMesh,  ///< btGImpactMeshShape (CONST_GIMPACT_TRIMESH_SHAPE)
-    TriangleMesh, ///< btBvhTriangleMeshShape / btTriangleMeshShape (TRIANGLE_MESH_SHAPE_PROXYTYPE)
+    TriangleMesh, ///< btBvhTriangleMeshShape / btTriangleMeshShape (TRIANGLE_MESH_SHAPE_PROXYTYPE), and
+                  ///< btScaledBvhTriangleMeshShape (its scaling applied to the child's triangles, as Bullet does)
     ConvexHull,   ///< btConvexHullShape: the hull of its scaled points
     Compound,     ///< btCompoundShape of convex children (nested compounds too): hull children as their hulls,
                   ///< other convex children as their local boxes (12 triangles, margin included), in the
@@ -25,6 +28,14 @@ enum class GeometryKind {
 };
 
 GeometryKind geometryKindOf(const btCollisionShape* shape);
+
+/// The triangle mesh shape behind `shape`: itself, or a scaled wrapper's child; nullptr for any other shape.
+const btTriangleMeshShape* triangleMeshOf(const btCollisionShape* shape);
+
+/// True for the shape types of GeometryKind::TriangleMesh (plain and scaled BVH / triangle meshes).
+inline bool isTriangleMeshType(int shapeType) {
+    return shapeType == TRIANGLE_MESH_SHAPE_PROXYTYPE || shapeType == SCALED_TRIANGLE_MESH_SHAPE_PROXYTYPE;
+}
 
 struct ShapeTriangles {
     GeometryKind kind = GeometryKind::None;

@@ -7,6 +7,7 @@
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <BulletCollision/Gimpact/btGImpactShape.h>
 
+#include <BulletCollision/CollisionShapes/btScaledBvhTriangleMeshShape.h>
 #include <gtest/gtest.h>
 
 #include <BulletDynamics/Dynamics/btRigidBody.h>
@@ -101,6 +102,71 @@ TEST(BulletGImpact, ToriOnATriangleMeshLandscape) {
     const MirrorRun run = runMirrored(reference, cullide, options);
     printMirrorRun("gimpact tori on a triangle-mesh landscape", run);
     expectCulledAgreement(run, 300);
+}
+
+/// The same with the landscape as a btScaledBvhTriangleMeshShape (non-uniform scale, as applications reuse one BVH
+/// at several sizes): its triangles enter the culler scaled exactly as Bullet's scaled callback scales them, so the
+/// GImpact-mesh pairs go through CULLIDE's triangle lists with every contact key of the default pipeline.
+TEST(BulletGImpact, ToriOnAScaledTriangleMeshLandscape) {
+    CULLIDE_BULLET_REQUIRE_GL();
+    ShapeStore shapes;
+    auto* bvh = static_cast<btBvhTriangleMeshShape*>(shapes.landscape(24, btScalar(0.5), btScalar(0.5)));
+    btScaledBvhTriangleMeshShape ground(bvh, btVector3(btScalar(1.3), btScalar(0.7), btScalar(0.9)));
+    btCollisionShape* torus = shapes.gimpactTorus(1, btScalar(0.3), 24, 12, btScalar(0.04));
+    auto populate = [&](TestWorld& w) {
+        btGImpactCollisionAlgorithm::registerAlgorithm(&w.dispatcher());
+        w.addBody(&ground, 0, btTransform::getIdentity());
+        for (int k = 0; k < 5; ++k)
+            w.addBody(torus, 1,
+                      btTransform(btQuaternion(btVector3(1, btScalar(0.3) * btScalar(k), 0).normalized(),
+                                               btScalar(0.2) + btScalar(0.7) * btScalar(k)),
+                                  btVector3(btScalar(2.4) * std::sin(btScalar(1.3) * btScalar(k)),
+                                            btScalar(1.2) + btScalar(1.0) * btScalar(k),
+                                            btScalar(2.4) * std::cos(btScalar(0.9) * btScalar(k)))));
+    };
+    TestWorld reference(PipelineKind::Default);
+    TestWorld cullide(PipelineKind::Cullide);
+    cullide.cullideBroadphase()->setGImpactPairCulling(true);  // every pair through the culler, as above
+    populate(reference);
+    populate(cullide);
+    MirrorOptions options;
+    options.steps = 150;
+    options.tolerance = [](const std::pair<int, int>&) { return 3.0 * double(gContactBreakingThreshold); };  // as above
+    const MirrorRun run = runMirrored(reference, cullide, options);
+    printMirrorRun("gimpact tori on a scaled triangle-mesh landscape", run);
+    expectCulledAgreement(run, 300);
+}
+
+/// Convex hulls on the scaled landscape with convex-mesh culling on: the hull-mesh pairs read the culler's scaled
+/// triangles (Bullet's btConvexConcaveCollisionAlgorithm on the surviving ones), every contact of the default pipeline
+/// kept.
+TEST(BulletGImpact, HullsOnAScaledTriangleMeshLandscape) {
+    CULLIDE_BULLET_REQUIRE_GL();
+    ShapeStore shapes;
+    auto* bvh = static_cast<btBvhTriangleMeshShape*>(shapes.landscape(24, btScalar(0.5), btScalar(0.5)));
+    btScaledBvhTriangleMeshShape ground(bvh, btVector3(btScalar(0.8), btScalar(1.4), btScalar(1.1)));
+    btCollisionShape* hull = shapes.hull(btVector3(btScalar(0.5), btScalar(0.35), btScalar(0.4)), 30, 7);
+    auto populate = [&](TestWorld& w) {
+        w.addBody(&ground, 0, btTransform::getIdentity());
+        for (int k = 0; k < 8; ++k)
+            w.addBody(hull, 1,
+                      btTransform(btQuaternion(btVector3(0, 1, btScalar(0.2) * btScalar(k)).normalized(),
+                                               btScalar(0.5) * btScalar(k)),
+                                  btVector3(btScalar(-3.5) + btScalar(k), btScalar(1.5) + btScalar(0.3) * btScalar(k),
+                                            btScalar(1.2) * std::sin(btScalar(k)))));
+    };
+    TestWorld reference(PipelineKind::Default);
+    TestWorld cullide(PipelineKind::Cullide);
+    cullide.cullideBroadphase()->setConvexMeshCulling(true);  // the hull-mesh triangle path (off by default)
+    populate(reference);
+    populate(cullide);
+    MirrorOptions options;
+    options.steps = 120;
+    options.tolerance = [](const std::pair<int, int>&) { return double(gContactBreakingThreshold); };
+    const MirrorRun run = runMirrored(reference, cullide, options);
+    printMirrorRun("hulls on a scaled triangle-mesh landscape", run);
+    expectAgreement(run, 300);
+    EXPECT_GT(run.cullidePairsFromTriangles, 0u) << "no hull-mesh pair read the culler's triangles";
 }
 
 /// GImpact tori falling on boxes (a static box floor and dynamic boxes), with a kinematic GImpact torus sweeping

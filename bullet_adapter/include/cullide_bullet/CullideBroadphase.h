@@ -11,7 +11,8 @@
 //   nothing, and rayTest / aabbTest answer as Bullet's. A proxy with a non-finite AABB is parked (one line on stderr,
 //   a counter, no pairs, filter mask 0 while parked) instead of poisoning the tree: nothing else is affected.
 // - The CULLIDE levels run only for the cache's pairs whose narrow phase reads the surviving triangles
-//   (GImpact-triangle mesh; GImpact-GImpact with setGImpactPairCulling(true); hull/compound-triangle mesh with
+//   (GImpact-triangle mesh, plain or btScaledBvhTriangleMeshShape; GImpact-GImpact with setGImpactPairCulling(true);
+//   hull/compound-triangle mesh with
 //   setConvexMeshCulling(true)) or that the culler decides (GImpact against a convex shape), and that the dispatcher will process (needsCollision). The
 //   culler gets those pairs only, meshes as the shape's local triangles plus the body's transform (built once per
 //   shape, shared by its bodies; static objects world-space, cached between steps). Planes and infinite boxes are
