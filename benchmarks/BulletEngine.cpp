@@ -1,4 +1,5 @@
 #include "BulletEngine.h"
+#include "BulletMesh.h"
 
 #include "cullide/Timer.h"
 
@@ -28,16 +29,6 @@ bool recordContact(btManifoldPoint&, const btCollisionObjectWrapper* w0, int, in
     return false;
 }
 
-btTransform toBullet(const Eigen::Isometry3d& pose) {
-    const Eigen::Matrix3d r = pose.rotation();
-    const Eigen::Vector3d t = pose.translation();
-    btMatrix3x3 basis(static_cast<btScalar>(r(0, 0)), static_cast<btScalar>(r(0, 1)), static_cast<btScalar>(r(0, 2)),
-                      static_cast<btScalar>(r(1, 0)), static_cast<btScalar>(r(1, 1)), static_cast<btScalar>(r(1, 2)),
-                      static_cast<btScalar>(r(2, 0)), static_cast<btScalar>(r(2, 1)), static_cast<btScalar>(r(2, 2)));
-    return btTransform(basis, btVector3(static_cast<btScalar>(t.x()), static_cast<btScalar>(t.y()),
-                                        static_cast<btScalar>(t.z())));
-}
-
 }  // namespace
 
 struct BulletEngine::Impl {
@@ -63,12 +54,6 @@ struct BulletEngine::Impl {
             for (Body& b : bodies)
                 if (b.object) world->removeCollisionObject(b.object.get());
         if (g_contactSink == &contacts) g_contactSink = nullptr;
-    }
-
-    static void copyVertices(const TriangleMesh& mesh, std::vector<btScalar>& out) {
-        out.resize(3 * mesh.vertices.size());
-        for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
-            for (int k = 0; k < 3; ++k) out[3 * i + static_cast<std::size_t>(k)] = static_cast<btScalar>(mesh.vertices[i][k]);
     }
 };
 
@@ -107,21 +92,8 @@ void BulletEngine::setup(const BenchFrame& first) {
         Impl::Body& b = m.bodies[i];
         b.motion = (*first.motion)[i];
         const TriangleMesh& mesh = b.motion == Motion::Deforming ? (*first.world)[i] : meshes[i];
-        Impl::copyVertices(mesh, b.vertices);
-        b.indices.resize(3 * mesh.triangles.size());
-        for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-            for (int k = 0; k < 3; ++k) b.indices[3 * t + static_cast<std::size_t>(k)] = static_cast<int>(mesh.triangles[t][static_cast<std::size_t>(k)]);
-        btIndexedMesh part;
-        part.m_numTriangles = static_cast<int>(mesh.triangles.size());
-        part.m_triangleIndexBase = reinterpret_cast<const unsigned char*>(b.indices.data());
-        part.m_triangleIndexStride = 3 * static_cast<int>(sizeof(int));
-        part.m_numVertices = static_cast<int>(mesh.vertices.size());
-        part.m_vertexBase = reinterpret_cast<const unsigned char*>(b.vertices.data());
-        part.m_vertexStride = 3 * static_cast<int>(sizeof(btScalar));
-        part.m_indexType = PHY_INTEGER;
-        part.m_vertexType = sizeof(btScalar) == sizeof(float) ? PHY_FLOAT : PHY_DOUBLE;
-        b.array = std::make_unique<btTriangleIndexVertexArray>();
-        b.array->addIndexedMesh(part, PHY_INTEGER);
+        copyVertices(mesh, b.vertices);
+        b.array = indexedMesh(mesh, b.vertices, b.indices);
         b.shape = std::make_unique<btGImpactMeshShape>(b.array.get());
         // No collision margin: the task is the intersecting triangle pairs, the same as the other engines'.
         b.shape->setMargin(0);
@@ -147,7 +119,7 @@ void BulletEngine::run(const BenchFrame& frame, FrameOutput& out) {
     for (std::size_t i = 0; i < m.bodies.size(); ++i) {
         Impl::Body& b = m.bodies[i];
         if (b.motion == Motion::Deforming) {
-            Impl::copyVertices((*frame.world)[i], b.vertices);
+            copyVertices((*frame.world)[i], b.vertices);
             b.shape->postUpdate();
             b.shape->updateBound();
         } else if (b.motion == Motion::Rigid) {

@@ -14,6 +14,7 @@
 // default world's step but not after the CULLIDE world's (on the same state). Prints one table row per scene;
 // --json writes the figures (docs/benchmarks.md, scripts/bench.sh).
 #include "BenchScene.h"
+#include "BulletMesh.h"
 #include "SeededRandom.h"
 #include "cullide/Timer.h"
 #include "cullide/TriangleTest.h"
@@ -264,6 +265,26 @@ public:
     double broadphaseMs = 0, narrowMs = 0;
 };
 
+/// The broadphase and dispatcher of a pipeline: Bullet's dbvt or SAP (world box [sapMin, sapMax]), or the two-line
+/// swap with the command line's settings.
+void makePipeline(Pipeline p, btCollisionConfiguration& config, const btVector3& sapMin, const btVector3& sapMax,
+                  std::unique_ptr<btBroadphaseInterface>& broadphase, std::unique_ptr<btCollisionDispatcher>& dispatcher) {
+    if (p == Pipeline::Cullide) {
+        auto bp = std::make_unique<cullide::CullideBroadphase>();
+        if (std::getenv("SWAP_BENCH_CONVEX_MESH") != nullptr) bp->setConvexMeshCulling(true);
+        bp->setDeepPenetrationFallback(g_penetrationFallback);
+        bp->setGImpactPairCulling(g_gimpactPairCulling);
+        dispatcher = std::make_unique<cullide::CullideCollisionDispatcher>(&config, bp.get());
+        broadphase = std::move(bp);
+        return;
+    }
+    dispatcher = std::make_unique<btCollisionDispatcher>(&config);
+    if (p == Pipeline::Dbvt)
+        broadphase = std::make_unique<btDbvtBroadphase>();
+    else
+        broadphase = std::make_unique<btAxisSweep3>(sapMin, sapMax);
+}
+
 /// Object pairs (lower user index first) with contact points in the dispatcher's manifolds.
 std::set<std::pair<int, int>> contactPairsOf(btDispatcher& dispatcher) {
     std::set<std::pair<int, int>> out;
@@ -310,20 +331,7 @@ struct World {
     std::size_t rayHits = 0;
 
     World(Pipeline p, const SceneSpec& scene) : pipeline(p) {
-        if (p == Pipeline::Cullide) {
-            auto bp = std::make_unique<cullide::CullideBroadphase>();
-            if (std::getenv("SWAP_BENCH_CONVEX_MESH") != nullptr) bp->setConvexMeshCulling(true);
-            bp->setDeepPenetrationFallback(g_penetrationFallback);
-            bp->setGImpactPairCulling(g_gimpactPairCulling);
-            dispatcher = std::make_unique<cullide::CullideCollisionDispatcher>(&config, bp.get());
-            broadphase = std::move(bp);
-        } else {
-            dispatcher = std::make_unique<btCollisionDispatcher>(&config);
-            if (p == Pipeline::Dbvt)
-                broadphase = std::make_unique<btDbvtBroadphase>();
-            else
-                broadphase = std::make_unique<btAxisSweep3>(btVector3(-120, -60, -120), btVector3(120, 200, 120));
-        }
+        makePipeline(p, config, btVector3(-120, -60, -120), btVector3(120, 200, 120), broadphase, dispatcher);
         if (scene.gimpact) btGImpactCollisionAlgorithm::registerAlgorithm(dispatcher.get());
         world = std::make_unique<TimedWorld>(dispatcher.get(), broadphase.get(), &solver, &config);
         world->setGravity(btVector3(0, -10, 0));
@@ -399,6 +407,20 @@ struct Row {
     double deepestDiffMax = 0, deepestDiffSum = 0;
     double convexCandidates = 0, convexTriangles = 0;  ///< GImpact-convex triangles per step: Bullet's query, run
 };
+
+/// Adds the CULLIDE world's last step (dispatcher and broadphase stages) to the row's per-step means.
+void addCullideStep(btCollisionDispatcher& dispatcher, btBroadphaseInterface& broadphase, int steps, Row& row) {
+    const auto& d = static_cast<cullide::CullideCollisionDispatcher&>(dispatcher).getLastStepStats();
+    row.cullidePairs += double(d.cullidePairs) / steps;
+    row.fallbackPairs += double(d.fallbackPairs) / steps;
+    row.penetrationPairs += double(d.penetrationPairs) / steps;
+    row.convexCandidates += double(d.convexCandidates) / steps;
+    row.convexTriangles += double(d.convexTriangles) / steps;
+    const auto& b = static_cast<cullide::CullideBroadphase&>(broadphase).getLastFrameStats();
+    row.buildMs += b.buildMs / steps;
+    row.cullMs += b.cullMs / steps;
+    row.recordMs += b.recordMs / steps;
+}
 
 /// Adds one step's contact error (see Row).
 void compareContacts(const ContactPoints& want, const ContactPoints& got, Row& row) {
@@ -514,16 +536,7 @@ Row runScene(const SceneFactory& factory, int steps) {
         }
         for (const auto& p : got) row.extra += want.count(p) ? 0 : 1;
         compareContacts(worlds[0]->contactPoints(), worlds[2]->contactPoints(), row);
-        const auto& d = static_cast<cullide::CullideCollisionDispatcher*>(worlds[2]->dispatcher.get())->getLastStepStats();
-        row.cullidePairs += double(d.cullidePairs) / steps;
-        row.fallbackPairs += double(d.fallbackPairs) / steps;
-        row.penetrationPairs += double(d.penetrationPairs) / steps;
-        row.convexCandidates += double(d.convexCandidates) / steps;
-        row.convexTriangles += double(d.convexTriangles) / steps;
-        const auto& b = static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get())->getLastFrameStats();
-        row.buildMs += b.buildMs / steps;
-        row.cullMs += b.cullMs / steps;
-        row.recordMs += b.recordMs / steps;
+        addCullideStep(*worlds[2]->dispatcher, *worlds[2]->broadphase, steps, row);
         for (std::size_t k = 1; k < worlds.size(); ++k) worlds[k]->copyStatesFrom(*worlds[0]);
     }
     for (std::size_t k = 0; k < worlds.size(); ++k) {
@@ -564,20 +577,8 @@ struct MeshBody {
     Motion motion = Motion::Deforming;
 };
 
-void copyVertices(const cullide::TriangleMesh& mesh, std::vector<btScalar>& out) {
-    out.resize(3 * mesh.vertices.size());
-    for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
-        for (int k = 0; k < 3; ++k) out[3 * i + std::size_t(k)] = btScalar(mesh.vertices[i][k]);
-}
-
-btTransform toBullet(const Eigen::Isometry3d& pose) {
-    const Eigen::Matrix3d r = pose.rotation();
-    const Eigen::Vector3d t = pose.translation();
-    return btTransform(btMatrix3x3(btScalar(r(0, 0)), btScalar(r(0, 1)), btScalar(r(0, 2)), btScalar(r(1, 0)),
-                                   btScalar(r(1, 1)), btScalar(r(1, 2)), btScalar(r(2, 0)), btScalar(r(2, 1)),
-                                   btScalar(r(2, 2))),
-                       btVector3(btScalar(t.x()), btScalar(t.y()), btScalar(t.z())));
-}
+using cullide::bench::copyVertices;
+using cullide::bench::toBullet;
 
 /// One pipeline's collision world of an environment.
 struct CollisionWorld {
@@ -591,27 +592,15 @@ struct CollisionWorld {
     std::size_t narrowPairs = 0;
 
     CollisionWorld(Pipeline p, const cullide::bench::BenchFrame& first) : pipeline(p) {
-        if (p == Pipeline::Cullide) {
-            auto bp = std::make_unique<cullide::CullideBroadphase>();
-            bp->setDeepPenetrationFallback(g_penetrationFallback);
-            bp->setGImpactPairCulling(g_gimpactPairCulling);
-            dispatcher = std::make_unique<cullide::CullideCollisionDispatcher>(&config, bp.get());
-            broadphase = std::move(bp);
-        } else {
-            dispatcher = std::make_unique<btCollisionDispatcher>(&config);
-            if (p == Pipeline::Dbvt) {
-                broadphase = std::make_unique<btDbvtBroadphase>();
-            } else {  // the first frame's bounds, three times their size (the environments stay inside a box)
-                cullide::Aabb box;
-                for (const auto& mesh : *first.world)
-                    for (const cullide::Vec3& v : mesh.vertices) box.grow(v);
-                const cullide::Vec3 c = 0.5 * (box.min + box.max);
-                const double half = 1.5 * box.extent().maxCoeff() + 1.0;
-                const auto bt = [](const cullide::Vec3& v) { return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z())); };
-                broadphase = std::make_unique<btAxisSweep3>(bt(c - cullide::Vec3::Constant(half)),
-                                                            bt(c + cullide::Vec3::Constant(half)));
-            }
-        }
+        // SAP's world box: the first frame's bounds, three times their size (the environments stay inside a box).
+        cullide::Aabb box;
+        for (const auto& mesh : *first.world)
+            for (const cullide::Vec3& v : mesh.vertices) box.grow(v);
+        const cullide::Vec3 c = 0.5 * (box.min + box.max);
+        const double half = 1.5 * box.extent().maxCoeff() + 1.0;
+        const auto bt = [](const cullide::Vec3& v) { return btVector3(btScalar(v.x()), btScalar(v.y()), btScalar(v.z())); };
+        makePipeline(p, config, bt(c - cullide::Vec3::Constant(half)), bt(c + cullide::Vec3::Constant(half)), broadphase,
+                     dispatcher);
         btGImpactCollisionAlgorithm::registerAlgorithm(dispatcher.get());
         world = std::make_unique<btCollisionWorld>(dispatcher.get(), broadphase.get(), &config);
         bodies.resize(first.local->size());
@@ -626,18 +615,7 @@ struct CollisionWorld {
         b.motion = (*first.motion)[i];
         const cullide::TriangleMesh& mesh = b.motion == Motion::Deforming ? (*first.world)[i] : (*first.local)[i];
         copyVertices(mesh, b.vertices);
-        for (const auto& t : mesh.triangles)
-            for (std::uint32_t k : t) b.indices.push_back(int(k));
-        btIndexedMesh part;
-        part.m_numTriangles = int(mesh.triangles.size());
-        part.m_triangleIndexBase = reinterpret_cast<const unsigned char*>(b.indices.data());
-        part.m_triangleIndexStride = 3 * int(sizeof(int));
-        part.m_numVertices = int(mesh.vertices.size());
-        part.m_vertexBase = reinterpret_cast<const unsigned char*>(b.vertices.data());
-        part.m_vertexStride = 3 * int(sizeof(btScalar));
-        part.m_vertexType = sizeof(btScalar) == sizeof(float) ? PHY_FLOAT : PHY_DOUBLE;
-        b.array = std::make_unique<btTriangleIndexVertexArray>();
-        b.array->addIndexedMesh(part, PHY_INTEGER);
+        b.array = cullide::bench::indexedMesh(mesh, b.vertices, b.indices);
         b.shape = std::make_unique<btGImpactMeshShape>(b.array.get());
         b.shape->setMargin(0);
         b.shape->updateBound();
@@ -697,14 +675,7 @@ Row runCollisionScene(const CollisionSceneSpec& spec, int frames) {
         for (const auto& p : want) row.lost += got.count(p) ? 0 : 1;
         for (const auto& p : got) row.extra += want.count(p) ? 0 : 1;
         compareContacts(contactPointsOf(*worlds[0]->dispatcher), contactPointsOf(*worlds[2]->dispatcher), row);
-        const auto& d = static_cast<cullide::CullideCollisionDispatcher*>(worlds[2]->dispatcher.get())->getLastStepStats();
-        row.cullidePairs += double(d.cullidePairs) / frames;
-        row.fallbackPairs += double(d.fallbackPairs) / frames;
-        row.penetrationPairs += double(d.penetrationPairs) / frames;
-        const auto& b = static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get())->getLastFrameStats();
-        row.buildMs += b.buildMs / frames;
-        row.cullMs += b.cullMs / frames;
-        row.recordMs += b.recordMs / frames;
+        addCullideStep(*worlds[2]->dispatcher, *worlds[2]->broadphase, frames, row);
     }
     for (std::size_t k = 0; k < worlds.size(); ++k) {
         row.ms[k] = worlds[k]->stepMs / frames;

@@ -1,0 +1,55 @@
+// Meshes and poses handed to Bullet by the benchmarks (cullide-bench-run's Bullet engine, cullide-swap-bench's
+// collision worlds): the same conversions, so both model an environment the same way.
+#pragma once
+
+#include "cullide/Types.h"
+
+#include <BulletCollision/CollisionShapes/btTriangleIndexVertexArray.h>
+#include <LinearMath/btTransform.h>
+
+#include <Eigen/Geometry>
+
+#include <memory>
+#include <vector>
+
+namespace cullide::bench {
+
+inline btTransform toBullet(const Eigen::Isometry3d& pose) {
+    const Eigen::Matrix3d r = pose.rotation();
+    const Eigen::Vector3d t = pose.translation();
+    const btMatrix3x3 basis(btScalar(r(0, 0)), btScalar(r(0, 1)), btScalar(r(0, 2)), btScalar(r(1, 0)),
+                            btScalar(r(1, 1)), btScalar(r(1, 2)), btScalar(r(2, 0)), btScalar(r(2, 1)),
+                            btScalar(r(2, 2)));
+    return btTransform(basis, btVector3(btScalar(t.x()), btScalar(t.y()), btScalar(t.z())));
+}
+
+/// The mesh's vertices as btScalar xyz triples (rewritten in place when an object deforms).
+inline void copyVertices(const TriangleMesh& mesh, std::vector<btScalar>& out) {
+    out.resize(3 * mesh.vertices.size());
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
+        for (int k = 0; k < 3; ++k) out[3 * i + static_cast<std::size_t>(k)] = static_cast<btScalar>(mesh.vertices[i][k]);
+}
+
+/// A btTriangleIndexVertexArray over `vertices` (see copyVertices) and the mesh's triangles (written to `indices`);
+/// both vectors must outlive the array and keep their storage.
+inline std::unique_ptr<btTriangleIndexVertexArray> indexedMesh(const TriangleMesh& mesh,
+                                                               const std::vector<btScalar>& vertices,
+                                                               std::vector<int>& indices) {
+    indices.clear();
+    for (const auto& t : mesh.triangles)
+        for (std::uint32_t k : t) indices.push_back(static_cast<int>(k));
+    btIndexedMesh part;
+    part.m_numTriangles = static_cast<int>(mesh.triangles.size());
+    part.m_triangleIndexBase = reinterpret_cast<const unsigned char*>(indices.data());
+    part.m_triangleIndexStride = 3 * static_cast<int>(sizeof(int));
+    part.m_numVertices = static_cast<int>(vertices.size() / 3);
+    part.m_vertexBase = reinterpret_cast<const unsigned char*>(vertices.data());
+    part.m_vertexStride = 3 * static_cast<int>(sizeof(btScalar));
+    part.m_indexType = PHY_INTEGER;
+    part.m_vertexType = sizeof(btScalar) == sizeof(float) ? PHY_FLOAT : PHY_DOUBLE;
+    auto array = std::make_unique<btTriangleIndexVertexArray>();
+    array->addIndexedMesh(part, PHY_INTEGER);
+    return array;
+}
+
+}  // namespace cullide::bench
