@@ -32,26 +32,17 @@ bool recordContact(btManifoldPoint&, const btCollisionObjectWrapper* w0, int, in
 }  // namespace
 
 struct BulletEngine::Impl {
-    struct Body {
-        std::vector<btScalar> vertices;
-        std::vector<int> indices;
-        std::unique_ptr<btTriangleIndexVertexArray> array;
-        std::unique_ptr<btGImpactMeshShape> shape;
-        std::unique_ptr<btCollisionObject> object;
-        Motion motion = Motion::Deforming;
-    };
-
     Broadphase kind;
     std::unique_ptr<btDefaultCollisionConfiguration> config;
     std::unique_ptr<btCollisionDispatcher> dispatcher;
     std::unique_ptr<btBroadphaseInterface> broadphase;
     std::unique_ptr<btCollisionWorld> world;
-    std::vector<Body> bodies;
+    std::vector<GImpactBody> bodies;
     std::vector<TriangleKey> contacts;
 
     ~Impl() {
         if (world)
-            for (Body& b : bodies)
+            for (GImpactBody& b : bodies)
                 if (b.object) world->removeCollisionObject(b.object.get());
         if (g_contactSink == &contacts) g_contactSink = nullptr;
     }
@@ -89,23 +80,11 @@ void BulletEngine::setup(const BenchFrame& first) {
     const auto& meshes = *first.local;
     m.bodies.resize(meshes.size());
     for (std::size_t i = 0; i < meshes.size(); ++i) {
-        Impl::Body& b = m.bodies[i];
-        b.motion = (*first.motion)[i];
-        const TriangleMesh& mesh = b.motion == Motion::Deforming ? (*first.world)[i] : meshes[i];
-        copyVertices(mesh, b.vertices);
-        b.array = indexedMesh(mesh, b.vertices, b.indices);
-        b.shape = std::make_unique<btGImpactMeshShape>(b.array.get());
-        // No collision margin: the task is the intersecting triangle pairs, the same as the other engines'.
-        b.shape->setMargin(0);
-        b.shape->updateBound();
-        b.object = std::make_unique<btCollisionObject>();
-        b.object->setCollisionShape(b.shape.get());
-        b.object->setUserIndex(static_cast<int>(i));
+        GImpactBody& b = m.bodies[i];
+        b.build(first, i);
         int flags = b.object->getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK;
         if (b.motion == Motion::Static) flags |= btCollisionObject::CF_STATIC_OBJECT;
         b.object->setCollisionFlags(flags);
-        b.object->setWorldTransform(b.motion == Motion::Deforming ? btTransform::getIdentity()
-                                                                  : toBullet(first.poses[i]));
         m.world->addCollisionObject(b.object.get());
     }
 }
@@ -116,16 +95,7 @@ void BulletEngine::run(const BenchFrame& frame, FrameOutput& out) {
     m.contacts.clear();
     const Timer total;
     Timer stage;
-    for (std::size_t i = 0; i < m.bodies.size(); ++i) {
-        Impl::Body& b = m.bodies[i];
-        if (b.motion == Motion::Deforming) {
-            copyVertices((*frame.world)[i], b.vertices);
-            b.shape->postUpdate();
-            b.shape->updateBound();
-        } else if (b.motion == Motion::Rigid) {
-            b.object->setWorldTransform(toBullet(frame.poses[i]));
-        }
-    }
+    for (std::size_t i = 0; i < m.bodies.size(); ++i) m.bodies[i].move(frame, i);
     out.stages.push_back({"refit", stage.ms()});
     stage = Timer();
     m.world->updateAabbs();

@@ -1,10 +1,13 @@
-// Meshes and poses handed to Bullet by the benchmarks (cullide-bench-run's Bullet engine, cullide-swap-bench's
+// Meshes, poses and environment objects handed to Bullet by the benchmarks (cullide-bench-run's Bullet engine, cullide-swap-bench's
 // collision worlds): the same conversions, so both model an environment the same way.
 #pragma once
 
+#include "BenchScene.h"
 #include "cullide/Types.h"
 
+#include <BulletCollision/CollisionDispatch/btCollisionObject.h>
 #include <BulletCollision/CollisionShapes/btTriangleIndexVertexArray.h>
+#include <BulletCollision/Gimpact/btGImpactShape.h>
 #include <LinearMath/btTransform.h>
 
 #include <Eigen/Geometry>
@@ -51,5 +54,43 @@ inline std::unique_ptr<btTriangleIndexVertexArray> indexedMesh(const TriangleMes
     array->addIndexedMesh(part, PHY_INTEGER);
     return array;
 }
+
+/// One object of an environment as a Bullet collision object with a GImpact shape of margin 0 (the task is the
+/// intersecting triangle pairs), and the mesh arrays the shape reads. Static and rigid objects hold their frame-0
+/// mesh and move by transform; deforming ones hold world-space vertices, rewritten every frame.
+struct GImpactBody {
+    std::vector<btScalar> vertices;
+    std::vector<int> indices;
+    std::unique_ptr<btTriangleIndexVertexArray> array;
+    std::unique_ptr<btGImpactMeshShape> shape;
+    std::unique_ptr<btCollisionObject> object;
+    Motion motion = Motion::Deforming;
+
+    /// Object `i` of the first frame (user index i); the caller adds it to its world.
+    void build(const BenchFrame& first, std::size_t i) {
+        motion = (*first.motion)[i];
+        const TriangleMesh& mesh = motion == Motion::Deforming ? (*first.world)[i] : (*first.local)[i];
+        copyVertices(mesh, vertices);
+        array = indexedMesh(mesh, vertices, indices);
+        shape = std::make_unique<btGImpactMeshShape>(array.get());
+        shape->setMargin(0);
+        shape->updateBound();
+        object = std::make_unique<btCollisionObject>();
+        object->setCollisionShape(shape.get());
+        object->setUserIndex(static_cast<int>(i));
+        object->setWorldTransform(motion == Motion::Deforming ? btTransform::getIdentity() : toBullet(first.poses[i]));
+    }
+
+    /// Object `i`'s state in `frame`: new vertices (postUpdate + updateBound) or a new transform.
+    void move(const BenchFrame& frame, std::size_t i) {
+        if (motion == Motion::Deforming) {
+            copyVertices((*frame.world)[i], vertices);
+            shape->postUpdate();
+            shape->updateBound();
+        } else if (motion == Motion::Rigid) {
+            object->setWorldTransform(toBullet(frame.poses[i]));
+        }
+    }
+};
 
 }  // namespace cullide::bench

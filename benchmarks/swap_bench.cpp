@@ -565,20 +565,8 @@ const CollisionSceneSpec kCollisionScenes[] = {
     {"env3-world", "env3", "env3 (rigid bunny 75K through a static dragon 20K) in a btCollisionWorld"},
     {"env3-deform-world", "env3-deform", "env3 with the bunny deforming, in a btCollisionWorld"}};
 
-using cullide::bench::Motion;
 
-/// One object's GImpact shape and the mesh arrays it reads (vertices rewritten when the object deforms).
-struct MeshBody {
-    std::vector<btScalar> vertices;
-    std::vector<int> indices;
-    std::unique_ptr<btTriangleIndexVertexArray> array;
-    std::unique_ptr<btGImpactMeshShape> shape;
-    std::unique_ptr<btCollisionObject> object;
-    Motion motion = Motion::Deforming;
-};
-
-using cullide::bench::copyVertices;
-using cullide::bench::toBullet;
+using cullide::bench::GImpactBody;
 
 /// One pipeline's collision world of an environment.
 struct CollisionWorld {
@@ -587,7 +575,7 @@ struct CollisionWorld {
     std::unique_ptr<btBroadphaseInterface> broadphase;
     std::unique_ptr<btCollisionDispatcher> dispatcher;
     std::unique_ptr<btCollisionWorld> world;
-    std::vector<MeshBody> bodies;
+    std::vector<GImpactBody> bodies;
     double stepMs = 0, updateMs = 0, broadphaseMs = 0, narrowMs = 0;
     std::size_t narrowPairs = 0;
 
@@ -604,42 +592,19 @@ struct CollisionWorld {
         btGImpactCollisionAlgorithm::registerAlgorithm(dispatcher.get());
         world = std::make_unique<btCollisionWorld>(dispatcher.get(), broadphase.get(), &config);
         bodies.resize(first.local->size());
-        for (std::size_t i = 0; i < bodies.size(); ++i) addBody(first, i);
+        for (std::size_t i = 0; i < bodies.size(); ++i) {
+            bodies[i].build(first, i);  // plain objects: default flags, as a collision-library user leaves them
+            world->addCollisionObject(bodies[i].object.get());
+        }
     }
     ~CollisionWorld() {
-        for (MeshBody& b : bodies) world->removeCollisionObject(b.object.get());
-    }
-
-    void addBody(const cullide::bench::BenchFrame& first, std::size_t i) {
-        MeshBody& b = bodies[i];
-        b.motion = (*first.motion)[i];
-        const cullide::TriangleMesh& mesh = b.motion == Motion::Deforming ? (*first.world)[i] : (*first.local)[i];
-        copyVertices(mesh, b.vertices);
-        b.array = cullide::bench::indexedMesh(mesh, b.vertices, b.indices);
-        b.shape = std::make_unique<btGImpactMeshShape>(b.array.get());
-        b.shape->setMargin(0);
-        b.shape->updateBound();
-        b.object = std::make_unique<btCollisionObject>();
-        b.object->setCollisionShape(b.shape.get());
-        b.object->setUserIndex(int(i));
-        b.object->setWorldTransform(b.motion == Motion::Deforming ? btTransform::getIdentity()
-                                                                  : toBullet(first.poses[i]));
-        world->addCollisionObject(b.object.get());
+        for (GImpactBody& b : bodies) world->removeCollisionObject(b.object.get());
     }
 
     /// The frame's motion, then collision detection (timed together, and in parts).
     void step(const cullide::bench::BenchFrame& frame) {
         Timer total;
-        for (std::size_t i = 0; i < bodies.size(); ++i) {
-            MeshBody& b = bodies[i];
-            if (b.motion == Motion::Deforming) {
-                copyVertices((*frame.world)[i], b.vertices);
-                b.shape->postUpdate();
-                b.shape->updateBound();
-            } else if (b.motion == Motion::Rigid) {
-                b.object->setWorldTransform(toBullet(frame.poses[i]));
-            }
-        }
+        for (std::size_t i = 0; i < bodies.size(); ++i) bodies[i].move(frame, i);
         updateMs += total.ms();
         Timer t;
         world->updateAabbs();
