@@ -1,5 +1,6 @@
 // CULLIDE: object, sub-object (group) and triangle levels of image-space visibility pruning, then the exact stage.
 #include "AutoLevels.h"
+#include "CullerBackends.h"
 #include "ExactStage.h"
 #include "FloatRounding.h"
 #include "FrameObjects.h"
@@ -8,8 +9,7 @@
 #include "cullide/Timer.h"
 #include "bindings.h"
 #include "cullide/Culler.h"
-#include "gl/EglContext.h"
-#include "gl/VisibilityPass.h"
+#include "VisibilityLevel.h"
 
 #include <algorithm>
 #include <cmath>
@@ -44,8 +44,9 @@ struct Group {
 
 class GpuCuller final : public Culler {
 public:
-    explicit GpuCuller(const Settings& settings) : m_settings(settings), m_pool(settings.threads), m_exact(m_pool) {
-        openGl();
+    GpuCuller(const Settings& settings, const PruningBackendFactory& makeBackend)
+        : m_settings(settings), m_pool(settings.threads), m_exact(m_pool) {
+        openBackend(makeBackend);
     }
 
     const Settings& settings() const override { return m_settings; }
@@ -63,8 +64,8 @@ private:
         Timer total;
         result.clear();
         Stats& stats = result.stats;
-        stats.renderer = m_context ? m_context->renderer() : std::string();
-        stats.device = m_context ? m_context->device() : std::string("none");
+        stats.renderer = m_backend ? m_backend->renderer() : std::string();
+        stats.device = m_backend ? m_backend->device() : std::string("none");
         stats.gpuUnavailable = m_gpuUnavailable;
         const double margin = m_settings.margin;
         m_objects = &objects;
@@ -98,7 +99,7 @@ private:
         m_objects = &m_world.resolve(objects, m_active, &m_pool);  // world-space meshes of the kept objects
         m_survivingTriangles.assign(objects.size(), {});
         m_autoActive = false;
-        m_gpuLevels = m_pass != nullptr && chooseGpuLevels(paper, stats);
+        m_gpuLevels = m_backend != nullptr && chooseGpuLevels(paper, stats);
         buildGroups(!paper, stats);
         stats.prepassMs = prepass.ms();
 
@@ -106,12 +107,12 @@ private:
         Timer levels;
         try {
             runLevels(paper, stats);
-        } catch (const gl::GlError& e) {
+        } catch (const BackendError& e) {
             // A GL error mid-frame costs this frame its GPU pruning, never a contact: every triangle that the CPU
             // pre-pass keeps goes to the exact stage.
             ++stats.gpuFallbacks;
             stats.gpuError = e.what();
-            if (m_pass) m_pass->forgetUploads();  // what the device holds is no longer trusted
+            if (m_backend) m_backend->forgetUploads();  // what the device holds is no longer trusted
             m_survivingTriangles.assign(m_valid.size(), {});
             collectTriangles(m_groups, !paper);
             finishFromTriangles({});
@@ -128,7 +129,7 @@ private:
         stats.pcsObjects = result.pcs.size();
         stats.candidateObjectPairs = result.pairs.size();
         result.pcsTriangles.swap(m_survivingTriangles);  // reassigned at the start of the next frame
-        stats.gpuDeviceBytes = m_pass ? m_pass->deviceBytes() : 0;
+        stats.gpuDeviceBytes = m_backend ? m_backend->deviceBytes() : 0;
         stats.totalMs = total.ms();
         if (m_autoActive) recordAutoFrame(stats);
         m_objects = nullptr;
@@ -155,22 +156,20 @@ private:
         stats.autoGpuMs = m_auto.gpuMs();
     }
 
-    /// The GL side (context and visibility pass), unless GPU levels are off (GpuLevels::Never: no EGL at all). Without
-    /// a usable GL device the CPU path runs instead, with a one-line notice — unless GPU levels were demanded
-    /// (GpuLevels::Always, Pipeline::Paper): then GlUnavailableError.
-    void openGl() {
+    /// The pruning backend (the GL visibility pass in production), unless GPU levels are off (GpuLevels::Never: no
+    /// EGL at all). Without a usable GL device the CPU path runs instead, with a one-line notice — unless GPU levels
+    /// were demanded (GpuLevels::Always, Pipeline::Paper): then GlUnavailableError.
+    void openBackend(const PruningBackendFactory& makeBackend) {
         if (m_settings.gpuLevels == GpuLevels::Never) {
             m_gpuUnavailable = "GPU levels off (GpuLevels::Never): no GL context opened";
             return;
         }
         try {
-            m_context = std::make_unique<gl::EglContext>(m_settings.device);
-            m_pass = std::make_unique<gl::VisibilityPass>(*m_context, m_settings);
+            m_backend = makeBackend(m_settings);
         } catch (const GlUnavailableError& e) {
             const bool demanded = m_settings.gpuLevels == GpuLevels::Always || m_settings.pipeline == Pipeline::Paper;
             if (demanded) throw;
-            m_pass.reset();
-            m_context.reset();
+            m_backend.reset();
             m_gpuUnavailable = e.what();
             noticeOnce(m_gpuUnavailable);
         }
@@ -432,7 +431,7 @@ private:
         m_groupBox.resize(m_groups.size());
         for (std::size_t g = 0; g < m_groups.size(); ++g) m_groupBox[g] = appendBox(m_groups[g].box, bound);
         m_geometry.coordinateBound = bound;
-        m_pass->upload(m_geometry, stats);
+        m_backend->upload(m_geometry, stats);
     }
 
     /// Where a mesh goes in the frame's position and index arrays.
@@ -499,7 +498,7 @@ private:
         stats.levels.push_back(LevelStats{});
         LevelStats& level = stats.levels.back();
         level.name = name;
-        m_pass->prune(m_items, m_survivors, level, stats);
+        cullide::pruneLevel(*m_backend, m_items, m_settings, m_geometry.coordinateBound, m_survivors, level, stats);
     }
 
     struct Tri {
@@ -806,9 +805,8 @@ private:
     Settings m_settings;
     TaskPool m_pool;  ///< before m_exact, which runs on it
     ExactStage m_exact;
-    std::unique_ptr<gl::EglContext> m_context;     ///< null: no GL (see openGl)
-    std::unique_ptr<gl::VisibilityPass> m_pass;    ///< declared after m_context: destroyed first
-    std::string m_gpuUnavailable;                  ///< why there is no GL context (Stats::gpuUnavailable)
+    std::unique_ptr<PruningBackend> m_backend;  ///< null: no GPU levels (see openBackend)
+    std::string m_gpuUnavailable;               ///< why there is no backend (Stats::gpuUnavailable)
 
     // Per-frame state (members to reuse allocations).
     const std::vector<Object>* m_objects = nullptr;
@@ -850,8 +848,8 @@ private:
     AutoLevels::Path m_autoPath = AutoLevels::Path::Cpu;  ///< the path AutoLevels chose for this frame
     bool m_autoActive = false;     ///< this frame's path was AutoLevels' choice
     bool m_gpuLevels = false;  ///< whether GPU levels run this frame (Settings::gpuLevels, the device, the pipeline)
-    gl::GpuGeometry m_geometry;
-    gl::LevelItems m_items;
+    GpuGeometry m_geometry;
+    LevelItems m_items;
     std::vector<std::uint8_t> m_survivors;
     std::vector<std::uint32_t> m_ownerId;
     std::uint32_t m_ownerCount = 0;
@@ -866,10 +864,14 @@ private:
 
 }  // namespace
 
-std::unique_ptr<Culler> createGpuCuller(const Settings& settings) {
+std::unique_ptr<Culler> createGpuCuller(const Settings& settings, const PruningBackendFactory& makeBackend) {
     const std::string error = settings.validate();
     if (!error.empty()) throw std::invalid_argument("cullide::Settings: " + error);
-    return std::make_unique<GpuCuller>(settings);
+    return std::make_unique<GpuCuller>(settings, makeBackend);
+}
+
+std::unique_ptr<Culler> createGpuCuller(const Settings& settings) {
+    return createGpuCuller(settings, createGlPruningBackend);
 }
 
 }  // namespace cullide

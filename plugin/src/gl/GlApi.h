@@ -5,15 +5,17 @@
 #include <epoxy/egl.h>
 #include <epoxy/gl.h>
 
+#include "PruningBackend.h"
+
 #include <stdexcept>
 #include <string>
 
 namespace cullide::gl {
 
 /// A GL error raised while the culler was working (the GL context may still be usable).
-class GlError : public std::runtime_error {
+class GlError : public BackendError {
 public:
-    using std::runtime_error::runtime_error;
+    using BackendError::BackendError;
 };
 
 /// Throws GlError naming `what` when a GL error is pending (all builds: the checks are cheap, once per pass). In

@@ -5,6 +5,8 @@
 #include "gl/GlApi.h"
 #include "gl/GlProgram.h"
 #include "FloatRounding.h"
+#include "CullerBackends.h"
+#include "VisibilityLevel.h"
 
 #include <algorithm>
 #include <chrono>
@@ -52,12 +54,6 @@ std::size_t uploadAfterPrefix(GLuint buffer, std::size_t& capacity, std::size_t&
     return bytes - keepBytes;
 }
 
-std::uint32_t bitsFor(std::uint32_t maxValue) {
-    std::uint32_t bits = 1;
-    while (bits < 31 && (maxValue >> bits) != 0) ++bits;
-    return bits;
-}
-
 
 /// A timer-query result is plausible when at most this factor times the CPU wall time of the same span plus this
 /// slack (clock-rate differences, timer granularity).
@@ -94,22 +90,6 @@ enum Buffer {
 };
 constexpr std::size_t kRecordBytes = 7 * 16;  // PrimRecord in common.glsl
 
-/// The view of one iteration: an orthographic box, as the shaders' uniforms.
-struct View {
-    Aabb box;  ///< relative to the upload origin
-    float lo[3], pixelScale[3], depthScale[3], halfSize[3], depthPad[3];
-};
-
-/// survive.comp's counters after an iteration (see bindings.h).
-struct IterationResult {
-    std::uint32_t overflows = 0;
-    std::uint32_t alive = 0;
-    std::uint32_t ownerMin = 0;
-    std::uint32_t ownerMax = 0;
-    std::uint32_t records = 0;  ///< the alive items' records (now in kPrims)
-    Aabb bounds;  ///< of the alive items (float boxes, so never smaller than their double boxes)
-};
-
 /// Inverse of survive.comp's orderedBits.
 float fromOrderedBits(std::uint32_t key) {
     const std::uint32_t bits = (key & 0x80000000u) != 0 ? (key & 0x7FFFFFFFu) : ~key;
@@ -118,17 +98,10 @@ float fromOrderedBits(std::uint32_t key) {
     return f;
 }
 
-/// The flag bits an item needs to stay alive: both sides of every enabled axis.
-std::uint32_t requiredFlags(unsigned axes) {
-    std::uint32_t required = 0;
-    for (unsigned a = 0; a < 3; ++a)
-        if (axes & (1u << a)) required |= 3u << (2 * a);
-    return required;
-}
-
 }  // namespace
 
 struct VisibilityPass::Impl {
+    std::unique_ptr<EglContext> ownContext;
     EglContext& context;
     Settings settings;
     GLuint program = 0;
@@ -148,7 +121,12 @@ struct VisibilityPass::Impl {
     std::vector<double> footprintScratch;  ///< compute back-end: pixels of each alive primitive's largest footprint
     std::vector<float> boundsScratch;
     std::vector<std::uint32_t> aliveScratch;
+    std::vector<std::uint8_t> aliveScratch8;
     const GpuGeometry* geometry = nullptr;
+    // The level being pruned (beginLevel .. its last iterate).
+    const LevelItems* levelItems = nullptr;
+    std::size_t recordCount = 0;  ///< records of the alive items, in kPrims
+    Aabb recordedView;          ///< the view the records' bands were fitted to
 
     /// Extent of a primitive (a box, or a triangle of the uploaded geometry).
     Vec3 primExtent(std::uint32_t ref) const {
@@ -164,7 +142,8 @@ struct VisibilityPass::Impl {
         return b.extent();
     }
 
-    Impl(EglContext& c, const Settings& s) : context(c), settings(s) {
+    Impl(std::unique_ptr<EglContext> c, const Settings& s)
+        : ownContext(std::move(c)), context(*ownContext), settings(s) {
         context.makeCurrent();
         if (settings.backend == Backend::Compute) {
             program = linkProgram({compileShader(GL_COMPUTE_SHADER, {"common.glsl", "visit.glsl", "cull.comp"})},
@@ -253,41 +232,9 @@ struct VisibilityPass::Impl {
         glUniform1ui(CULLIDE_LOC_AXES, settings.axes);
     }
 
-    /// The view box fitted to `bounds` (the alive items' bounds), grown by the margin and a little, so that every
-    /// dilated fragment and every conservative depth range stays inside the image and inside [0, 1].
-    View fitView(const Aabb& bounds) const {
-        View v;
-        const double margin = 0.5 * settings.margin;  // each item is dilated by half: together the full margin
-        const double scale = std::max(bounds.extent().maxCoeff(), 1e-30);
-        v.box = bounds.inflated(margin + 1e-4 * scale);
-        Vec3 extent = v.box.extent();
-        const double minExtent = std::max(1e-6 * extent.maxCoeff(), 1e-30);
-        for (int a = 0; a < 3; ++a) {
-            if (extent[a] < minExtent) {
-                v.box.min[a] -= 0.5 * minExtent;
-                v.box.max[a] += 0.5 * minExtent;
-            }
-        }
-        extent = v.box.extent();
-        const double res = settings.resolution;
-        const double bound =
-            std::max(coordinateBound, v.box.min.cwiseAbs().cwiseMax(v.box.max.cwiseAbs()).maxCoeff());
-        for (int a = 0; a < 3; ++a) {
-            // Float error of positions (relative to the origin) and of the projection, as a fraction of the
-            // extent: a few ulps of `bound`, generously over-estimated (docs/reliability.md).
-            const double relative = std::ldexp(1.0, -18) * (1.0 + bound / extent[a]);
-            v.lo[a] = static_cast<float>(v.box.min[a]);
-            v.pixelScale[a] = static_cast<float>(res / extent[a]);
-            v.depthScale[a] = static_cast<float>(1.0 / extent[a]);
-            v.halfSize[a] = static_cast<float>(0.5 + margin * res / extent[a] + 1e-3 + relative * res);
-            v.depthPad[a] = static_cast<float>(margin / extent[a] + relative + std::ldexp(1.0, -20));
-        }
-        return v;
-    }
-
     /// Sends what the survivor pass needs of the level's items: their owners, float boxes (rounded outwards) and
     /// the alive set (every item).
-    void beginLevel(const LevelItems& items, Stats& stats) {
+    void uploadItems(const LevelItems& items, Stats& stats) {
         const std::size_t n = items.size();
         uploadBuffer(buffers[kOwners], capacity[kOwners], items.owner.data(), n * 4);
         boundsScratch.resize(6 * n);
@@ -384,36 +331,36 @@ struct VisibilityPass::Impl {
 
     /// One iteration on the device: the three passes over the alive items' records, the survivor pass, and the
     /// compaction of the records to those of the items still alive. Reads back only the counters (44 bytes).
-    IterationResult runIteration(const View& view, std::uint32_t idBits, std::size_t primCount, std::size_t itemCount,
-                                 LevelStats& level, Stats& stats) {
+    IterationResult runIteration(const View& view, std::uint32_t idBits, std::size_t itemCount, LevelStats& level,
+                                 Stats& stats) {
         prepareIteration(itemCount);
         const auto timedSpan = Clock::now();
         if (timer) glBeginQuery(GL_TIME_ELAPSED, timer);
         if (settings.backend == Backend::Raster) {
-            reserveBuffer(buffers[kRecords], capacity[kRecords], 3 * primCount * kRecordBytes);
+            reserveBuffer(buffers[kRecords], capacity[kRecords], 3 * recordCount * kRecordBytes);
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_RECORDS, buffers[kRecords]);
             glUseProgram(setupProgram);
-            setUniforms(primCount, idBits, view);
-            dispatchAll(primCount, 3);
+            setUniforms(recordCount, idBits, view);
+            dispatchAll(recordCount, 3);
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
             level.draws += 1;
             stats.draws += 1;
         }
         glUseProgram(program);
-        setUniforms(primCount, idBits, view);
-        draw(CULLIDE_PASS_NEAREST, primCount, level, stats);
-        draw(CULLIDE_PASS_SECOND, primCount, level, stats);
-        draw(CULLIDE_PASS_FLAG, primCount, level, stats);
+        setUniforms(recordCount, idBits, view);
+        draw(CULLIDE_PASS_NEAREST, recordCount, level, stats);
+        draw(CULLIDE_PASS_SECOND, recordCount, level, stats);
+        draw(CULLIDE_PASS_FLAG, recordCount, level, stats);
         glUseProgram(surviveProgram);
         glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(itemCount));
         glUniform1ui(CULLIDE_LOC_REQUIRED, requiredFlags(settings.axes));
         dispatchAll(itemCount, 1);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        reserveBuffer(buffers[kPrimsNext], capacity[kPrimsNext], primCount * 16);
+        reserveBuffer(buffers[kPrimsNext], capacity[kPrimsNext], recordCount * 16);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_PRIMS_OUT, buffers[kPrimsNext]);
         glUseProgram(compactProgram);
-        glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(primCount));
-        dispatchAll(primCount, 1);
+        glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(recordCount));
+        dispatchAll(recordCount, 1);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         level.draws += 2;
         stats.draws += 2;
@@ -429,7 +376,7 @@ struct VisibilityPass::Impl {
         r.alive = counters[CULLIDE_COUNTER_ALIVE];
         r.ownerMin = counters[CULLIDE_COUNTER_OWNER_MIN];
         r.ownerMax = counters[CULLIDE_COUNTER_OWNER_MAX];
-        r.records = counters[CULLIDE_COUNTER_RECORDS];
+        recordCount = counters[CULLIDE_COUNTER_RECORDS];
         std::swap(buffers[kPrims], buffers[kPrimsNext]);
         std::swap(capacity[kPrims], capacity[kPrimsNext]);
         for (int a = 0; a < 3; ++a) {
@@ -481,10 +428,13 @@ struct VisibilityPass::Impl {
     }
 };
 
-VisibilityPass::VisibilityPass(EglContext& context, const Settings& settings)
-    : m_impl(std::make_unique<Impl>(context, settings)) {}
+VisibilityPass::VisibilityPass(const Settings& settings)
+    : m_impl(std::make_unique<Impl>(std::make_unique<EglContext>(settings.device), settings)) {}
 
 VisibilityPass::~VisibilityPass() = default;
+
+std::string VisibilityPass::renderer() const { return m_impl->context.renderer(); }
+std::string VisibilityPass::device() const { return m_impl->context.device(); }
 
 void VisibilityPass::upload(const GpuGeometry& geometry, Stats& stats) {
     Impl& s = *m_impl;
@@ -515,19 +465,6 @@ void VisibilityPass::forgetUploads() {
 
 namespace {
 
-/// Distinct owners among the items, or 0 when owner ids need more than 16 bits (no pruning then).
-std::size_t distinctOwners(const LevelItems& items) {
-    const std::uint32_t maxOwner = *std::max_element(items.owner.begin(), items.owner.end());
-    if (maxOwner >= 65536) return 0;
-    std::vector<std::uint8_t> seen(maxOwner + std::size_t{1}, 0);
-    std::size_t owners = 0;
-    for (std::uint32_t o : items.owner) {
-        if (!seen[o]) ++owners;
-        seen[o] = 1;
-    }
-    return owners;
-}
-
 /// The records are rebuilt (bands fitted to the new view) when the view has shrunk to a quarter along some axis:
 /// each pixel band of a record grows with the square of the view's shrinking.
 bool recordsStale(const Aabb& view, const Aabb& recordedView) {
@@ -539,59 +476,39 @@ bool recordsStale(const Aabb& view, const Aabb& recordedView) {
 
 }  // namespace
 
-void VisibilityPass::prune(const LevelItems& items, std::vector<std::uint8_t>& survivors, LevelStats& level,
-                           Stats& stats) {
+void VisibilityPass::beginLevel(const LevelItems& items, const View& view, Stats& stats) {
     Impl& s = *m_impl;
-    const auto t0 = Clock::now();
-    const std::size_t n = items.size();
-    survivors.assign(n, 1);
-    if (n == 0) return;
-    level.itemsPerIteration.push_back(n);
-    const std::size_t owners = distinctOwners(items);
-    if (owners == 0) return;  // owner ids need more than 16 bits: no pruning (conservative)
-    if (owners < 2) {         // nothing to collide with
-        std::fill(survivors.begin(), survivors.end(), 0);
-        level.itemsPerIteration.push_back(0);
-        return;
-    }
     s.context.makeCurrent();
-    s.beginLevel(items, stats);
-    Aabb bounds;
-    for (const Aabb& b : items.bounds) bounds.grow(b);
-    View view = s.fitView(bounds);
-    std::uint32_t maxOwner = *std::max_element(items.owner.begin(), items.owner.end());
-    // The alive set lives on the device: an iteration reads back its counters only, the level its set once.
-    std::size_t primCount = s.buildRecords(items, survivors, view, stats);
-    Aabb recordedView = view.box;
-    std::size_t alive = n;
-    bool allPruned = false;
-    for (int iteration = 0; iteration < s.settings.maxIterations; ++iteration) {
-        const IterationResult r = s.runIteration(view, bitsFor(maxOwner), primCount, n, level, stats);
-        if (r.overflows != 0) break;  // some footprint was not scanned: the iteration pruned nothing
-        if (r.alive == alive) break;  // the set only shrinks: the same size is the same set
-        alive = r.alive;
-        level.itemsPerIteration.push_back(alive);
-        if (alive == 0) break;
-        if (r.ownerMin == r.ownerMax) {  // one owner left: nothing to collide with
-            allPruned = true;
-            level.itemsPerIteration.push_back(0);
-            break;
-        }
-        if (iteration + 1 == s.settings.maxIterations) break;
-        view = s.fitView(r.bounds);
-        maxOwner = r.ownerMax;
-        primCount = r.records;
-        if (recordsStale(view.box, recordedView)) {
-            s.readAlive(n, survivors, stats);
-            primCount = s.buildRecords(items, survivors, view, stats);
-            recordedView = view.box;
-        }
+    s.levelItems = &items;
+    s.uploadItems(items, stats);
+    s.aliveScratch8.assign(items.size(), 1);
+    s.recordCount = s.buildRecords(items, s.aliveScratch8, view, stats);
+    s.recordedView = view.box;
+}
+
+IterationResult VisibilityPass::iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) {
+    Impl& s = *m_impl;
+    s.context.makeCurrent();
+    if (recordsStale(view.box, s.recordedView)) {
+        s.readAlive(s.levelItems->size(), s.aliveScratch8, stats);
+        s.recordCount = s.buildRecords(*s.levelItems, s.aliveScratch8, view, stats);
+        s.recordedView = view.box;
     }
-    if (allPruned)
-        std::fill(survivors.begin(), survivors.end(), 0);
-    else
-        s.readAlive(n, survivors, stats);
-    level.cpuMs += msSince(t0);
+    return s.runIteration(view, idBits, s.levelItems->size(), level, stats);
+}
+
+void VisibilityPass::readAlive(std::vector<std::uint8_t>& alive, Stats& stats) {
+    Impl& s = *m_impl;
+    s.context.makeCurrent();
+    s.readAlive(s.levelItems->size(), alive, stats);
 }
 
 }  // namespace cullide::gl
+
+namespace cullide {
+
+std::unique_ptr<PruningBackend> createGlPruningBackend(const Settings& settings) {
+    return std::make_unique<gl::VisibilityPass>(settings);
+}
+
+}  // namespace cullide

@@ -1,64 +1,34 @@
-// The image-space visibility test of CULLIDE on the GPU: one level (objects, groups or triangles), iterated over
-// the three axes (both view directions each) until its set stops changing.
+// The image-space visibility test of CULLIDE on the GPU (OpenGL 4.5 through headless EGL): the PruningBackend that
+// production runs. The iterations' alive set, records and counters stay on the device; an iteration reads back
+// 44 bytes of counters, a level its alive set once.
 #pragma once
 
+#include "PruningBackend.h"
 #include "cullide/Settings.h"
-#include "cullide/Stats.h"
-#include "cullide/Types.h"
 
-#include <cstdint>
 #include <memory>
+#include <string>
 #include <vector>
 
 namespace cullide::gl {
 
-class EglContext;
-
-/// Geometry uploaded once per frame: positions and boxes relative to `origin` (float on the GPU).
-struct GpuGeometry {
-    std::vector<float> positions;       ///< xyz per vertex
-    std::vector<std::uint32_t> indices;  ///< 3 global vertex indices per triangle
-    /// The first keptPositions floats of `positions` and keptIndices of `indices` are the same as in the previous
-    /// upload (static geometry): what the device already holds of them is not sent again.
-    std::size_t keptPositions = 0;
-    std::size_t keptIndices = 0;
-    std::vector<float> boxes;           ///< min xyz, max xyz per box (rounded outwards)
-    double coordinateBound = 0.0;       ///< max |coordinate| over positions and boxes (for error bounds)
-};
-
-/// The items of one level. Item i belongs to owner[i] (a compact object id) and is drawn as the primitives
-/// prims[primBegin[i] .. primBegin[i + 1]) (a triangle index, or a box index | CULLIDE_PRIM_BOX_BIT).
-struct LevelItems {
-    std::vector<std::uint32_t> owner;
-    std::vector<std::uint32_t> primBegin{0};
-    std::vector<std::uint32_t> prims;
-    std::vector<Aabb> bounds;  ///< per item, relative to the upload origin, inflated by nothing
-    std::size_t size() const { return owner.size(); }
-    void clear() {
-        owner.clear();
-        primBegin.assign(1, 0);
-        prims.clear();
-        bounds.clear();
-    }
-};
-
-class VisibilityPass {
+class VisibilityPass final : public PruningBackend {
 public:
-    VisibilityPass(EglContext& context, const Settings& settings);
-    ~VisibilityPass();
-    VisibilityPass(const VisibilityPass&) = delete;
-    VisibilityPass& operator=(const VisibilityPass&) = delete;
+    /// Opens the EGL context (Settings::device) and builds the programs of Settings::backend. Throws
+    /// GlUnavailableError without a usable GL device.
+    explicit VisibilityPass(const Settings& settings);
+    ~VisibilityPass() override;
 
-    /// Uploads the frame's geometry; `geometry` must stay alive (unchanged) until the next upload.
-    void upload(const GpuGeometry& geometry, Stats& stats);
-    /// Forgets what the device holds (after a GL error): the next upload sends everything.
-    void forgetUploads();
-    /// Bytes held on the device: buffer capacities plus the view images.
-    std::size_t deviceBytes() const;
+    void upload(const GpuGeometry& geometry, Stats& stats) override;
+    void forgetUploads() override;
+    /// Buffer capacities plus the view images.
+    std::size_t deviceBytes() const override;
+    std::string renderer() const override;
+    std::string device() const override;
 
-    /// Prunes the items: survivors[i] is true when item i may intersect an item of another owner. Runs at most
-    /// `maxIterations` iterations (each: three axes, both directions) and stops when the set stops changing.
-    void prune(const LevelItems& items, std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats);
+    void beginLevel(const LevelItems& items, const View& view, Stats& stats) override;
+    IterationResult iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) override;
+    void readAlive(std::vector<std::uint8_t>& alive, Stats& stats) override;
 
 private:
     struct Impl;

@@ -1,0 +1,28 @@
+// Internal: the GPU culler with the pruning backend of the caller's choice. Production uses the GL backend; tests
+// plug in the CPU reference (unit tests without GL, pruning-strength tests) or a recorder around the GL backend that
+// checks it against the reference iteration by iteration.
+#pragma once
+
+#include "PruningBackend.h"
+#include "cullide/Culler.h"
+
+#include <functional>
+#include <memory>
+
+namespace cullide {
+
+/// Makes the backend for a culler's settings; may throw GlUnavailableError (no usable GL device).
+using PruningBackendFactory = std::function<std::unique_ptr<PruningBackend>(const Settings&)>;
+
+/// The GL visibility test (gl/VisibilityPass). Throws GlUnavailableError without a usable GL device.
+std::unique_ptr<PruningBackend> createGlPruningBackend(const Settings& settings);
+
+/// The CPU reference of the visibility test (ReferenceVisibility.h): no GL, single-threaded, exact same answers.
+std::unique_ptr<PruningBackend> createReferencePruningBackend(const Settings& settings);
+
+/// createGpuCuller with `makeBackend` in place of the GL backend: the same frame pipeline, the same fallback rules
+/// (GpuLevels::Never calls no factory; a GlUnavailableError from the factory means the CPU path, unless GPU levels
+/// were demanded).
+std::unique_ptr<Culler> createGpuCuller(const Settings& settings, const PruningBackendFactory& makeBackend);
+
+}  // namespace cullide

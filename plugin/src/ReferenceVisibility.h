@@ -1,0 +1,46 @@
+// The CPU reference of CULLIDE's visibility test: the PruningBackend that computes, pixel by pixel, what the
+// shaders compute (shaders/common.glsl, visit.glsl, cull.comp, survive.comp) in the same float operations in the
+// same order: the same primitive set-up, the same pixel grid and coverage test (pixel centres in sampled mode; the
+// conservative square and depth range in reliable mode), the same quantized per-pixel "nearest and farthest other
+// owner" bookkeeping and the same survival rule. GL tests assert that the GL backend keeps exactly the items this
+// one keeps, iteration by iteration; unit tests run whole culling frames on it without GL.
+//
+// Single-threaded and unoptimised: a test oracle, not a production path (Settings::resolution^2 pixels per view).
+#pragma once
+
+#include "PruningBackend.h"
+#include "cullide/Settings.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace cullide {
+
+class ReferenceVisibility final : public PruningBackend {
+public:
+    explicit ReferenceVisibility(const Settings& settings);
+
+    void upload(const GpuGeometry& geometry, Stats& stats) override;
+    void forgetUploads() override {}
+    std::size_t deviceBytes() const override { return 0; }
+    std::string renderer() const override { return "cpu-visibility-reference"; }
+    std::string device() const override { return "cpu"; }
+
+    void beginLevel(const LevelItems& items, const View& view, Stats& stats) override;
+    IterationResult iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) override;
+    void readAlive(std::vector<std::uint8_t>& alive, Stats& stats) override;
+
+    /// The flag bits each item earned in the last iteration (bit 2a: hidden from the -a side somewhere, bit 2a + 1:
+    /// from the +a side), for tests that look inside an iteration.
+    const std::vector<std::uint32_t>& lastFlags() const { return m_flags; }
+
+private:
+    Settings m_settings;
+    const GpuGeometry* m_geometry = nullptr;
+    const LevelItems* m_items = nullptr;
+    std::vector<std::uint8_t> m_alive;
+    std::vector<std::uint32_t> m_flags;
+    std::vector<std::uint32_t> m_near1, m_far1, m_near2, m_far2;  ///< one view's images
+};
+
+}  // namespace cullide

@@ -1,0 +1,120 @@
+#include "VisibilityLevel.h"
+
+#include "FloatRounding.h"
+#include "cullide/Timer.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace cullide {
+
+View fitView(const Aabb& bounds, const Settings& settings, double coordinateBound) {
+    View v;
+    const double margin = 0.5 * settings.margin;
+    const double scale = std::max(bounds.extent().maxCoeff(), 1e-30);
+    v.box = bounds.inflated(margin + 1e-4 * scale);
+    Vec3 extent = v.box.extent();
+    const double minExtent = std::max(1e-6 * extent.maxCoeff(), 1e-30);
+    for (int a = 0; a < 3; ++a) {
+        if (extent[a] < minExtent) {
+            v.box.min[a] -= 0.5 * minExtent;
+            v.box.max[a] += 0.5 * minExtent;
+        }
+    }
+    extent = v.box.extent();
+    const double res = settings.resolution;
+    const double bound = std::max(coordinateBound, v.box.min.cwiseAbs().cwiseMax(v.box.max.cwiseAbs()).maxCoeff());
+    for (int a = 0; a < 3; ++a) {
+        // Float error of positions (relative to the origin) and of the projection, as a fraction of the extent: a
+        // few ulps of `bound`, generously over-estimated (docs/reliability.md).
+        const double relative = std::ldexp(1.0, -18) * (1.0 + bound / extent[a]);
+        v.lo[a] = static_cast<float>(v.box.min[a]);
+        v.pixelScale[a] = static_cast<float>(res / extent[a]);
+        v.depthScale[a] = static_cast<float>(1.0 / extent[a]);
+        v.halfSize[a] = static_cast<float>(0.5 + margin * res / extent[a] + 1e-3 + relative * res);
+        v.depthPad[a] = static_cast<float>(margin / extent[a] + relative + std::ldexp(1.0, -20));
+    }
+    return v;
+}
+
+std::uint32_t idBitsFor(std::uint32_t maxOwner) {
+    std::uint32_t bits = 1;
+    while (bits < 31 && (maxOwner >> bits) != 0) ++bits;
+    return bits;
+}
+
+std::uint32_t depthBitsFor(std::uint32_t idBits) { return std::min(24u, 32u - idBits); }
+
+std::uint32_t requiredFlags(unsigned axes) {
+    std::uint32_t required = 0;
+    for (unsigned a = 0; a < 3; ++a)
+        if (axes & (1u << a)) required |= 3u << (2 * a);
+    return required;
+}
+
+std::size_t distinctOwners(const LevelItems& items) {
+    if (items.size() == 0) return 0;
+    const std::uint32_t maxOwner = *std::max_element(items.owner.begin(), items.owner.end());
+    if (maxOwner >= 65536) return 0;
+    std::vector<std::uint8_t> seen(maxOwner + std::size_t{1}, 0);
+    std::size_t owners = 0;
+    for (std::uint32_t o : items.owner) {
+        if (!seen[o]) ++owners;
+        seen[o] = 1;
+    }
+    return owners;
+}
+
+Aabb floatBoundsOf(const LevelItems& items, std::size_t i) {
+    Aabb b;
+    for (int a = 0; a < 3; ++a) {
+        b.min[a] = floatDown(items.bounds[i].min[a]);
+        b.max[a] = floatUp(items.bounds[i].max[a]);
+    }
+    return b;
+}
+
+void pruneLevel(PruningBackend& backend, const LevelItems& items, const Settings& settings, double coordinateBound,
+                std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats) {
+    const Timer timer;
+    const std::size_t n = items.size();
+    survivors.assign(n, 1);
+    if (n == 0) return;
+    level.itemsPerIteration.push_back(n);
+    const std::size_t owners = distinctOwners(items);
+    if (owners == 0) return;  // owner ids need more than 16 bits: no pruning (conservative)
+    if (owners < 2) {         // nothing to collide with
+        std::fill(survivors.begin(), survivors.end(), 0);
+        level.itemsPerIteration.push_back(0);
+        return;
+    }
+    Aabb bounds;
+    for (const Aabb& b : items.bounds) bounds.grow(b);
+    View view = fitView(bounds, settings, coordinateBound);
+    std::uint32_t maxOwner = *std::max_element(items.owner.begin(), items.owner.end());
+    backend.beginLevel(items, view, stats);
+    std::size_t alive = n;
+    bool allPruned = false;
+    for (int iteration = 0; iteration < settings.maxIterations; ++iteration) {
+        const IterationResult r = backend.iterate(view, idBitsFor(maxOwner), level, stats);
+        if (r.overflows != 0) break;  // some footprint was not scanned: the iteration pruned nothing
+        if (r.alive == alive) break;  // the set only shrinks: the same size is the same set
+        alive = r.alive;
+        level.itemsPerIteration.push_back(alive);
+        if (alive == 0) break;
+        if (r.ownerMin == r.ownerMax) {  // one owner left: nothing to collide with
+            allPruned = true;
+            level.itemsPerIteration.push_back(0);
+            break;
+        }
+        view = fitView(r.bounds, settings, coordinateBound);
+        maxOwner = r.ownerMax;
+    }
+    if (allPruned)
+        std::fill(survivors.begin(), survivors.end(), 0);
+    else
+        backend.readAlive(survivors, stats);
+    level.cpuMs += timer.ms();
+}
+
+}  // namespace cullide

@@ -1,0 +1,44 @@
+// One CULLIDE level (objects, groups or triangles) as a loop of visibility iterations, and the pure functions it is
+// made of: the view fitted to the alive items with its float-error bounds (docs/reliability.md, section 7), the
+// owner-id packing and the survival rule. No GL: the iterations run on any PruningBackend.
+#pragma once
+
+#include "PruningBackend.h"
+#include "cullide/Settings.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace cullide {
+
+/// The view of an iteration over items whose bounds are `bounds` (relative to the upload origin): the box grown by
+/// half the margin (each item is dilated by half: together the full margin) and 1e-4 of its extent, no axis thinner
+/// than 1e-6 of the largest, and per world axis the float parameters of the shaders. The reliable-mode slack
+/// (halfSize beyond half a pixel plus the margin, depthPad beyond the margin) covers the float error of positions
+/// up to `coordinateBound` from the origin and of the projection: 2^-18 (1 + B / extent) with B the larger of
+/// coordinateBound and the box's own coordinates.
+View fitView(const Aabb& bounds, const Settings& settings, double coordinateBound);
+
+/// Bits of the packed per-pixel value that hold the owner id: enough for `maxOwner`, at least 1, at most 31.
+std::uint32_t idBitsFor(std::uint32_t maxOwner);
+
+/// Depth bits beside `idBits` owner bits (at most 24: a float holds the scale exactly).
+std::uint32_t depthBitsFor(std::uint32_t idBits);
+
+/// The flag bits an item needs to stay alive: both view directions of every enabled axis (Settings::axes).
+std::uint32_t requiredFlags(unsigned axes);
+
+/// Distinct owners among the items, or 0 when owner ids need more than 16 bits (the level then prunes nothing).
+std::size_t distinctOwners(const LevelItems& items);
+
+/// The box of item `i` as the device holds it: float, rounded outwards.
+Aabb floatBoundsOf(const LevelItems& items, std::size_t i);
+
+/// Runs one level on `backend`: survivors[i] is 1 when item i may intersect an item of another owner. At most
+/// Settings::maxIterations iterations, each fitted to the items still alive; the loop stops when the set stops
+/// changing, when one owner is left (nothing to collide with: all pruned) or when an iteration overflowed (it pruned
+/// nothing). `coordinateBound`: GpuGeometry::coordinateBound of the upload the items refer to.
+void pruneLevel(PruningBackend& backend, const LevelItems& items, const Settings& settings, double coordinateBound,
+                std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats);
+
+}  // namespace cullide
