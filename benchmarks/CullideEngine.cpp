@@ -17,11 +17,12 @@ const char* gpuLevelsName(GpuLevels g) {
 
 }  // namespace
 
-CullideEngine::CullideEngine(const Settings& settings, bool reference)
-    : m_settings(settings), m_reference(reference) {}
+CullideEngine::CullideEngine(const Settings& settings, Kind kind) : m_settings(settings), m_kind(kind) {}
 
 void CullideEngine::setup(const BenchFrame& first) {
-    m_culler = m_reference ? createReferenceCuller(m_settings) : createGpuCuller(m_settings);
+    m_culler = m_kind == Kind::Exact                 ? createReferenceCuller(m_settings)
+               : m_kind == Kind::VisibilityReference ? createVisibilityReferenceCuller(m_settings)
+                                                     : createGpuCuller(m_settings);
     m_objects.assign(first.world->size(), Object{});
     for (std::size_t i = 0; i < m_objects.size(); ++i) {
         // Geometry that never changes in world space is declared static (the API's staticKey): the GPU culler keeps
@@ -37,7 +38,7 @@ void CullideEngine::run(const BenchFrame& frame, FrameOutput& out) {
     m_culler->run(m_objects, m_result);
     out.totalMs = timer.ms();
     const Stats& s = m_result.stats;
-    if (m_reference) {
+    if (m_kind == Kind::Exact) {
         out.stages = {{"brute force", out.totalMs}};
     } else {
         const double other = out.totalMs - s.prepassMs - s.uploadMs - s.gpuLevelsMs - s.exactMs;
@@ -69,7 +70,7 @@ void CullideEngine::run(const BenchFrame& frame, FrameOutput& out) {
 
 nlohmann::json CullideEngine::describe() const {
     nlohmann::json j;
-    if (m_reference) {
+    if (m_kind == Kind::Exact) {
         j["mode"] = "exact";
         j["threads"] = m_settings.threads;
         j["renderer"] = "cpu-reference";

@@ -1,4 +1,5 @@
-// CULLIDE (createGpuCuller) or the brute-force reference (createReferenceCuller) as a benchmark engine.
+// CULLIDE (createGpuCuller, or createVisibilityReferenceCuller: the same levels on the CPU reference of the visibility
+// test) or the brute-force reference (createReferenceCuller) as a benchmark engine.
 #pragma once
 
 #include "Engine.h"
@@ -12,8 +13,12 @@ namespace cullide::bench {
 
 class CullideEngine final : public Engine {
 public:
-    /// `reference`: the exact brute-force oracle instead of the GPU culler.
-    CullideEngine(const Settings& settings, bool reference);
+    enum class Kind {
+        Gpu,                  ///< createGpuCuller
+        VisibilityReference,  ///< createVisibilityReferenceCuller (the visibility test on the CPU reference)
+        Exact,                ///< createReferenceCuller: the exact brute-force oracle
+    };
+    CullideEngine(const Settings& settings, Kind kind);
 
     void setup(const BenchFrame& first) override;
     void run(const BenchFrame& frame, FrameOutput& out) override;
@@ -21,7 +26,7 @@ public:
 
 private:
     Settings m_settings;
-    bool m_reference;
+    Kind m_kind;
     std::unique_ptr<Culler> m_culler;
     std::vector<Object> m_objects;
     Result m_result;

@@ -12,8 +12,8 @@ namespace cullide::bench {
 
 std::vector<std::string> engineNames() {
     std::vector<std::string> names = {"exact",          "cullide",         "cullide-1t",  "cullide-cpu",
-                                      "cullide-gpu",    "cullide-raster",  "cullide-sampled", "bullet-dbvt",
-                                      "bullet-sap"};
+                                      "cullide-gpu",    "cullide-raster",  "cullide-sampled", "cullide-sampled-reference",
+                                      "bullet-dbvt",    "bullet-sap"};
 #ifdef CULLIDE_BENCH_FCL
     names.push_back("fcl");
     names.push_back("fcl-aabb");
@@ -25,21 +25,26 @@ std::unique_ptr<Engine> makeEngine(const std::string& name, const EngineOptions&
     Settings s;
     s.resolution = options.resolution;
     s.groupSize = options.groupSize;
-    if (name == "exact") return std::make_unique<CullideEngine>(s, true);
-    if (name == "cullide") return std::make_unique<CullideEngine>(s, false);
+    if (name == "exact") return std::make_unique<CullideEngine>(s, CullideEngine::Kind::Exact);
+    if (name == "cullide") return std::make_unique<CullideEngine>(s, CullideEngine::Kind::Gpu);
     if (name == "cullide-1t") {
         s.threads = 1;
-        return std::make_unique<CullideEngine>(s, false);
+        return std::make_unique<CullideEngine>(s, CullideEngine::Kind::Gpu);
     }
     if (name == "cullide-cpu") {  // the CPU path alone: what Auto weighs the GPU levels against
         s.gpuLevels = GpuLevels::Never;
-        return std::make_unique<CullideEngine>(s, false);
+        return std::make_unique<CullideEngine>(s, CullideEngine::Kind::Gpu);
     }
     if (name == "cullide-gpu" || name == "cullide-raster" || name == "cullide-sampled") {
         s.gpuLevels = GpuLevels::Always;
         if (name == "cullide-sampled") s.mode = Mode::Sampled;
         if (name == "cullide-raster") s.backend = Backend::Raster;
-        return std::make_unique<CullideEngine>(s, false);
+        return std::make_unique<CullideEngine>(s, CullideEngine::Kind::Gpu);
+    }
+    if (name == "cullide-sampled-reference") {  // cullide-sampled's levels on the CPU reference of the visibility test
+        s.gpuLevels = GpuLevels::Always;
+        s.mode = Mode::Sampled;
+        return std::make_unique<CullideEngine>(s, CullideEngine::Kind::VisibilityReference);
     }
     if (name == "bullet-dbvt") return std::make_unique<BulletEngine>(BulletEngine::Broadphase::Dbvt);
     if (name == "bullet-sap") return std::make_unique<BulletEngine>(BulletEngine::Broadphase::AxisSweep);

@@ -266,4 +266,8 @@ std::unique_ptr<PruningBackend> createReferencePruningBackend(const Settings& se
     return std::make_unique<ReferenceVisibility>(settings);
 }
 
+std::unique_ptr<Culler> createVisibilityReferenceCuller(const Settings& settings) {
+    return createGpuCuller(settings, createReferencePruningBackend);
+}
+
 }  // namespace cullide

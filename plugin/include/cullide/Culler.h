@@ -51,6 +51,13 @@ public:
 /// are demanded (GpuLevels::Always, Pipeline::Paper) it throws GlUnavailableError without a usable GL device.
 std::unique_ptr<Culler> createGpuCuller(const Settings& settings);
 
+/// The CULLIDE culler with its image-space visibility test computed on the CPU by the reference implementation
+/// (ReferenceVisibility: the shaders' float arithmetic, pixel for pixel; the GL tests hold the GPU to exactly its
+/// answers, level by level and iteration by iteration). No GL; single-threaded and slow (resolution² pixels per view
+/// and iteration): for checking a device's answers and studying the levels (e.g. sampled mode's misses against
+/// resolution), not for production. Settings as for createGpuCuller: GpuLevels::Always runs the levels every frame.
+std::unique_ptr<Culler> createVisibilityReferenceCuller(const Settings& settings);
+
 /// All triangle pairs, exact: the oracle. Only margin and threads of the settings are used.
 std::unique_ptr<Culler> createReferenceCuller(const Settings& settings);
 
