@@ -80,6 +80,7 @@ nlohmann::json CullideEngine::describe() const {
     j["resolution"] = m_settings.resolution;
     j["gpu_levels"] = gpuLevelsName(m_settings.gpuLevels);
     j["group_size"] = m_settings.groupSize;
+    j["max_iterations"] = m_settings.maxIterations;
     j["threads"] = m_settings.threads;
     j["renderer"] = m_result.stats.renderer;
     j["device"] = m_result.stats.device;

@@ -25,6 +25,7 @@ std::unique_ptr<Engine> makeEngine(const std::string& name, const EngineOptions&
     Settings s;
     s.resolution = options.resolution;
     s.groupSize = options.groupSize;
+    s.maxIterations = options.maxIterations;
     if (name == "exact") return std::make_unique<CullideEngine>(s, CullideEngine::Kind::Exact);
     if (name == "cullide") return std::make_unique<CullideEngine>(s, CullideEngine::Kind::Gpu);
     if (name == "cullide-1t") {

@@ -40,6 +40,7 @@ struct FrameOutput {
 struct EngineOptions {
     int resolution = 256;  ///< CULLIDE image resolution (GPU levels)
     int groupSize = 32;
+    int maxIterations = 4;  ///< Settings::maxIterations
 };
 
 class Engine {

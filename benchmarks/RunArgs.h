@@ -17,6 +17,7 @@ struct RunArgs {
     int warmup = 1;             ///< untimed frames first (shader compilation, caches)
     int resolution = 256;
     int groupSize = 32;
+    int maxIterations = 4;      ///< CULLIDE engines: Settings::maxIterations
     int sampleEvery = 10;       ///< breakable: compare with the exact answer every n-th frame
 };
 
