@@ -1,6 +1,8 @@
 // Shared by every CULLIDE visibility shader: resources, the per-primitive setup, the conservative pixel test and
 // the per-pixel depth bookkeeping. Both back-ends (raster: cull.vert/cull.frag; compute: cull.comp) run exactly
-// this code, so they give the same answer.
+// this code, so they give the same answer. Every value the test depends on is `precise`: no fused multiply-add, no
+// reassociation, on any driver. The CPU reference (plugin/src/ReferenceVisibility.cpp) performs the same float
+// operations in the same order, and the GL tests require the same answers, iteration by iteration.
 
 layout(std430, binding = CULLIDE_SSBO_POSITIONS) readonly buffer Positions { float positions[]; };
 layout(std430, binding = CULLIDE_SSBO_INDICES) readonly buffer Indices { uint indices[]; };
@@ -57,14 +59,16 @@ vec3 vertexAt(uint i) { return vec3(positions[3u * i], positions[3u * i + 1u], p
 vec3 project(vec3 p, int axis) {
     int ua = (axis + 1) % 3;
     int va = (axis + 2) % 3;
-    return vec3((p[ua] - u_viewLo[ua]) * u_pixelScale[ua], (p[va] - u_viewLo[va]) * u_pixelScale[va],
-                (p[axis] - u_viewLo[axis]) * u_depthScale[axis]);
+    precise vec3 r = vec3((p[ua] - u_viewLo[ua]) * u_pixelScale[ua], (p[va] - u_viewLo[va]) * u_pixelScale[va],
+                          (p[axis] - u_viewLo[axis]) * u_depthScale[axis]);
+    return r;
 }
 
 vec3 edgeFunction(vec2 from, vec2 to, float s) {
-    vec2 e = to - from;
-    vec2 n = s * vec2(e.y, -e.x);
-    return vec3(n, -dot(n, from));
+    precise vec2 e = to - from;
+    precise vec2 n = s * vec2(e.y, -e.x);
+    precise float c = -(n.x * from.x + n.y * from.y);
+    return vec3(n, c);
 }
 
 Prim makePrim(uint index, int axis) {
@@ -92,10 +96,11 @@ Prim makePrim(uint index, int axis) {
     vec3 p2 = project(vertexAt(indices[t + 2u]), axis);
     p.rect = vec4(min(min(p0.xy, p1.xy), p2.xy), max(max(p0.xy, p1.xy), p2.xy));
     p.zrange = vec2(min(min(p0.z, p1.z), p2.z), max(max(p0.z, p1.z), p2.z));
-    vec2 d1 = p1.xy - p0.xy;
-    vec2 d2 = p2.xy - p0.xy;
-    float area2 = d1.x * d2.y - d1.y * d2.x;
-    float maxEdge2 = max(max(dot(d1, d1), dot(d2, d2)), dot(p2.xy - p1.xy, p2.xy - p1.xy));
+    precise vec2 d1 = p1.xy - p0.xy;
+    precise vec2 d2 = p2.xy - p0.xy;
+    precise vec2 d3 = p2.xy - p1.xy;
+    precise float area2 = d1.x * d2.y - d1.y * d2.x;
+    precise float maxEdge2 = max(max(d1.x * d1.x + d1.y * d1.y, d2.x * d2.x + d2.y * d2.y), d3.x * d3.x + d3.y * d3.y);
     // Well-conditioned in 2D: exact edge tests and a depth plane. Otherwise (edge-on, needle-like or tiny in
     // projection) the rectangle and the triangle's own depth range are used: coarser, still conservative.
     if (abs(area2) > 1.0e-3 && abs(area2) >= maxEdge2 * (1.0 / 256.0)) {
@@ -103,9 +108,9 @@ Prim makePrim(uint index, int axis) {
         p.edge0 = edgeFunction(p0.xy, p1.xy, s);
         p.edge1 = edgeFunction(p1.xy, p2.xy, s);
         p.edge2 = edgeFunction(p2.xy, p0.xy, s);
-        float invArea = 1.0 / area2;
-        float pa = ((p1.z - p0.z) * d2.y - (p2.z - p0.z) * d1.y) * invArea;
-        float pb = ((p2.z - p0.z) * d1.x - (p1.z - p0.z) * d2.x) * invArea;
+        precise float invArea = 1.0 / area2;
+        precise float pa = ((p1.z - p0.z) * d2.y - (p2.z - p0.z) * d1.y) * invArea;
+        precise float pb = ((p2.z - p0.z) * d1.x - (p1.z - p0.z) * d2.x) * invArea;
         p.plane = vec4(pa, pb, p0.z, 1.0);
         p.origin = p0.xy;
     }
@@ -117,11 +122,14 @@ vec2 halfSizeFor(int axis) {
     return u_conservative != 0 ? vec2(u_halfSize[(axis + 1) % 3], u_halfSize[(axis + 2) % 3]) : vec2(0.0);
 }
 
-bool edgeRejects(vec3 e, vec2 c, vec2 h) { return e.x * c.x + e.y * c.y + e.z - (h.x * abs(e.x) + h.y * abs(e.y)) > 0.0; }
+bool edgeRejects(vec3 e, vec2 c, vec2 h) {
+    precise float v = e.x * c.x + e.y * c.y + e.z - (h.x * abs(e.x) + h.y * abs(e.y));
+    return v > 0.0;
+}
 
 // Pixel square [c - h, c + h] against the rectangle and the three edge half-planes (separating axes); on success
 // the primitive's depth range over the square (padded in reliable mode).
-bool coverage(Prim p, vec2 c, vec2 h, out float zlo, out float zhi) {
+bool coverage(Prim p, vec2 c, vec2 h, out precise float zlo, out precise float zhi) {
     zlo = 0.0;
     zhi = 0.0;
     if (c.x + h.x < p.rect.x || c.x - h.x > p.rect.z || c.y + h.y < p.rect.y || c.y - h.y > p.rect.w) return false;
@@ -129,10 +137,10 @@ bool coverage(Prim p, vec2 c, vec2 h, out float zlo, out float zhi) {
     zlo = p.zrange.x;
     zhi = p.zrange.y;
     if (p.plane.w != 0.0) {
-        float zc = p.plane.z + p.plane.x * (c.x - p.origin.x) + p.plane.y * (c.y - p.origin.y);
-        float r = h.x * abs(p.plane.x) + h.y * abs(p.plane.y);
-        float lo = max(zc - r, zlo);
-        float hi = min(zc + r, zhi);
+        precise float zc = p.plane.z + p.plane.x * (c.x - p.origin.x) + p.plane.y * (c.y - p.origin.y);
+        precise float r = h.x * abs(p.plane.x) + h.y * abs(p.plane.y);
+        precise float lo = max(zc - r, zlo);
+        precise float hi = min(zc + r, zhi);
         if (lo <= hi) {
             zlo = lo;
             zhi = hi;
@@ -142,7 +150,7 @@ bool coverage(Prim p, vec2 c, vec2 h, out float zlo, out float zhi) {
         }
     }
     if (u_conservative != 0) {
-        float pad = u_depthPad[p.axis] + (p.zrange.y - p.zrange.x) * (1.0 / 4096.0);
+        precise float pad = u_depthPad[p.axis] + (p.zrange.y - p.zrange.x) * (1.0 / 4096.0);
         zlo -= pad;
         zhi += pad;
     }

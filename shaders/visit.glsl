@@ -9,8 +9,14 @@ layout(binding = CULLIDE_IMAGE_FAR2, r32ui) coherent uniform uimage2D u_far2;
 // Quantize conservatively: near depths round down, far depths round up. maxQ leaves the all-ones value free as the
 // "empty" marker of the near images; far depths are stored + 1 so that 0 marks "empty". At most 24 depth bits:
 // a float holds the scale exactly.
-uint quantizeDown(float z, float maxQ) { return uint(floor(clamp(z, 0.0, 1.0) * maxQ)); }
-uint quantizeUp(float z, float maxQ) { return uint(ceil(clamp(z, 0.0, 1.0) * maxQ)); }
+uint quantizeDown(float z, float maxQ) {
+    precise float q = clamp(z, 0.0, 1.0) * maxQ;
+    return uint(floor(q));
+}
+uint quantizeUp(float z, float maxQ) {
+    precise float q = clamp(z, 0.0, 1.0) * maxQ;
+    return uint(ceil(q));
+}
 
 // Returns the flag bits this pixel earns the item in the flag pass (0 in the other passes).
 uint visit(ivec2 pixel, uint owner, int axis, float zlo, float zhi) {
