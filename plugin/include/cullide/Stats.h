@@ -24,9 +24,11 @@ struct LevelStats {
 };
 
 struct Stats {
-    std::string renderer;   ///< GL_RENDERER of the context used ("cpu-reference" for the reference culler; empty
-                            ///< when the culler holds no GL context)
-    std::string device;     ///< which GL device / platform was chosen ("none" when no GL context was opened)
+    std::string renderer;   ///< GL_RENDERER of the context used ("cpu-reference" for the reference culler,
+                            ///< "cpu-visibility-reference" for createVisibilityReferenceCuller; empty when the culler
+                            ///< holds no GL context)
+    std::string device;     ///< which GL device / platform was chosen ("none" when no GL context was opened, "cpu"
+                            ///< for createVisibilityReferenceCuller)
     /// Empty when the culler holds a GL context; otherwise why not: no usable GL device (the GlUnavailableError
     /// message; GpuLevels::Auto then runs the CPU path) or GpuLevels::Never (no context is opened at all).
     std::string gpuUnavailable;

@@ -116,7 +116,6 @@ struct VisibilityPass::Impl {
     std::size_t valid[kBufferCount] = {};  ///< bytes of the buffer that hold the last upload (positions, indices)
     GLuint timer = 0;
     std::size_t maxGroups = 65535;  ///< GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]
-    double coordinateBound = 0.0;
     std::vector<std::uint32_t> primScratch;
     std::vector<double> footprintScratch;  ///< compute back-end: pixels of each alive primitive's largest footprint
     std::vector<float> boundsScratch;
@@ -447,7 +446,6 @@ void VisibilityPass::upload(const GpuGeometry& geometry, Stats& stats) {
                                              geometry.keptIndices * 4);
     uploadBuffer(s.buffers[kBoxes], s.capacity[kBoxes], geometry.boxes.data(), geometry.boxes.size() * 4);
     stats.bytesUploaded += geometry.boxes.size() * 4;
-    s.coordinateBound = geometry.coordinateBound;
     s.geometry = &geometry;
 }
 
