@@ -15,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <ostream>
 #include <string>
 
 namespace cullide::test {
@@ -160,6 +161,13 @@ struct Case {
     int resolution;
 };
 
+std::string name(const Case& c) {
+    return std::string(c.pipeline == Pipeline::Paper ? "Paper" : "Auto") +
+           (c.mode == Mode::Reliable ? "Reliable" : "Sampled") + std::to_string(c.resolution);
+}
+std::string caseName(const ::testing::TestParamInfo<Case>& param) { return name(param.param); }
+void PrintTo(const Case& c, std::ostream* os) { *os << name(c); }
+
 class ReferenceLevels : public ::testing::TestWithParam<Case> {};
 
 TEST_P(ReferenceLevels, ReliableMissesNothingAndBothModesPrune) {
@@ -193,7 +201,8 @@ TEST_P(ReferenceLevels, ReliableMissesNothingAndBothModesPrune) {
 INSTANTIATE_TEST_SUITE_P(Matrix, ReferenceLevels,
                          ::testing::Values(Case{Pipeline::Auto, Mode::Reliable, 16}, Case{Pipeline::Auto, Mode::Reliable, 128},
                                            Case{Pipeline::Paper, Mode::Reliable, 16}, Case{Pipeline::Paper, Mode::Reliable, 128},
-                                           Case{Pipeline::Auto, Mode::Sampled, 64}, Case{Pipeline::Paper, Mode::Sampled, 64}));
+                                           Case{Pipeline::Auto, Mode::Sampled, 64}, Case{Pipeline::Paper, Mode::Sampled, 64}),
+                         caseName);
 
 }  // namespace
 }  // namespace cullide::test
@@ -236,7 +245,11 @@ std::vector<TriangleMesh> envFrame(const std::string& scene, bool* standIns) {
     return scenes::makeEnv3(scenes::defaultDataDir(), false, standIns)->frame(3);
 }
 
-class PruningStrength : public ::testing::TestWithParam<std::pair<const char*, Pipeline>> {};
+class PruningStrength : public ::testing::TestWithParam<std::pair<std::string, Pipeline>> {};
+
+std::string strengthName(const ::testing::TestParamInfo<std::pair<std::string, Pipeline>>& param) {
+    return param.param.first + (param.param.second == Pipeline::Paper ? "Paper" : "Auto");
+}
 
 TEST_P(PruningStrength, EveryLevelPrunesAsMuchAsItDid) {
     const auto [scene, pipeline] = GetParam();
@@ -244,7 +257,7 @@ TEST_P(PruningStrength, EveryLevelPrunesAsMuchAsItDid) {
     const auto meshes = envFrame(scene, &standIns);
     const Strength* expected = nullptr;
     for (const Strength& s : strengths())
-        if (s.scene == std::string(scene) && s.pipeline == pipeline && s.standIns == standIns) expected = &s;
+        if (s.scene == scene && s.pipeline == pipeline && s.standIns == standIns) expected = &s;
     ASSERT_NE(expected, nullptr);
     auto culler = referenceLevelsCuller(referenceLevels(pipeline, Mode::Reliable, 64));
     Result r;
@@ -264,9 +277,10 @@ TEST_P(PruningStrength, EveryLevelPrunesAsMuchAsItDid) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Environments, PruningStrength,
-                         ::testing::Values(std::make_pair("env1", Pipeline::Auto), std::make_pair("env1", Pipeline::Paper),
-                                           std::make_pair("env2", Pipeline::Auto), std::make_pair("env2", Pipeline::Paper),
-                                           std::make_pair("env3", Pipeline::Auto), std::make_pair("env3", Pipeline::Paper)));
+                         ::testing::Values(std::make_pair(std::string("env1"), Pipeline::Auto), std::make_pair(std::string("env1"), Pipeline::Paper),
+                                           std::make_pair(std::string("env2"), Pipeline::Auto), std::make_pair(std::string("env2"), Pipeline::Paper),
+                                           std::make_pair(std::string("env3"), Pipeline::Auto), std::make_pair(std::string("env3"), Pipeline::Paper)),
+                         strengthName);
 
 }  // namespace
 }  // namespace cullide::test
