@@ -101,6 +101,8 @@ struct EnvironmentCase {
     LockstepCase settings;
 };
 
+void PrintTo(const EnvironmentCase& c, std::ostream* os) { *os << c.scene << name(c.settings); }
+
 class EnvironmentLockstep : public ::testing::TestWithParam<EnvironmentCase> {};
 
 TEST_P(EnvironmentLockstep, GlKeepsExactlyWhatTheReferenceKeeps) {
