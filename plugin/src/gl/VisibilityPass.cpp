@@ -120,7 +120,7 @@ struct VisibilityPass::Impl {
     std::vector<double> footprintScratch;  ///< compute back-end: pixels of each alive primitive's largest footprint
     std::vector<float> boundsScratch;
     std::vector<std::uint32_t> aliveScratch;
-    std::vector<std::uint8_t> aliveScratch8;
+    std::vector<std::uint8_t> recordAlive;  ///< the alive set the records are built from (all at a level's start)
     const GpuGeometry* geometry = nullptr;
     // The level being pruned (beginLevel .. its last iterate).
     const LevelItems* levelItems = nullptr;
@@ -479,8 +479,8 @@ void VisibilityPass::beginLevel(const LevelItems& items, const View& view, Stats
     s.context.makeCurrent();
     s.levelItems = &items;
     s.uploadItems(items, stats);
-    s.aliveScratch8.assign(items.size(), 1);
-    s.recordCount = s.buildRecords(items, s.aliveScratch8, view, stats);
+    s.recordAlive.assign(items.size(), 1);
+    s.recordCount = s.buildRecords(items, s.recordAlive, view, stats);
     s.recordedView = view.box;
 }
 
@@ -488,8 +488,8 @@ IterationResult VisibilityPass::iterate(const View& view, std::uint32_t idBits, 
     Impl& s = *m_impl;
     s.context.makeCurrent();
     if (recordsStale(view.box, s.recordedView)) {
-        s.readAlive(s.levelItems->size(), s.aliveScratch8, stats);
-        s.recordCount = s.buildRecords(*s.levelItems, s.aliveScratch8, view, stats);
+        s.readAlive(s.levelItems->size(), s.recordAlive, stats);
+        s.recordCount = s.buildRecords(*s.levelItems, s.recordAlive, view, stats);
         s.recordedView = view.box;
     }
     return s.runIteration(view, idBits, s.levelItems->size(), level, stats);
