@@ -1,0 +1,82 @@
+#include "ClusterGeometry.h"
+
+#include "FloatRounding.h"
+
+#include <algorithm>
+
+namespace cullide {
+
+void ClusterGeometry::upload(const FrameState& frame, const Cluster& cluster, PruningBackend& backend, TaskPool& pool,
+                             Stats& stats) {
+    placeMeshes(frame, cluster);
+    pool.parallelFor(m_written.size(), 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) writeMesh(frame.meshOf(m_written[i].object), m_written[i]);
+    });
+    m_geometry.boxes.clear();
+    m_geometry.coordinateBound = 0.0;
+    m_objectBox.assign(frame.valid.size(), 0);
+    for (std::uint32_t o : cluster.objects) m_objectBox[o] = appendBox(frame.valid[o].box);
+    m_groupBox.resize(cluster.groups.size());
+    for (std::size_t g = 0; g < cluster.groups.size(); ++g) m_groupBox[g] = appendBox(cluster.groups[g].box);
+    backend.upload(m_geometry, stats);
+}
+
+/// The origin (ResidentRegion::fit), then static meshes where the region holds them (or appended to it) and every
+/// other mesh after the region, in object order; m_written lists what must be written this upload.
+void ClusterGeometry::placeMeshes(const FrameState& frame, const Cluster& cluster) {
+    Aabb all;
+    std::size_t staticTriangles = 0;
+    for (std::uint32_t o : cluster.objects) {
+        all.grow(frame.valid[o].box);
+        if (frame.isMesh(o) && frame.statics.entry[o] != nullptr) staticTriangles += frame.meshOf(o).triangles.size();
+    }
+    const Vec3 centre = all.isEmpty() ? Vec3::Zero() : Vec3(0.5 * (all.min + all.max));
+    const double extent = all.isEmpty() ? 0.0 : all.extent().maxCoeff();
+    m_origin = m_region.fit(centre, extent, staticTriangles);
+    m_geometry.keptPositions = 3 * m_region.vertices();
+    m_geometry.keptIndices = 3 * m_region.triangles();
+    m_baseTriangle.assign(frame.valid.size(), 0);
+    m_written.clear();
+    for (std::uint32_t o : cluster.objects) {
+        StaticEntry* e = frame.statics.entry[o];
+        if (!frame.isMesh(o) || e == nullptr) continue;
+        const TriangleMesh& mesh = frame.meshOf(o);
+        const ResidentRegion::Place p = m_region.place(*e, mesh.vertices.size(), mesh.triangles.size());
+        if (p.appended) m_written.push_back({o, p.baseVertex, p.baseTriangle});
+        m_baseTriangle[o] = p.baseTriangle;
+    }
+    std::size_t vertices = m_region.vertices();
+    std::size_t triangles = m_region.triangles();
+    for (std::uint32_t o : cluster.objects) {
+        if (!frame.isMesh(o) || frame.statics.entry[o] != nullptr) continue;
+        m_written.push_back({o, static_cast<std::uint32_t>(vertices), static_cast<std::uint32_t>(triangles)});
+        m_baseTriangle[o] = static_cast<std::uint32_t>(triangles);
+        vertices += frame.meshOf(o).vertices.size();
+        triangles += frame.meshOf(o).triangles.size();
+    }
+    m_geometry.positions.resize(3 * vertices);  // the region's front is kept as it is
+    m_geometry.indices.resize(3 * triangles);
+}
+
+/// A mesh's vertices (relative to the origin, as floats) and its triangles' global vertex indices.
+void ClusterGeometry::writeMesh(const TriangleMesh& mesh, const MeshSlot& slot) {
+    float* position = &m_geometry.positions[3 * std::size_t{slot.baseVertex}];
+    for (const Vec3& v : mesh.vertices) {
+        const Vec3 r = v.allFinite() ? Vec3(v - m_origin) : Vec3::Zero();  // unused vertices may be NaN
+        for (int a = 0; a < 3; ++a) *position++ = static_cast<float>(r[a]);
+    }
+    std::uint32_t* index = &m_geometry.indices[3 * std::size_t{slot.baseTriangle}];
+    for (const auto& t : mesh.triangles)
+        for (std::uint32_t k : t) *index++ = slot.baseVertex + k;
+}
+
+std::uint32_t ClusterGeometry::appendBox(const Aabb& worldBox) {
+    const Aabb r = relative(worldBox);
+    for (int a = 0; a < 3; ++a) m_geometry.boxes.push_back(floatDown(r.min[a]));
+    for (int a = 0; a < 3; ++a) m_geometry.boxes.push_back(floatUp(r.max[a]));
+    m_geometry.coordinateBound =
+        std::max({m_geometry.coordinateBound, r.min.cwiseAbs().maxCoeff(), r.max.cwiseAbs().maxCoeff()});
+    return static_cast<std::uint32_t>(m_geometry.boxes.size() / 6 - 1);
+}
+
+}  // namespace cullide

@@ -1,0 +1,52 @@
+// The device's copy of one cluster (FrameState.h): positions and indices of its meshes and the boxes of its objects
+// and groups, relative to an origin near the cluster's centre, in float. Static meshes sit in the resident region at
+// the front of the buffers and are sent once (MeshCache.h).
+#pragma once
+
+#include "FrameState.h"
+#include "MeshCache.h"
+#include "PruningBackend.h"
+#include "TaskPool.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace cullide {
+
+class ClusterGeometry {
+public:
+    /// Writes the cluster's geometry relative to its origin (float precision is spent on the cluster, not on its
+    /// offset) and hands it to `backend`. Boxes are rounded outwards to float.
+    void upload(const FrameState& frame, const Cluster& cluster, PruningBackend& backend, TaskPool& pool,
+                Stats& stats);
+
+    /// Of the last upload: where object o's triangles start in the index buffer, its box's index and group g's.
+    std::uint32_t baseTriangle(std::uint32_t object) const { return m_baseTriangle[object]; }
+    std::uint32_t objectBox(std::uint32_t object) const { return m_objectBox[object]; }
+    std::uint32_t groupBox(std::size_t group) const { return m_groupBox[group]; }
+    /// The largest |coordinate| uploaded (GpuGeometry::coordinateBound), for the views' error bounds.
+    double coordinateBound() const { return m_geometry.coordinateBound; }
+    /// A world box relative to the upload's origin.
+    Aabb relative(const Aabb& worldBox) const { return {worldBox.min - m_origin, worldBox.max - m_origin}; }
+
+private:
+    /// Where a mesh goes in the position and index arrays.
+    struct MeshSlot {
+        std::uint32_t object;
+        std::uint32_t baseVertex;
+        std::uint32_t baseTriangle;
+    };
+    void placeMeshes(const FrameState& frame, const Cluster& cluster);
+    void writeMesh(const TriangleMesh& mesh, const MeshSlot& slot);
+    std::uint32_t appendBox(const Aabb& worldBox);
+
+    ResidentRegion m_region;
+    GpuGeometry m_geometry;  ///< the backend reads it until the next upload
+    Vec3 m_origin = Vec3::Zero();
+    std::vector<std::uint32_t> m_baseTriangle;
+    std::vector<std::uint32_t> m_objectBox;
+    std::vector<std::uint32_t> m_groupBox;
+    std::vector<MeshSlot> m_written;  ///< the meshes written this upload
+};
+
+}  // namespace cullide

@@ -1,0 +1,71 @@
+// What the stages of one culling frame share (GpuCuller.cpp): the objects after validation and the box pre-pass,
+// the triangle boxes and orders built for them, and the triangles that survive. Each stage takes it explicitly and
+// says what it reads and writes; the culler keeps one between frames only to reuse its allocations.
+#pragma once
+
+#include "FrameObjects.h"
+#include "MeshCache.h"
+#include "cullide/Object.h"
+
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+namespace cullide {
+
+/// k spatially consecutive triangles of one mesh (Settings::groupSize).
+struct Group {
+    std::uint32_t object;
+    std::uint32_t first;  ///< into the object's spatial triangle order (FrameState::order)
+    std::uint32_t count;
+    Aabb box;  ///< world, inflated by margin / 2
+};
+
+/// One triangle of one object.
+struct FrameTriangle {
+    std::uint32_t object;
+    std::uint32_t triangle;
+};
+
+struct FrameState {
+    /// The frame's objects, with world-space meshes for the active objects that came with a transform.
+    const std::vector<Object>* objects = nullptr;
+    std::vector<ValidatedObject> valid;
+    StaticLookup statics;
+    /// Object pairs whose boxes overlap (sorted, a < b) and, per object, the other object of each.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+    std::vector<std::vector<std::uint32_t>> partners;
+    /// Per object: 1 when its box meets another's (only those can collide; the others are not looked at again).
+    std::vector<std::uint8_t> active;
+    bool gpuLevels = false;  ///< whether the visibility levels run this frame
+
+    /// Per active mesh: its triangles in Morton order of their centroids (GPU levels only).
+    std::vector<std::vector<std::uint32_t>> order;
+    /// Per active non-static mesh: storage of its triangle boxes (static ones are in their StaticEntry).
+    std::vector<std::vector<Aabb>> ownBoxes;
+    /// Per active mesh: triangle boxes (inflated by margin / 2), of every triangle (static meshes; every mesh with
+    /// GPU levels) or, on the CPU path, only of its surviving ones.
+    std::vector<std::vector<Aabb>*> boxesOf;
+    /// The groups the levels start from (GPU levels only).
+    std::vector<Group> groups;
+    /// Per object: its triangles that may touch another object's, sorted (what the exact stage tests).
+    std::vector<std::vector<std::uint32_t>> surviving;
+
+    const TriangleMesh& meshOf(std::uint32_t o) const { return *(*objects)[o].mesh; }
+    bool isMesh(std::uint32_t o) const { return valid[o].isMesh; }
+    bool isActiveMesh(std::uint32_t o) const { return active[o] && valid[o].isMesh; }
+    bool overlapsPartner(std::uint32_t o, const Aabb& box) const {
+        for (std::uint32_t p : partners[o])
+            if (box.overlaps(valid[p].box)) return true;
+        return false;
+    }
+};
+
+/// The objects of one cluster (clustersOf) and the frame's groups that belong to them: what one run of the levels
+/// sees.
+struct Cluster {
+    std::vector<std::uint32_t> objects;  ///< sorted
+    std::vector<Group> groups;
+};
+
+}  // namespace cullide

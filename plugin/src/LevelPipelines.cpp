@@ -1,0 +1,210 @@
+#include "LevelPipelines.h"
+
+#include "VisibilityLevel.h"
+#include "bindings.h"
+#include "cullide/Timer.h"
+
+#include <algorithm>
+
+namespace cullide {
+namespace {
+
+constexpr std::uint32_t kNoOwner = 0xFFFFFFFFu;
+
+/// The levels of one cluster: what they read, what they write, and the buffers they reuse.
+struct LevelRun {
+    FrameState& frame;
+    const Cluster& cluster;
+    const Settings& settings;
+    PruningBackend& backend;
+    TaskPool& pool;
+    TriangleScratch& scratch;
+    Stats& stats;
+    ClusterGeometry& geometry;
+    LevelItems& items;
+    std::vector<std::uint8_t>& survivors;  ///< of the last level, per item
+    std::vector<std::uint32_t>& ownerId;   ///< per object: its compact owner id in the level being built
+    std::vector<FrameTriangle>& triangles;
+    std::uint32_t ownerCount = 0;
+    bool uploaded = false;  ///< the cluster's geometry is on the device (sent when its first level runs)
+};
+
+/// Starts building a level's items. The cluster's geometry goes to the device only when a level actually runs.
+void beginLevel(LevelRun& run) {
+    if (!run.uploaded) {
+        Timer upload;
+        run.geometry.upload(run.frame, run.cluster, run.backend, run.pool, run.stats);
+        run.stats.uploadMs += upload.ms();
+        run.uploaded = true;
+    }
+    run.ownerId.assign(run.frame.valid.size(), kNoOwner);
+    run.ownerCount = 0;
+    run.items.clear();
+}
+
+/// Compact owner ids for the objects present in a level.
+std::uint32_t ownerOf(LevelRun& run, std::uint32_t object) {
+    std::uint32_t& id = run.ownerId[object];
+    if (id == kNoOwner) id = run.ownerCount++;
+    return id;
+}
+
+void addBoxItem(LevelRun& run, std::uint32_t object, std::uint32_t box, const Aabb& worldBox) {
+    run.items.owner.push_back(ownerOf(run, object));
+    run.items.prims.push_back(box | CULLIDE_PRIM_BOX_BIT);
+    run.items.primBegin.push_back(static_cast<std::uint32_t>(run.items.prims.size()));
+    run.items.bounds.push_back(run.geometry.relative(worldBox));
+}
+
+void addObjectBoxItem(LevelRun& run, std::uint32_t object) {
+    addBoxItem(run, object, run.geometry.objectBox(object), run.frame.valid[object].box);
+}
+
+void addTriangleItem(LevelRun& run, std::uint32_t object, const std::uint32_t* triangles, std::uint32_t count,
+                     const Aabb& worldBox) {
+    run.items.owner.push_back(ownerOf(run, object));
+    const std::uint32_t base = run.geometry.baseTriangle(object);
+    for (std::uint32_t i = 0; i < count; ++i) run.items.prims.push_back(base + triangles[i]);
+    run.items.primBegin.push_back(static_cast<std::uint32_t>(run.items.prims.size()));
+    run.items.bounds.push_back(run.geometry.relative(worldBox));
+}
+
+/// Runs the level built since beginLevel; run.survivors says which items survive.
+void prune(LevelRun& run, const char* name) {
+    run.stats.levels.push_back(LevelStats{});
+    LevelStats& level = run.stats.levels.back();
+    level.name = name;
+    pruneLevel(run.backend, run.items, run.settings, run.geometry.coordinateBound(), run.survivors, level, run.stats);
+}
+
+std::vector<std::uint32_t> clusterProxies(const LevelRun& run) {
+    std::vector<std::uint32_t> proxies;
+    for (std::uint32_t o : run.cluster.objects)
+        if (!run.frame.isMesh(o)) proxies.push_back(o);
+    return proxies;
+}
+
+/// Keeps the entries of `list` whose item survived; its items start at item `first` of the level.
+template <typename T>
+void keepSurvivors(const std::vector<std::uint8_t>& survivors, std::size_t first, std::vector<T>& list) {
+    std::vector<T> kept;
+    for (std::size_t i = 0; i < list.size(); ++i)
+        if (survivors[first + i]) kept.push_back(list[i]);
+    list.swap(kept);
+}
+
+/// The triangles of run.triangles and the proxies (occluders only) as one level; the surviving triangles go to
+/// frame.surviving.
+void runTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
+    beginLevel(run);
+    for (const FrameTriangle& t : run.triangles)
+        addTriangleItem(run, t.object, &t.triangle, 1, (*run.frame.boxesOf[t.object])[t.triangle]);
+    for (std::uint32_t o : proxies) addObjectBoxItem(run, o);
+    prune(run, "triangles");
+    addSurvivingTriangles(run.frame, run.triangles, run.survivors);
+}
+
+std::size_t triangleCount(const std::vector<Group>& groups) {
+    std::size_t n = 0;
+    for (const Group& g : groups) n += g.count;
+    return n;
+}
+
+/// CPU pre-pass (done in buildTriangleBoxesAndGroups), group boxes, then the triangles of the surviving groups; a
+/// level whose input is at most Settings::exactThreshold triangles goes straight to the exact stage.
+void runAutoPipeline(LevelRun& run) {
+    std::vector<std::uint32_t> proxies = clusterProxies(run);
+    std::vector<Group> groups = run.cluster.groups;
+    if (triangleCount(groups) > run.settings.exactThreshold) {
+        beginLevel(run);
+        for (std::size_t g = 0; g < groups.size(); ++g)
+            addBoxItem(run, groups[g].object, run.geometry.groupBox(g), groups[g].box);
+        for (std::uint32_t o : proxies) addObjectBoxItem(run, o);
+        prune(run, "groups");
+        keepSurvivors(run.survivors, 0, groups);
+        keepSurvivors(run.survivors, run.cluster.groups.size(), proxies);
+    }
+    collectTriangles(run.frame, groups, true, run.pool, run.scratch, run.triangles);
+    if (run.triangles.size() > run.settings.exactThreshold)
+        runTriangleLevel(run, proxies);
+    else
+        addSurvivingTriangles(run.frame, run.triangles, {});
+}
+
+/// The paper's pipeline: objects as boxes, objects as triangles, groups as triangles, triangles.
+void runPaperPipeline(LevelRun& run) {
+    const FrameState& frame = run.frame;
+    std::vector<std::uint32_t> objects = run.cluster.objects;
+    beginLevel(run);
+    for (std::uint32_t o : objects) addObjectBoxItem(run, o);
+    prune(run, "objects-box");
+    keepSurvivors(run.survivors, 0, objects);
+
+    beginLevel(run);
+    for (std::uint32_t o : objects) {
+        if (frame.isMesh(o))
+            addTriangleItem(run, o, frame.order[o].data(), static_cast<std::uint32_t>(frame.order[o].size()),
+                            frame.valid[o].box);
+        else
+            addObjectBoxItem(run, o);
+    }
+    prune(run, "objects");
+    keepSurvivors(run.survivors, 0, objects);
+    std::vector<std::uint8_t> objectAlive(frame.valid.size(), 0);
+    for (std::uint32_t o : objects) objectAlive[o] = 1;
+
+    std::vector<Group> groups;
+    for (const Group& g : run.cluster.groups)
+        if (objectAlive[g.object]) groups.push_back(g);
+    std::vector<std::uint32_t> proxies;
+    for (std::uint32_t o : clusterProxies(run))
+        if (objectAlive[o]) proxies.push_back(o);
+    beginLevel(run);
+    for (const Group& g : groups) addTriangleItem(run, g.object, &frame.order[g.object][g.first], g.count, g.box);
+    for (std::uint32_t o : proxies) addObjectBoxItem(run, o);
+    prune(run, "groups");
+    const std::size_t groupItems = groups.size();
+    keepSurvivors(run.survivors, 0, groups);
+    keepSurvivors(run.survivors, groupItems, proxies);
+    collectTriangles(run.frame, groups, false, run.pool, run.scratch, run.triangles);
+    runTriangleLevel(run, proxies);
+}
+
+bool rasterisable(const FrameState& frame, const Cluster& cluster) {
+    Aabb box;
+    for (std::uint32_t o : cluster.objects) box.grow(frame.valid[o].box);
+    return box.isEmpty() || box.extent().maxCoeff() <= kRasterisableExtent;
+}
+
+}  // namespace
+
+void LevelPipelines::run(FrameState& frame, const Settings& settings, PruningBackend& backend, TaskPool& pool,
+                         TriangleScratch& scratch, Stats& stats) {
+    const std::vector<std::vector<std::uint32_t>> clusters = clustersOf(frame.active, frame.pairs, frame.valid);
+    stats.clusters += clusters.size();
+    std::vector<std::uint8_t> member(frame.valid.size(), 0);
+    Cluster cluster;
+    for (const std::vector<std::uint32_t>& objects : clusters) {
+        for (std::uint32_t o : objects) member[o] = 1;
+        cluster.objects = objects;
+        cluster.groups.clear();
+        for (const Group& g : frame.groups)
+            if (member[g.object]) cluster.groups.push_back(g);
+        for (std::uint32_t o : objects) member[o] = 0;
+        if (!rasterisable(frame, cluster)) {
+            // Relative coordinates beyond what float positions and depths carry: no pruning (sound, and rare).
+            ++stats.unrasterisedClusters;
+            collectTriangles(frame, cluster.groups, true, pool, scratch, m_triangles);
+            addSurvivingTriangles(frame, m_triangles, {});
+            continue;
+        }
+        LevelRun run{frame, cluster, settings, backend, pool, scratch, stats, m_geometry, m_items,
+                     m_survivors, m_ownerId, m_triangles};
+        if (settings.pipeline == Pipeline::Paper)
+            runPaperPipeline(run);
+        else
+            runAutoPipeline(run);
+    }
+}
+
+}  // namespace cullide

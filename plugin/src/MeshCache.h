@@ -1,0 +1,92 @@
+// What the culler keeps of static meshes (Object::staticKey) between frames: their validation and triangle boxes
+// (StaticMeshCache), and their place in the device's resident region, sent once (ResidentRegion).
+#pragma once
+
+#include "FrameObjects.h"
+#include "cullide/Object.h"
+#include "cullide/Result.h"
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+namespace cullide {
+
+/// One static mesh as the culler keeps it: valid while (version, vertex count, triangle count, transform) stay the
+/// same.
+struct StaticEntry {
+    std::uint64_t version = 0;
+    std::size_t vertices = 0;
+    std::size_t triangles = 0;
+    bool transformed = false;
+    Transform transform;  ///< when transformed: the one the cached world boxes were built with
+    bool checked = false;
+    ValidatedObject valid;
+    std::string error;  ///< the rejection message, if it was rejected
+    bool boxesReady = false;
+    std::vector<Aabb> boxes;  ///< every triangle's world box, inflated by margin / 2 (when boxesReady)
+    std::uint64_t lastFrame = 0;
+    std::uint64_t regionEpoch = 0;  ///< == ResidentRegion::epoch(): its triangles are in the device's region
+    std::uint32_t regionBaseTriangle = 0;
+};
+
+/// The frame's view of the cache, per object.
+struct StaticLookup {
+    std::vector<StaticEntry*> entry;  ///< null: not static, or its key was already used this frame
+    std::vector<std::uint8_t> known;  ///< 1: validated in an earlier frame (validateObjects skips it)
+};
+
+class StaticMeshCache {
+public:
+    /// Entries unused for this many frames are dropped (a static object far from every moving one is not handed
+    /// to the culler by the adapter; it comes back when something approaches).
+    static constexpr std::uint64_t kKeepFrames = 240;
+
+    /// Starts a frame: drops stale entries and finds (or makes) each static object's entry. An entry whose mesh
+    /// version, sizes or transform changed starts over.
+    void lookUp(const std::vector<Object>& objects, StaticLookup& lookup);
+
+    /// After validateObjects (which skipped the known objects): known entries' validation into the frame (their
+    /// rejections into `result.rejected`, kept sorted by object), new entries' validation into the cache.
+    static void merge(const StaticLookup& lookup, std::vector<ValidatedObject>& valid, Result& result, Stats& stats);
+
+    std::size_t size() const { return m_entries.size(); }
+
+private:
+    std::unordered_map<std::uint64_t, StaticEntry> m_entries;  ///< by Object::staticKey
+    std::uint64_t m_frame = 0;
+};
+
+/// The front of the device's position and index buffers, where static meshes are written once and stay while the
+/// cluster uploaded each frame stays near the region's origin: within half the region's extent, between a quarter
+/// and twice as large, and no more than half of the region stale. Otherwise the region starts over at the new
+/// cluster's centre (a new epoch: every static mesh is written again).
+class ResidentRegion {
+public:
+    /// Keeps or restarts the region for a cluster with box centre `centre` and largest side `extent` holding
+    /// `staticTriangles` static triangles. Returns the origin the cluster's coordinates are relative to.
+    Vec3 fit(const Vec3& centre, double extent, std::size_t staticTriangles);
+
+    /// The base triangle of a static mesh: where it already is, or appended now (then `appended` is set and the
+    /// caller writes it at `baseVertex`, `baseTriangle`).
+    struct Place {
+        bool appended = false;
+        std::uint32_t baseVertex = 0;
+        std::uint32_t baseTriangle = 0;
+    };
+    Place place(StaticEntry& entry, std::size_t vertices, std::size_t triangles);
+
+    std::size_t vertices() const { return m_vertices; }
+    std::size_t triangles() const { return m_triangles; }
+
+private:
+    Vec3 m_origin = Vec3::Zero();
+    std::uint64_t m_epoch = 0;  ///< bumped whenever the region is rebuilt (0: none yet)
+    double m_extent = 0.0;      ///< extent of the cluster when the region's origin was chosen
+    std::size_t m_vertices = 0;
+    std::size_t m_triangles = 0;
+};
+
+}  // namespace cullide

@@ -1,0 +1,208 @@
+#include "TriangleSets.h"
+
+#include "Morton.h"
+
+#include <algorithm>
+
+namespace cullide {
+namespace {
+
+/// Orders an object's triangles along a Morton curve of their centroids, so that k consecutive ones are close
+/// together whatever the file order (scanned meshes and soups are not stored spatially). O(n).
+void spatialOrder(const TriangleMesh& mesh, const Aabb& box, std::vector<std::uint32_t>& order) {
+    thread_local std::vector<std::uint64_t> keys;  // per worker: objects are ordered in parallel
+    thread_local std::vector<std::uint64_t> tmp;
+    const Vec3 scale = (box.extent().array().max(1e-300)).inverse() * 1023.0;
+    keys.clear();
+    for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+        const auto& tri = mesh.triangles[t];
+        const Vec3 c =
+            ((mesh.vertices[tri[0]] + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]) / 3.0 - box.min).cwiseProduct(scale);
+        keys.push_back(morton::key(morton::code(c[0], c[1], c[2]), t));
+    }
+    morton::sortByCode(keys, tmp);
+    order.resize(keys.size());
+    for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(keys[i]);
+}
+
+/// Ranges of at most `range` triangles over the active meshes, in object and triangle order.
+void splitIntoRanges(const FrameState& frame, const std::vector<std::uint8_t>& take, std::uint32_t range,
+                     std::vector<TriangleScratch::Range>& ranges) {
+    ranges.clear();
+    for (std::uint32_t o = 0; o < frame.valid.size(); ++o) {
+        if (!take[o]) continue;
+        const auto n = static_cast<std::uint32_t>(frame.meshOf(o).triangles.size());
+        for (std::uint32_t first = 0; first < n; first += range) ranges.push_back({o, first, std::min(n, first + range)});
+    }
+}
+
+/// Which meshes get their triangle boxes computed now (scratch.needBoxes), and where each active mesh's boxes live
+/// (frame.boxesOf).
+void assignBoxStorage(FrameState& frame, TriangleScratch& scratch) {
+    const std::size_t n = frame.valid.size();
+    frame.ownBoxes.resize(n);
+    frame.boxesOf.assign(n, nullptr);
+    scratch.needBoxes.assign(n, 0);
+    for (std::uint32_t o = 0; o < n; ++o) {
+        if (!frame.isActiveMesh(o)) continue;
+        const std::size_t triangles = frame.meshOf(o).triangles.size();
+        StaticEntry* e = frame.statics.entry[o];
+        if (e != nullptr) {
+            frame.boxesOf[o] = &e->boxes;
+            if (e->boxesReady) continue;
+            e->boxes.resize(triangles);
+            e->boxesReady = true;  // filled by the caller
+        } else {
+            frame.ownBoxes[o].resize(triangles);
+            frame.boxesOf[o] = &frame.ownBoxes[o];
+            if (!frame.gpuLevels) continue;  // collectDirect computes them
+        }
+        scratch.needBoxes[o] = 1;
+    }
+}
+
+/// Every group of k triangles of the active meshes, with its box; kept (frame.groups) when `prepass` is off or its
+/// box overlaps a partner's.
+void buildGroups(FrameState& frame, std::uint32_t k, bool prepass, TaskPool& pool, TriangleScratch& scratch,
+                 Stats& stats) {
+    std::vector<Group>& candidates = scratch.groupCandidates;
+    candidates.clear();
+    for (std::uint32_t o = 0; o < frame.valid.size(); ++o) {
+        if (!frame.isActiveMesh(o)) continue;
+        const auto n = static_cast<std::uint32_t>(frame.meshOf(o).triangles.size());
+        for (std::uint32_t first = 0; first < n; first += k) candidates.push_back({o, first, std::min(k, n - first), {}});
+    }
+    scratch.groupKept.resize(candidates.size());
+    pool.parallelFor(candidates.size(), 256, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) {
+            Group& g = candidates[i];
+            const std::vector<Aabb>& boxes = *frame.boxesOf[g.object];
+            const std::vector<std::uint32_t>& order = frame.order[g.object];
+            for (std::uint32_t t = g.first; t < g.first + g.count; ++t) g.box.grow(boxes[order[t]]);
+            scratch.groupKept[i] = !prepass || frame.overlapsPartner(g.object, g.box);
+        }
+    });
+    stats.prepassGroupsIn += candidates.size();
+    frame.groups.clear();
+    for (std::size_t i = 0; i < candidates.size(); ++i)
+        if (scratch.groupKept[i]) frame.groups.push_back(candidates[i]);
+    stats.prepassGroupsOut = frame.groups.size();
+}
+
+}  // namespace
+
+void buildTriangleBoxesAndGroups(FrameState& frame, std::uint32_t groupSize, double margin, bool prepass,
+                                 TaskPool& pool, TriangleScratch& scratch, Stats& stats) {
+    frame.groups.clear();
+    frame.order.resize(frame.valid.size());
+    if (frame.gpuLevels) {  // the CPU path has no groups (collectDirect)
+        pool.parallelFor(frame.valid.size(), 1, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t i = begin; i < end; ++i) {
+                const auto o = static_cast<std::uint32_t>(i);
+                if (frame.isActiveMesh(o)) spatialOrder(frame.meshOf(o), frame.valid[o].box, frame.order[o]);
+            }
+        });
+    }
+    assignBoxStorage(frame, scratch);
+    splitIntoRanges(frame, scratch.needBoxes, 8192, scratch.ranges);
+    const double inflate = 0.5 * margin;
+    pool.parallelFor(scratch.ranges.size(), 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t r = begin; r < end; ++r) {
+            const TriangleScratch::Range& range = scratch.ranges[r];
+            const TriangleMesh& mesh = frame.meshOf(range.object);
+            std::vector<Aabb>& boxes = *frame.boxesOf[range.object];
+            for (std::uint32_t t = range.begin; t < range.end; ++t) boxes[t] = triangleBounds(mesh, t, inflate);
+        }
+    });
+    if (frame.gpuLevels) buildGroups(frame, groupSize, prepass, pool, scratch, stats);
+}
+
+void collectTriangles(const FrameState& frame, const std::vector<Group>& groups, bool prepass, TaskPool& pool,
+                      TriangleScratch& scratch, std::vector<FrameTriangle>& triangles) {
+    constexpr std::size_t kGroupsPerTask = 256;
+    const std::size_t tasks = (groups.size() + kGroupsPerTask - 1) / kGroupsPerTask;
+    if (scratch.taskTriangles.size() < tasks) scratch.taskTriangles.resize(tasks);
+    pool.parallelFor(tasks, 1, [&](std::size_t begin, std::size_t end) {
+        thread_local std::vector<FrameTriangle> kept;  // per thread: neighbouring tasks' vectors share cache lines
+        for (std::size_t task = begin; task < end; ++task) {
+            kept.clear();
+            const std::size_t last = std::min(groups.size(), (task + 1) * kGroupsPerTask);
+            for (std::size_t i = task * kGroupsPerTask; i < last; ++i) {
+                const Group& g = groups[i];
+                const std::vector<Aabb>& boxes = *frame.boxesOf[g.object];
+                const bool test = prepass && frame.partners[g.object].size() <= 16;
+                for (std::uint32_t k = g.first; k < g.first + g.count; ++k) {
+                    const std::uint32_t t = frame.order[g.object][k];
+                    if (test && !frame.overlapsPartner(g.object, boxes[t])) continue;
+                    kept.push_back({g.object, t});
+                }
+            }
+            scratch.taskTriangles[task].assign(kept.begin(), kept.end());
+        }
+    });
+    triangles.clear();
+    for (std::size_t task = 0; task < tasks; ++task)
+        triangles.insert(triangles.end(), scratch.taskTriangles[task].begin(), scratch.taskTriangles[task].end());
+}
+
+void collectDirect(FrameState& frame, std::uint32_t groupSize, double margin, TaskPool& pool,
+                   TriangleScratch& scratch) {
+    const std::uint32_t k = groupSize;
+    const std::size_t n = frame.valid.size();
+    std::vector<std::uint8_t>& take = scratch.needBoxes;  // reused: here the active meshes
+    take.assign(n, 0);
+    for (std::uint32_t o = 0; o < n; ++o) take[o] = frame.isActiveMesh(o) ? 1 : 0;
+    splitIntoRanges(frame, take, k * std::max<std::uint32_t>(1, 8192 / k), scratch.ranges);
+    if (scratch.rangeKept.size() < scratch.ranges.size()) scratch.rangeKept.resize(scratch.ranges.size());
+    // The union of each object's partners' boxes: one test rejects the triangles far from all of them.
+    scratch.partnerUnion.assign(n, Aabb{});
+    for (std::uint32_t o = 0; o < n; ++o)
+        for (std::uint32_t p : frame.partners[o]) scratch.partnerUnion[o].grow(frame.valid[p].box);
+    const double inflate = 0.5 * margin;
+    pool.parallelFor(scratch.ranges.size(), 1, [&](std::size_t begin, std::size_t end) {
+        thread_local std::vector<std::uint32_t> kept;  // per thread: neighbouring ranges' vectors share lines
+        for (std::size_t r = begin; r < end; ++r) {
+            const TriangleScratch::Range& rg = scratch.ranges[r];
+            const TriangleMesh& mesh = frame.meshOf(rg.object);
+            std::vector<Aabb>& boxes = *frame.boxesOf[rg.object];
+            const bool compute = frame.statics.entry[rg.object] == nullptr;
+            const Aabb& near = scratch.partnerUnion[rg.object];
+            kept.clear();
+            if (frame.partners[rg.object].size() <= 16) {
+                for (std::uint32_t t = rg.begin; t < rg.end; ++t) {
+                    // Only kept triangles' boxes are read later: the others are not stored (memory traffic).
+                    const Aabb box = compute ? triangleBounds(mesh, t, inflate) : boxes[t];
+                    if (!box.overlaps(near) || !frame.overlapsPartner(rg.object, box)) continue;
+                    if (compute) boxes[t] = box;
+                    kept.push_back(t);
+                }
+            } else {
+                for (std::uint32_t first = rg.begin; first < rg.end; first += k) {
+                    const std::uint32_t last = std::min(rg.end, first + k);
+                    Aabb box;
+                    for (std::uint32_t t = first; t < last; ++t) {
+                        if (compute) boxes[t] = triangleBounds(mesh, t, inflate);
+                        box.grow(boxes[t]);
+                    }
+                    if (!box.overlaps(near) || !frame.overlapsPartner(rg.object, box)) continue;
+                    for (std::uint32_t t = first; t < last; ++t) kept.push_back(t);
+                }
+            }
+            scratch.rangeKept[r].assign(kept.begin(), kept.end());
+        }
+    });
+    for (std::size_t r = 0; r < scratch.ranges.size(); ++r) {  // ranges in object and triangle order: sorted lists
+        auto& list = frame.surviving[scratch.ranges[r].object];
+        list.insert(list.end(), scratch.rangeKept[r].begin(), scratch.rangeKept[r].end());
+    }
+}
+
+void addSurvivingTriangles(FrameState& frame, const std::vector<FrameTriangle>& triangles,
+                           const std::vector<std::uint8_t>& alive) {
+    for (std::size_t i = 0; i < triangles.size(); ++i)
+        if (alive.empty() || alive[i]) frame.surviving[triangles[i].object].push_back(triangles[i].triangle);
+    for (auto& list : frame.surviving)
+        if (!std::is_sorted(list.begin(), list.end())) std::sort(list.begin(), list.end());
+}
+
+}  // namespace cullide

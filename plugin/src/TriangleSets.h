@@ -1,0 +1,54 @@
+// The CPU stages over the active meshes' triangles: their boxes, their Morton order and groups of k (what the
+// visibility levels start from), and the triangles whose boxes meet a partner's (the CPU path, and what is left
+// when the levels cannot run). All run on the pool; results do not depend on the number of workers.
+#pragma once
+
+#include "FrameState.h"
+#include "TaskPool.h"
+#include "cullide/Stats.h"
+
+#include <cstdint>
+#include <vector>
+
+namespace cullide {
+
+/// Working memory of these stages, kept between frames (no allocation churn on large scenes).
+struct TriangleScratch {
+    struct Range {
+        std::uint32_t object;
+        std::uint32_t begin;
+        std::uint32_t end;
+    };
+    std::vector<Range> ranges;
+    std::vector<std::vector<std::uint32_t>> rangeKept;
+    std::vector<Group> groupCandidates;
+    std::vector<std::uint8_t> groupKept;
+    std::vector<std::vector<FrameTriangle>> taskTriangles;
+    std::vector<Aabb> partnerUnion;
+    std::vector<std::uint8_t> needBoxes;
+};
+
+/// Sets frame.boxesOf for every active mesh and computes the triangle boxes of new static meshes; with GPU levels
+/// (frame.gpuLevels) also every active mesh's boxes, its Morton order (frame.order) and its groups of `groupSize`
+/// spatially consecutive triangles (frame.groups; with `prepass`, only groups whose box overlaps a partner's box).
+/// Without GPU levels the other meshes' boxes are computed where they are filtered (collectDirect).
+void buildTriangleBoxesAndGroups(FrameState& frame, std::uint32_t groupSize, double margin, bool prepass,
+                                 TaskPool& pool, TriangleScratch& scratch, Stats& stats);
+
+/// The triangles of `groups` (each in the object's Morton order), in group order; with `prepass`, only those whose
+/// box overlaps a partner object's box (tested when the object has at most 16 partners).
+void collectTriangles(const FrameState& frame, const std::vector<Group>& groups, bool prepass, TaskPool& pool,
+                      TriangleScratch& scratch, std::vector<FrameTriangle>& triangles);
+
+/// The CPU path (no GPU levels), in one pass on every worker: each active mesh's triangle boxes (those not kept from
+/// an earlier frame) and its surviving triangles into frame.surviving — those whose box overlaps a partner's box
+/// (with more than 16 partners, every triangle of a run of `groupSize` whose joint box does, as the group filter
+/// would). Only the kept triangles' boxes are stored.
+void collectDirect(FrameState& frame, std::uint32_t groupSize, double margin, TaskPool& pool,
+                   TriangleScratch& scratch);
+
+/// Adds `triangles` (those with alive[i] set; `alive` empty: all) to frame.surviving and keeps each list sorted.
+void addSurvivingTriangles(FrameState& frame, const std::vector<FrameTriangle>& triangles,
+                           const std::vector<std::uint8_t>& alive);
+
+}  // namespace cullide
