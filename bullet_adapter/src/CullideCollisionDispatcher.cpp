@@ -1,4 +1,5 @@
 #include "cullide_bullet/CullideCollisionDispatcher.h"
+#include "AdapterAccess.h"
 #include "GImpactLeafPairs.h"
 #include "ShapeGeometry.h"
 #include "cullide/Timer.h"
@@ -128,10 +129,10 @@ const PairTriangles* cullideTrianglesFor(btDispatcher* d, const btCollisionObjec
                                          const btCollisionObjectWrapper* body1Wrap, bool& swapped,
                                          CullideDispatchStats*& stats) {
     CullideCollisionDispatcher& dispatcher = cullideDispatcher(d);
-    stats = &dispatcher.currentStats();
+    stats = &detail::AdapterAccess::currentStats(dispatcher);
     swapped = false;
     const CullideBroadphase* broadphase = dispatcher.getCullideBroadphase();
-    return broadphase != nullptr ? broadphase->trianglePairsFor(body0Wrap, body1Wrap, swapped) : nullptr;
+    return broadphase != nullptr ? detail::AdapterAccess::trianglePairsFor(*broadphase, body0Wrap, body1Wrap, swapped) : nullptr;
 }
 
 /// A stand-in for a triangle mesh that enumerates only CULLIDE's surviving triangles (mesh-local vertices, Bullet's
@@ -295,7 +296,7 @@ public:
         }
         if (swapped) std::sort(ordered.begin(), ordered.end());
 
-        detail::GImpactLeafIndex& leafIndex = cullideDispatcher(m_dispatcher).gimpactLeafIndex();
+        detail::GImpactLeafIndex& leafIndex = detail::AdapterAccess::gimpactLeafIndex(cullideDispatcher(m_dispatcher));
         std::size_t begin = 0;
         while (begin < ordered.size()) {
             std::size_t end = begin;

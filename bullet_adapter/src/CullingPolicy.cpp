@@ -61,4 +61,15 @@ double requiredCullingMargin(const std::vector<MarginEntry>& objects, const Brea
     return std::max(d, 1e-9);
 }
 
+std::optional<double> cullingMarginToMake(double required, double current, double requested, std::uint64_t step,
+                                          bool shrinkFailed) {
+    if (required <= current) {
+        if (current <= requested || shrinkFailed) return std::nullopt;
+        const bool muchTooLarge = required < 0.5 * current;
+        const bool firstStepTooLarge = step <= 1 && required < current;  // the constructor's default: fit it exactly
+        if (!muchTooLarge && !firstStepTooLarge) return std::nullopt;
+    }
+    return std::max(requested, (step > 1 ? 1.25 : 1.0) * required);
+}
+
 }  // namespace cullide::bullet

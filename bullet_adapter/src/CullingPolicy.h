@@ -4,6 +4,8 @@
 
 #include "ShapeGeometry.h"
 
+#include <cstdint>
+#include <optional>
 #include <vector>
 
 namespace cullide::bullet {
@@ -50,5 +52,15 @@ struct BreakingRule {
 /// points within the sum of the two margins: 2.2 g plus float slack at the objects' coordinates. Box proxies carry
 /// Bullet's AABB padding: 1.5 t among themselves. Never below 1e-9. Pure: the same entries give the same d.
 double requiredCullingMargin(const std::vector<MarginEntry>& objects, const BreakingRule& rule);
+
+/// The margin policy: given the margin this step `required` (requiredCullingMargin), the culler's `current` margin,
+/// the application's `requested` Settings::margin (0: none), the step number (1 = first) and whether making a
+/// smaller culler failed before, the margin to recreate the culler with — or nothing: keep the current one. The
+/// culler is recreated when its margin is too small, and when it is more than twice what the scene needs (a margin
+/// twice too large multiplies the within-margin triangle pairs the exact stage tests); after the first step with
+/// 25% headroom, so that a slowly changing scene does not recreate it every step. Never below `requested`; a
+/// culler that is large enough is kept when it is the requested margin or a smaller one could not be made.
+std::optional<double> cullingMarginToMake(double required, double current, double requested, std::uint64_t step,
+                                          bool shrinkFailed);
 
 }  // namespace cullide::bullet

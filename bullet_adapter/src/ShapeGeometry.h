@@ -2,6 +2,7 @@
 #pragma once
 
 #include "cullide/Types.h"
+#include "PairTriangles.h"
 #include "cullide_bullet/CullideBroadphase.h"
 
 #include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>

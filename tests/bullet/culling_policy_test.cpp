@@ -105,5 +105,26 @@ TEST(CullingPolicy, RelativeThresholdUsesTheSmallerDiscOfAPossiblePair) {
                      2 * 0.04 + 1.5 * 0.02);
 }
 
+TEST(CullingPolicy, MarginPolicyGrowsAtOnceAndShrinksOnlyWhenMuchTooLarge) {
+    using bullet::cullingMarginToMake;
+    // Too small: recreated at once, exactly on the first step, with 25% headroom later.
+    EXPECT_EQ(cullingMarginToMake(0.2, 0.12, 0.0, 1, false), 0.2);
+    EXPECT_DOUBLE_EQ(cullingMarginToMake(0.2, 0.12, 0.0, 5, false).value(), 0.25);
+    EXPECT_DOUBLE_EQ(cullingMarginToMake(0.2, 0.12, 0.0, 5, true).value(), 0.25);  // growing is never skipped
+    // The constructor's default margin is fitted on the first step, also when it is large enough.
+    EXPECT_EQ(cullingMarginToMake(0.1, 0.12, 0.0, 1, false), 0.1);
+    // Later, a margin up to twice what the scene needs is kept (no recreation every step of a changing scene)...
+    EXPECT_FALSE(cullingMarginToMake(0.1, 0.12, 0.0, 2, false).has_value());
+    EXPECT_FALSE(cullingMarginToMake(0.06, 0.12, 0.0, 2, false).has_value());
+    // ... and one more than twice as large shrinks (with headroom), unless shrinking failed before.
+    EXPECT_DOUBLE_EQ(cullingMarginToMake(0.05, 0.12, 0.0, 2, false).value(), 0.0625);
+    EXPECT_FALSE(cullingMarginToMake(0.05, 0.12, 0.0, 2, true).has_value());
+    // The application's margin is a floor: kept when large enough, never gone below.
+    EXPECT_FALSE(cullingMarginToMake(0.01, 0.5, 0.5, 1, false).has_value());
+    EXPECT_FALSE(cullingMarginToMake(0.01, 0.5, 0.5, 9, false).has_value());
+    EXPECT_EQ(cullingMarginToMake(0.01, 2.0, 0.5, 9, false), 0.5);
+    EXPECT_DOUBLE_EQ(cullingMarginToMake(0.8, 0.5, 0.5, 9, false).value(), 1.0);
+}
+
 }  // namespace
 }  // namespace cullide::test

@@ -17,7 +17,7 @@
 //   culler gets those pairs only, meshes as the shape's local triangles plus the body's transform (built once per
 //   shape, shared by its bodies; static objects world-space, cached between steps). Planes and infinite boxes are
 //   never culled. Every other pair goes from the object level straight to Bullet's algorithms.
-// - The hand-off to CullideCollisionDispatcher is a per-pair record (trianglePairsFor), valid only for the shapes
+// - The hand-off to CullideCollisionDispatcher is a per-pair record (internal), valid only for the shapes
 //   and transforms the pair had in calculateOverlappingPairs(): the surviving triangles, or `pruned` for a pair the
 //   culler proved farther apart than its margin (it stays in the cache, as in Bullet; the narrow phase makes no
 //   contact for it). A pair without a record runs Bullet's own algorithm.
@@ -52,42 +52,10 @@ class btCollisionShape;
 
 namespace cullide {
 
-/// A triangle as Bullet's narrow phase names it: part = GImpact mesh part or btStridingMeshInterface subpart,
-/// index = triangle index within that part.
-struct BulletTriangle {
-    int part = 0;
-    int index = 0;
-    friend bool operator==(const BulletTriangle& x, const BulletTriangle& y) {
-        return x.part == y.part && x.index == y.index;
-    }
-    friend bool operator<(const BulletTriangle& x, const BulletTriangle& y) {
-        return x.part != y.part ? x.part < y.part : x.index < y.index;
-    }
-};
-
-struct BulletTrianglePair {
-    BulletTriangle a;  ///< triangle of the first object of the pair
-    BulletTriangle b;  ///< triangle of the second object
-};
-
-/// What CULLIDE kept for one object pair in the last calculateOverlappingPairs().
-struct PairTriangles {
-    /// GImpact-GImpact: surviving candidate triangle pairs (within the culling margin d), sorted by (a.part, b.part,
-    /// a.index, b.index). The dispatcher hands Bullet's triangle routine those that Bullet's own BVH search would
-    /// also produce (overlapping quantized leaf boxes).
-    std::vector<BulletTrianglePair> pairs;
-    /// GImpact-GImpact: the two meshes intersect (a surviving triangle pair shares a point, exact test) and the
-    /// deep-penetration fallback is on: the dispatcher runs Bullet's full GImpact algorithm for the pair this step,
-    /// so the penetration contacts that GImpact derives from distant triangle pairs are kept.
-    bool interpenetrating = false;
-    /// Convex hull, compound or GImpact mesh against a triangle mesh: the mesh's surviving triangles, sorted, and
-    /// their vertices in the mesh's local frame exactly as Bullet's processAllTriangles yields them (3 per triangle).
-    std::vector<BulletTriangle> meshTriangles;
-    std::vector<btVector3> meshTriangleVertices;
-    /// The culler proved the pair farther apart than its margin (or rejected one of its objects): no triangle of it
-    /// can make a contact point this step, and the dispatcher makes none (the lists above are empty).
-    bool pruned = false;
-};
+struct PairTriangles;  // the hand-off to CullideCollisionDispatcher (internal: bullet_adapter/src/PairTriangles.h)
+namespace detail {
+struct AdapterAccess;  // the broadphase's and dispatcher's internal calls (bullet_adapter/src/AdapterAccess.h)
+}
 
 /// Statistics of the last calculateOverlappingPairs().
 struct CullideFrameStats {
@@ -156,14 +124,6 @@ public:
     void printStats() override;
 
     // ---- CULLIDE ----
-    /// The surviving triangles for the pair of the two wrapped objects, computed by the last
-    /// calculateOverlappingPairs(), or nullptr when there are none to trust: a pair the culler did not see or kept
-    /// without triangles (a convex side), a child wrapper other than a compound's child, or either object moved or
-    /// changed shape since. A pair the culler pruned has a record with `pruned` set.
-    /// `swapped` is set when body0Wrap is the record's second object.
-    const PairTriangles* trianglePairsFor(const btCollisionObjectWrapper* body0Wrap,
-                                          const btCollisionObjectWrapper* body1Wrap, bool& swapped) const;
-
     /// Drop cached triangle geometry of `shape`. Not needed after deforming a mesh in place: changed vertex data is
     /// detected every step by a content hash.
     void invalidateShape(const btCollisionShape* shape);
@@ -211,6 +171,13 @@ public:
     const Settings& getSettings() const;
 
 private:
+    friend struct detail::AdapterAccess;
+    /// The record of the pair of the two wrapped objects made by the last calculateOverlappingPairs(), while it
+    /// holds (bullet_adapter/src/PairRecords.h states the contract), or nullptr. `swapped` is set when body0Wrap is
+    /// the record's second object.
+    const PairTriangles* trianglePairsFor(const btCollisionObjectWrapper* body0Wrap,
+                                          const btCollisionObjectWrapper* body1Wrap, bool& swapped) const;
+
     CullideBroadphase(detail::PrecisionChecked, const Settings& settings, btOverlappingPairCache* pairCache,
                       CullerFactory factory);
 

@@ -35,6 +35,7 @@ class btCollisionConfiguration;
 namespace cullide {
 namespace detail {
 class GImpactLeafIndex;
+struct AdapterAccess;
 }
 
 struct CullideDispatchStats {
@@ -79,12 +80,13 @@ public:
     const CullideDispatchStats& getTotalStats() const { return m_total; }
     void resetStats() { m_total.reset(); }
 
+private:
+    friend struct detail::AdapterAccess;
     /// Used by the algorithms: counters for the current dispatch.
     CullideDispatchStats& currentStats() { return m_current; }
     /// Used by the GImpact algorithm: primitive -> leaf node of GImpact box sets (Bullet's candidate criterion).
     detail::GImpactLeafIndex& gimpactLeafIndex() { return *m_leafIndex; }
 
-private:
     CullideCollisionDispatcher(detail::PrecisionChecked, btCollisionConfiguration* collisionConfiguration,
                                CullideBroadphase* broadphase);
 

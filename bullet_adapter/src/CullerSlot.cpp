@@ -1,0 +1,65 @@
+#include "CullerSlot.h"
+
+#include "CullingPolicy.h"
+
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+namespace cullide::bullet {
+
+CullerSlot::CullerSlot(const Settings& settings, Factory factory, double defaultMargin)
+    : m_settings(settings), m_factory(std::move(factory)) {
+    if (!m_factory) m_factory = [](const Settings& s) { return createGpuCuller(s); };
+    const std::string error = m_settings.validate();
+    if (!error.empty()) throw std::invalid_argument("cullide::CullideBroadphase: invalid settings: " + error);
+    make(m_settings.margin > 0.0 ? m_settings.margin : defaultMargin);
+}
+
+/// Replaces the culler by one with margin d; on failure (throws) the current culler stays as it was.
+void CullerSlot::make(double d) {
+    Settings s = m_settings;
+    s.margin = d;
+    // Bullet's triangle routines are the exact stage here: the culler hands over its surviving candidates.
+    s.exactTriangles = false;
+    std::unique_ptr<Culler> made = m_factory(s);
+    if (!made) throw std::runtime_error("cullide::CullideBroadphase: the culler factory returned nothing");
+    m_culler = std::move(made);
+    m_margin = m_culler->settings().margin;
+}
+
+bool CullerSlot::ready(double required, std::uint64_t step) {
+    try {
+        if (const auto d = cullingMarginToMake(required, m_margin, m_settings.margin, step, m_shrinkFailed)) make(*d);
+        return true;
+    } catch (const std::exception& e) {
+        reportFailure(e);
+        // A culler that could not be made smaller is still sound; one whose margin is too small is not.
+        const bool usable = m_culler != nullptr && required <= m_margin;
+        if (usable) m_shrinkFailed = true;
+        return usable;
+    }
+}
+
+bool CullerSlot::run(const std::vector<Object>& objects, const std::vector<ObjectIndexPair>& pairs, Result& result) {
+    result.clear();
+    try {
+        m_culler->run(objects, pairs, result);
+        return true;
+    } catch (const std::exception& e) {
+        reportFailure(e);
+        return false;
+    }
+}
+
+void CullerSlot::reportFailure(const std::exception& e) {
+    if (m_failureReported) return;
+    m_failureReported = true;
+    std::fprintf(stderr,
+                 "cullide::CullideBroadphase: the culler failed (%s); Bullet's full algorithms run for such frames "
+                 "(reported once)\n",
+                 e.what());
+}
+
+}  // namespace cullide::bullet

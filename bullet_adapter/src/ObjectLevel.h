@@ -1,0 +1,47 @@
+// The broadphase's object level: Bullet's own btDbvtBroadphase (incremental trees, fattened leaves, lazy pair
+// removal, filters, the overlap filter callback, ray and box queries), so that its pair cache holds exactly the pairs
+// Bullet's default pipeline would, plus a guard for non-finite AABBs: such a proxy would poison the tree's volumes
+// for every object, so it is parked far away with a filter mask of 0 and its pairs removed until its box is finite.
+#pragma once
+
+#include <BulletCollision/BroadphaseCollision/btDbvtBroadphase.h>
+
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <unordered_map>
+
+namespace cullide::bullet {
+
+class ObjectLevel {
+public:
+    explicit ObjectLevel(btOverlappingPairCache* pairCache);
+
+    btBroadphaseProxy* createProxy(const btVector3& mn, const btVector3& mx, int shapeType, void* userPtr, int group,
+                                   int mask, btDispatcher* dispatcher);
+    void setAabb(btBroadphaseProxy* p, const btVector3& mn, const btVector3& mx, btDispatcher* dispatcher);
+    void destroyProxy(btBroadphaseProxy* p, btDispatcher* dispatcher);
+
+    /// The tree itself, for what it answers as Bullet's (pairs, getAabb, rayTest, aabbTest, resetPool).
+    btDbvtBroadphase& tree() { return *m_tree; }
+    const btDbvtBroadphase& tree() const { return *m_tree; }
+    btOverlappingPairCache* cache() const { return m_tree->getOverlappingPairCache(); }
+
+    bool isParked(const btBroadphaseProxy* p) const { return m_parked.count(p) != 0; }
+    std::size_t parkedCount() const { return m_parked.size(); }
+    std::size_t proxyCount() const { return m_proxyCount; }
+    /// Every park() call so far (a proxy parked again by each setAabb with a non-finite box counts each time).
+    std::size_t parkCalls() const { return m_parkCalls; }
+
+private:
+    void park(btBroadphaseProxy* p, const char* where, const std::string& why, btDispatcher* dispatcher);
+    void unpark(btBroadphaseProxy* p);
+
+    std::unique_ptr<btDbvtBroadphase> m_tree;
+    std::size_t m_proxyCount = 0;
+    std::size_t m_parkCalls = 0;
+    /// Proxies with a non-finite AABB, with the filter mask they had: restored when the AABB is finite again.
+    std::unordered_map<const btBroadphaseProxy*, int> m_parked;
+};
+
+}  // namespace cullide::bullet
