@@ -132,7 +132,8 @@ const PairTriangles* cullideTrianglesFor(btDispatcher* d, const btCollisionObjec
     stats = &detail::AdapterAccess::currentStats(dispatcher);
     swapped = false;
     const CullideBroadphase* broadphase = dispatcher.getCullideBroadphase();
-    return broadphase != nullptr ? detail::AdapterAccess::trianglePairsFor(*broadphase, body0Wrap, body1Wrap, swapped) : nullptr;
+    if (broadphase == nullptr) return nullptr;
+    return detail::AdapterAccess::trianglePairsFor(*broadphase, body0Wrap, body1Wrap, swapped);
 }
 
 /// A stand-in for a triangle mesh that enumerates only CULLIDE's surviving triangles (mesh-local vertices, Bullet's

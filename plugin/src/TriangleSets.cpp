@@ -25,12 +25,13 @@ void spatialOrder(const TriangleMesh& mesh, const Aabb& box, std::vector<std::ui
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(keys[i]);
 }
 
-/// Ranges of at most `range` triangles over the active meshes, in object and triangle order.
-void splitIntoRanges(const FrameState& frame, const std::vector<std::uint8_t>& take, std::uint32_t range,
+/// Ranges of at most `range` triangles over the meshes for which take(o) holds, in object and triangle order.
+template <typename Take>
+void splitIntoRanges(const FrameState& frame, const Take& take, std::uint32_t range,
                      std::vector<TriangleScratch::Range>& ranges) {
     ranges.clear();
     for (std::uint32_t o = 0; o < frame.valid.size(); ++o) {
-        if (!take[o]) continue;
+        if (!take(o)) continue;
         const auto n = static_cast<std::uint32_t>(frame.meshOf(o).triangles.size());
         for (std::uint32_t first = 0; first < n; first += range) ranges.push_back({o, first, std::min(n, first + range)});
     }
@@ -104,7 +105,7 @@ void buildTriangleBoxesAndGroups(FrameState& frame, std::uint32_t groupSize, dou
         });
     }
     assignBoxStorage(frame, scratch);
-    splitIntoRanges(frame, scratch.needBoxes, 8192, scratch.ranges);
+    splitIntoRanges(frame, [&](std::uint32_t o) { return scratch.needBoxes[o] != 0; }, 8192, scratch.ranges);
     const double inflate = 0.5 * margin;
     pool.parallelFor(scratch.ranges.size(), 1, [&](std::size_t begin, std::size_t end) {
         for (std::size_t r = begin; r < end; ++r) {
@@ -149,10 +150,8 @@ void collectDirect(FrameState& frame, std::uint32_t groupSize, double margin, Ta
                    TriangleScratch& scratch) {
     const std::uint32_t k = groupSize;
     const std::size_t n = frame.valid.size();
-    std::vector<std::uint8_t>& take = scratch.needBoxes;  // reused: here the active meshes
-    take.assign(n, 0);
-    for (std::uint32_t o = 0; o < n; ++o) take[o] = frame.isActiveMesh(o) ? 1 : 0;
-    splitIntoRanges(frame, take, k * std::max<std::uint32_t>(1, 8192 / k), scratch.ranges);
+    splitIntoRanges(frame, [&](std::uint32_t o) { return frame.isActiveMesh(o); },
+                    k * std::max<std::uint32_t>(1, 8192 / k), scratch.ranges);
     if (scratch.rangeKept.size() < scratch.ranges.size()) scratch.rangeKept.resize(scratch.ranges.size());
     // The union of each object's partners' boxes: one test rejects the triangles far from all of them.
     scratch.partnerUnion.assign(n, Aabb{});
