@@ -29,14 +29,14 @@ elif [ $sanitize -eq 1 ]; then
   # demo and Bullet scenes in the suite's time budget.
   cmake -S . -B $dir -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_FLAGS_DEBUG="-g -O1" -DCULLIDE_WERROR=ON -DCULLIDE_SANITIZE=ON \
     -DCULLIDE_BUILD_CGAL_ORACLE=OFF
-  export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1"
+  # intercept_tls_get_addr=0: with it on, LeakSanitizer tracks the dynamic TLS of dlopen'ed libraries (Mesa's
+  # driver) and, after a GL demo ran under -j2 load, its tracer read a stale entry of the main thread's DTLS at exit
+  # and crashed ("DTLS 12 at 0x000000000e9c-0x001800002b9e", then "Tracer caught signal 11": GCC 12's libsanitizer
+  # with glibc 2.36) — 1 run in 2-4 of ctest -R 'DemoScenes|EnvironmentLockstep' -j2. Off, 8 of 8 such runs passed
+  # and leaks are still found (heap, stacks, static TLS are scanned; only the driver's dynamic TLS is not).
+  export ASAN_OPTIONS="detect_leaks=1:abort_on_error=1:intercept_tls_get_addr=0"
   export LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp:print_suppressions=0"
   export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
-  # LeakSanitizer's tracer itself crashes now and then at the exit of a GL demo under -j2 load ("Tracer caught
-  # signal 11 ... LeakSanitizer has encountered a fatal error", after every assertion passed; seen on DemoScenes/env3
-  # in about 1 of 5 runs, also alone: 1 of 5 in session 13). A failing test gets two reruns here; every run stays in
-  # the log.
-  repeat="--repeat until-pass:3"
 else
   dir=build
   cmake -S . -B $dir -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCULLIDE_WERROR=ON
@@ -44,4 +44,4 @@ fi
 cmake --build $dir -j"$jobs"
 # Mesa's shader cache lives under the build dir so runs never depend on a warm home directory.
 export MESA_SHADER_CACHE_DIR="$PWD/$dir/mesa-shader-cache"
-ctest --test-dir $dir --output-on-failure -j"$jobs" --timeout 600 ${repeat:-}
+ctest --test-dir $dir --output-on-failure -j"$jobs" --timeout 600
