@@ -255,6 +255,11 @@ public:
             processWithMesh(body0Wrap, body1Wrap, dispatchInfo, resultOut);
             return;
         }
+        if (!isGImpactMesh(*body0Wrap) || !isGImpactMesh(*body1Wrap)) {
+            // A btGImpactCompoundShape, or a btGImpactMeshShapePart used on its own: Bullet's algorithm as it is.
+            btGImpactCollisionAlgorithm::processCollision(body0Wrap, body1Wrap, dispatchInfo, resultOut);
+            return;
+        }
         bool swapped = false;
         CullideDispatchStats* statsPtr = nullptr;
         const PairTriangles* triangles = cullideTrianglesFor(m_dispatcher, body0Wrap, body1Wrap, swapped, statsPtr);
@@ -378,13 +383,17 @@ public:
         part1.unlockChildShapes();
     }
 
+    /// A btGImpactMeshShape (not a GImpact compound, not a lone mesh part).
+    static bool isGImpactMesh(const btCollisionObjectWrapper& w) {
+        const btCollisionShape* shape = w.getCollisionShape();
+        return shape->getShapeType() == GIMPACT_SHAPE_PROXYTYPE &&
+               static_cast<const btGImpactShapeInterface*>(shape)->getGImpactShapeType() == CONST_GIMPACT_TRIMESH_SHAPE;
+    }
+
     /// A GImpact triangle mesh (`mesh`) against a convex shape that is not a compound (`convex`).
     static bool trimeshAgainstConvex(const btCollisionObjectWrapper* mesh, const btCollisionObjectWrapper* convex) {
-        const btCollisionShape* m = mesh->getCollisionShape();
         const btCollisionShape* c = convex->getCollisionShape();
-        return m->getShapeType() == GIMPACT_SHAPE_PROXYTYPE &&
-               static_cast<const btGImpactShapeInterface*>(m)->getGImpactShapeType() == CONST_GIMPACT_TRIMESH_SHAPE &&
-               c->isConvex() && !c->isCompound();
+        return isGImpactMesh(*mesh) && c->isConvex() && !c->isCompound();
     }
 
 private:
