@@ -1,7 +1,9 @@
 #include "cullide_bullet/CullideCollisionDispatcher.h"
 #include "AdapterAccess.h"
 #include "GImpactLeafPairs.h"
+#include "GImpactMeshContacts.h"
 #include "ShapeGeometry.h"
+#include "cullide/TaskPool.h"
 #include "cullide/Timer.h"
 
 #include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
@@ -15,6 +17,7 @@
 #include <LinearMath/btPoolAllocator.h>
 
 #include <algorithm>
+#include <thread>
 #include <array>
 #include <cstdint>
 #include <typeinfo>
@@ -79,42 +82,6 @@ private:
 
     std::uint64_t m_epoch = 0;
     std::unordered_map<const btGImpactBoxSet*, Entry> m_leaves;
-};
-
-/// A GImpact part's triangles as Bullet's collide_sat_triangles prepares them (mapped to world space by the body's
-/// transform, plane built), each computed on first use within one begin() .. begin() span.
-class WorldTriangles {
-public:
-    void begin(int count) {
-        const std::size_t n = static_cast<std::size_t>(std::max(count, 0));
-        if (++m_epoch == 0) {  // wrapped: no stamp may look current
-            std::fill(m_stamp.begin(), m_stamp.end(), 0u);
-            m_epoch = 1;
-        }
-        if (m_stamp.size() < n) {
-            m_stamp.resize(n, 0u);
-            m_triangles.resize(static_cast<int>(n));
-        }
-        m_count = n;
-    }
-    /// Triangle `prim` of `part` in world space, or nullptr when the part has no such primitive.
-    btPrimitiveTriangle* get(const btGImpactMeshShapePart& part, int prim, const btTransform& t) {
-        if (prim < 0 || static_cast<std::size_t>(prim) >= m_count) return nullptr;
-        btPrimitiveTriangle& tri = m_triangles[prim];
-        if (m_stamp[static_cast<std::size_t>(prim)] != m_epoch) {
-            part.getPrimitiveTriangle(prim, tri);
-            tri.applyTransform(t);
-            tri.buildTriPlane();
-            m_stamp[static_cast<std::size_t>(prim)] = m_epoch;
-        }
-        return &tri;
-    }
-
-private:
-    btAlignedObjectArray<btPrimitiveTriangle> m_triangles;
-    std::vector<std::uint32_t> m_stamp;
-    std::uint32_t m_epoch = 0;
-    std::size_t m_count = 0;
 };
 
 }  // namespace detail
@@ -235,7 +202,7 @@ bool convexCanTouch(const btTriangleShapeEx& triangle, const ConvexReach& reach)
 }
 
 /// GImpact pairs on CULLIDE's lists. GImpact-GImpact: the surviving triangle pairs go straight to Bullet's
-/// triangle-triangle routine (satTriangles: collide_sat_triangles' loop), no BVH traversal. GImpact-triangle mesh: Bullet's own
+/// triangle-triangle routine (triangleContacts: collide_sat_triangles' loop), no BVH traversal. GImpact-triangle mesh: Bullet's own
 /// gimpact_vs_concave (per mesh triangle: a BVH query of the GImpact mesh and convex-convex tests), driven with the
 /// mesh's surviving triangles only. Same size as btGImpactCollisionAlgorithm.
 class CullideGImpactAlgorithm final : public btGImpactCollisionAlgorithm {
@@ -317,9 +284,18 @@ public:
                              leafIndex, ordered, begin, end);
             stats.trianglePairs += interleaved.size() / 2;
             if (!interleaved.empty()) {
-                world0.begin(part0->getNumChildShapes());
-                world1.begin(part1->getNumChildShapes());
-                satTriangles(body0Wrap, body1Wrap, *part0, *part1);
+                const detail::PartPair parts{part0, part1, m_part0, m_part1, &body0Wrap->getWorldTransform(),
+                                             &body1Wrap->getWorldTransform()};
+                detail::MeshContactScratch& scratch = detail::threadScratch();
+                scratch.world0.begin(part0->getNumChildShapes());
+                scratch.world1.begin(part1->getNumChildShapes());
+                contacts.clear();
+                part0->lockChildShapes();
+                part1->lockChildShapes();
+                detail::triangleContacts(parts, interleaved, scratch.world0, scratch.world1, contacts);
+                part1->unlockChildShapes();
+                part0->unlockChildShapes();
+                addContacts(body0Wrap, body1Wrap, contacts);
             }
             begin = end;
         }
@@ -333,7 +309,8 @@ public:
     /// order, Bullet's box-set pairs in Bullet's order (findLeafPairs: Bullet's descent with each node box mapped
     /// into the other tree's frame once per call), through Bullet's own triangle routine (the conservative plane test,
     /// then the clip method), with each triangle mapped to world space and given its plane once per call instead of
-    /// once per pair it is in. Same inputs to the same routines in the same order: the same manifold.
+    /// once per pair it is in. Same inputs to the same routines in the same order: the same manifold. The points
+    /// come from the dispatch's batch when it computed them ahead (on the narrow-phase threads) for these inputs.
     void processAsBullet(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
                          const btGImpactMeshShape& shape0, const btGImpactMeshShape& shape1,
                          const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut) {
@@ -342,45 +319,30 @@ public:
         m_dispatchInfo = &dispatchInfo;
         const btTransform& trans0 = body0Wrap->getWorldTransform();
         const btTransform& trans1 = body1Wrap->getWorldTransform();
-        for (m_part0 = shape0.getMeshPartCount(); m_part0-- > 0;) {
-            const btGImpactMeshShapePart& part0 = *shape0.getMeshPart(m_part0);
-            world0.begin(part0.getNumChildShapes());
-            for (m_part1 = shape1.getMeshPartCount(); m_part1-- > 0;) {
-                const btGImpactMeshShapePart& part1 = *shape1.getMeshPart(m_part1);
-                interleaved.clear();
-                detail::findLeafPairs(*part0.getBoxSet(), trans0, *part1.getBoxSet(), trans1, leafScratch,
-                                      interleaved);
-                if (interleaved.empty()) continue;
-                world1.begin(part1.getNumChildShapes());
-                satTriangles(body0Wrap, body1Wrap, part0, part1);
-            }
+        const std::vector<detail::MeshContact>* ahead =
+            detail::AdapterAccess::meshContacts(cullideDispatcher(m_dispatcher))
+                .find(body0Wrap->getCollisionObject(), body1Wrap->getCollisionObject(), &shape0, &shape1, trans0,
+                      trans1);
+        if (ahead == nullptr) {
+            contacts.clear();
+            detail::meshPairContacts(shape0, trans0, shape1, trans1, detail::threadScratch(), contacts);
+            ahead = &contacts;
         }
+        addContacts(body0Wrap, body1Wrap, *ahead);
         if (getLastManifold() != nullptr) m_resultOut->refreshContactPoints();
     }
 
-    /// Bullet's collide_sat_triangles over `interleaved` (same routines, same order, same contacts), the triangles
-    /// taken from world0 / world1 (begun for these parts by the caller) instead of fetched and mapped per pair.
-    void satTriangles(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
-                      const btGImpactMeshShapePart& part0, const btGImpactMeshShapePart& part1) {
-        const btTransform& trans0 = body0Wrap->getWorldTransform();
-        const btTransform& trans1 = body1Wrap->getWorldTransform();
-        part0.lockChildShapes();
-        part1.lockChildShapes();
-        GIM_TRIANGLE_CONTACT contact;
-        for (std::size_t k = 0; k + 1 < interleaved.size(); k += 2) {
-            m_triface0 = interleaved[k];
-            m_triface1 = interleaved[k + 1];
-            btPrimitiveTriangle* tri0 = world0.get(part0, m_triface0, trans0);
-            btPrimitiveTriangle* tri1 = world1.get(part1, m_triface1, trans1);
-            if (tri0 == nullptr || tri1 == nullptr) continue;  // not a primitive of the part (a stale box set)
-            if (!tri0->overlap_test_conservative(*tri1) || !tri0->find_triangle_collision_clip_method(*tri1, contact))
-                continue;
-            for (int j = contact.m_point_count; j-- > 0;)
-                addContactPoint(body0Wrap, body1Wrap, contact.m_points[j], contact.m_separating_normal,
-                                -contact.m_penetration_depth);
+    /// The points in order through Bullet's addContactPoint, each with its shape identifiers (as
+    /// collide_sat_triangles adds them).
+    void addContacts(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
+                     const std::vector<detail::MeshContact>& points) {
+        for (const detail::MeshContact& c : points) {
+            m_part0 = c.part0;
+            m_triface0 = c.face0;
+            m_part1 = c.part1;
+            m_triface1 = c.face1;
+            addContactPoint(body0Wrap, body1Wrap, c.point, c.normal, c.distance);
         }
-        part0.unlockChildShapes();
-        part1.unlockChildShapes();
     }
 
     /// A btGImpactMeshShape (not a GImpact compound, not a lone mesh part).
@@ -503,8 +465,7 @@ private:
     }
 
     static thread_local std::vector<std::array<int, 4>> ordered;  // part0, part1, tri0, tri1
-    static thread_local detail::LeafPairScratch leafScratch;
-    static thread_local detail::WorldTriangles world0, world1;  // the two parts' triangles in world space
+    static thread_local std::vector<detail::MeshContact> contacts;
     static thread_local btAlignedObjectArray<int> candidates;      // Bullet's box query of one mesh part
     static thread_local std::vector<int> interleaved;
 
@@ -563,9 +524,7 @@ public:
 thread_local std::vector<std::array<int, 4>> CullideGImpactAlgorithm::ordered;
 thread_local std::vector<int> CullideGImpactAlgorithm::interleaved;
 thread_local btAlignedObjectArray<int> CullideGImpactAlgorithm::candidates;
-thread_local detail::LeafPairScratch CullideGImpactAlgorithm::leafScratch;
-thread_local detail::WorldTriangles CullideGImpactAlgorithm::world0;
-thread_local detail::WorldTriangles CullideGImpactAlgorithm::world1;
+thread_local std::vector<detail::MeshContact> CullideGImpactAlgorithm::contacts;
 
 /// Convex hull vs triangle mesh: Bullet's btConvexConcaveCollisionAlgorithm (btConvexTriangleCallback, persistent
 /// manifold) driven with the surviving mesh triangles only. Same size as the base class.
@@ -627,6 +586,17 @@ bool culledConvex(const btCollisionObjectWrapper* w) {
            object->getCollisionShape()->getShapeType() == COMPOUND_SHAPE_PROXYTYPE;
 }
 
+/// The shape as a btGImpactMeshShape whose parts all have box sets (what the mesh-mesh path reads), or nullptr.
+const btGImpactMeshShape* asGImpactMesh(const btCollisionShape* shape) {
+    if (shape->getShapeType() != GIMPACT_SHAPE_PROXYTYPE ||
+        static_cast<const btGImpactShapeInterface*>(shape)->getGImpactShapeType() != CONST_GIMPACT_TRIMESH_SHAPE)
+        return nullptr;
+    const auto* mesh = static_cast<const btGImpactMeshShape*>(shape);
+    for (int part = 0; part < mesh->getMeshPartCount(); ++part)
+        if (!mesh->getMeshPart(part)->hasBoxSet()) return nullptr;
+    return mesh;
+}
+
 template <typename T>
 bool registeredIs(const btCollisionAlgorithmCreateFunc* f) {
     return f != nullptr && typeid(*f) == typeid(T);
@@ -640,7 +610,50 @@ CullideCollisionDispatcher::CullideCollisionDispatcher(detail::PrecisionChecked,
                                                        CullideBroadphase* broadphase)
     : btCollisionDispatcher(collisionConfiguration),
       m_broadphase(broadphase),
-      m_leafIndex(std::make_unique<detail::GImpactLeafIndex>()) {}
+      m_leafIndex(std::make_unique<detail::GImpactLeafIndex>()),
+      m_meshContacts(std::make_unique<detail::MeshContactBatch>()) {}
+
+void CullideCollisionDispatcher::setNarrowPhaseThreads(unsigned threads) {
+    if (threads == m_threads) return;
+    m_threads = threads;
+    m_pool.reset();
+}
+
+void CullideCollisionDispatcher::computeMeshContactsAhead(btOverlappingPairCache* pairCache,
+                                                         const btDispatcherInfo& dispatchInfo) {
+    detail::MeshContactBatch& batch = *m_meshContacts;
+    batch.clear();
+    const unsigned threads = m_threads != 0 ? m_threads : std::min(8u, std::max(1u, std::thread::hardware_concurrency()));
+    // Only where the dispatch will run the GImpact algorithm's mesh-mesh path: discrete dispatch, Bullet's GImpact
+    // algorithm registered (then replaced by ours in findAlgorithm), more than one thread to use.
+    if (threads < 2 || dispatchInfo.m_dispatchFunc != btDispatcherInfo::DISPATCH_DISCRETE ||
+        !registeredIs<btGImpactCollisionAlgorithm::CreateFunc>(
+            m_doubleDispatchContactPoints[GIMPACT_SHAPE_PROXYTYPE][GIMPACT_SHAPE_PROXYTYPE]))
+        return;
+    const int count = pairCache->getNumOverlappingPairs();
+    const btBroadphasePair* pairs = count > 0 ? pairCache->getOverlappingPairArrayPtr() : nullptr;
+    for (int i = 0; i < count; ++i) {
+        const auto* object0 = static_cast<const btCollisionObject*>(pairs[i].m_pProxy0->m_clientObject);
+        const auto* object1 = static_cast<const btCollisionObject*>(pairs[i].m_pProxy1->m_clientObject);
+        const btGImpactMeshShape* shape0 = asGImpactMesh(object0->getCollisionShape());
+        const btGImpactMeshShape* shape1 = asGImpactMesh(object1->getCollisionShape());
+        if (shape0 == nullptr || shape1 == nullptr || !needsCollision(object0, object1)) continue;
+        if (m_broadphase != nullptr && m_broadphase->getGImpactPairCulling()) {
+            // A culled pair reads the culler's triangle pairs instead, unless its meshes interpenetrate.
+            const btCollisionObjectWrapper w0(nullptr, shape0, object0, object0->getWorldTransform(), -1, -1);
+            const btCollisionObjectWrapper w1(nullptr, shape1, object1, object1->getWorldTransform(), -1, -1);
+            bool swapped = false;
+            const PairTriangles* record = detail::AdapterAccess::trianglePairsFor(*m_broadphase, &w0, &w1, swapped);
+            if (record != nullptr && !record->interpenetrating) continue;
+        }
+        batch.add(object0, object1, *shape0, *shape1, object0->getWorldTransform(), object1->getWorldTransform());
+    }
+    if (batch.size() == 0) return;
+    if (!m_pool || m_pool->size() != threads) m_pool = std::make_unique<TaskPool>(threads);
+    batch.run(m_pool.get());
+    m_current.threadedMeshPairs = batch.size();
+    m_current.threadedTasks = batch.taskCount();
+}
 
 CullideCollisionDispatcher::~CullideCollisionDispatcher() = default;
 
@@ -690,7 +703,9 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
     if (pairCache == (m_broadphase != nullptr ? m_broadphase->getOverlappingPairCache() : nullptr))
         m_leafIndex->beginDispatch();  // once per step, not for a character controller's private cache
     cullide::Timer watch;
+    computeMeshContactsAhead(pairCache, dispatchInfo);
     btCollisionDispatcher::dispatchAllCollisionPairs(pairCache, dispatchInfo, dispatcher);
+    m_meshContacts->clear();
     m_current.dispatchMs = watch.ms();
     m_current.pairsDispatched = static_cast<std::size_t>(pairCache->getNumOverlappingPairs());
     m_total.pairsDispatched += m_current.pairsDispatched;
@@ -702,6 +717,8 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
     m_total.convexPairs += m_current.convexPairs;
     m_total.convexCandidates += m_current.convexCandidates;
     m_total.convexTriangles += m_current.convexTriangles;
+    m_total.threadedMeshPairs += m_current.threadedMeshPairs;
+    m_total.threadedTasks += m_current.threadedTasks;
     m_total.dispatchMs += m_current.dispatchMs;
     if (m_broadphase != nullptr && pairCache == m_broadphase->getOverlappingPairCache()) m_lastStep = m_current;
     m_current = outer;

@@ -81,73 +81,137 @@ std::uint32_t nextEpoch(LeafPairScratch& scratch) {
 
 }  // namespace
 
-void findLeafPairs(const btGImpactBoxSet& set0, const btTransform& trans0, const btGImpactBoxSet& set1,
-                   const btTransform& trans1, LeafPairScratch& scratch, std::vector<int>& interleaved) {
+LeafPairSearch::LeafPairSearch(const btGImpactBoxSet& set0, const btTransform& trans0, const btGImpactBoxSet& set1,
+                               const btTransform& trans1)
+    : m_set0(set0), m_set1(set1) {
     if (set0.getNodeCount() == 0 || set1.getNodeCount() == 0) return;
-    BT_BOX_BOX_TRANSFORM_CACHE cache;  // frame 1 -> frame 0, as Bullet computes it
-    cache.calc_from_homogenic(trans0, trans1);
+    m_cache.calc_from_homogenic(trans0, trans1);
     btAABB root0, root1;
     set0.getNodeBound(0, root0);
     set1.getNodeBound(0, root1);
-    if (!root0.overlapping_trans_cache(root1, cache, true)) return;  // Bullet's root test: all 15 axes
+    m_rootsOverlap = root0.overlapping_trans_cache(root1, m_cache, true);  // Bullet's root test: all 15 axes
+    if (!m_rootsOverlap) return;
 
     // Frame 0 -> frame 1, inverted from Bullet's map itself: computed again from the two world transforms it would
     // differ from Bullet's by rounding relative to their translations (far from the origin, more than the boxes).
-    BT_BOX_BOX_TRANSFORM_CACHE inverse;
-    inverse.m_R1to0 = cache.m_R1to0.transpose();
-    inverse.m_T1to0 = -(inverse.m_R1to0 * cache.m_T1to0);
-    inverse.calc_absolute_matrix();
+    m_inverse.m_R1to0 = m_cache.m_R1to0.transpose();
+    m_inverse.m_T1to0 = -(m_inverse.m_R1to0 * m_cache.m_T1to0);
+    m_inverse.calc_absolute_matrix();
     // Every node box lies within its root; mapped coordinates stay within a few times the largest coordinate.
     const btScalar magnitude =
         btMax(btMax(btMax(largestCoordinate(root0.m_min), largestCoordinate(root0.m_max)),
                     btMax(largestCoordinate(root1.m_min), largestCoordinate(root1.m_max))),
-              btMax(largestCoordinate(cache.m_T1to0), largestCoordinate(inverse.m_T1to0)));
-    const btScalar slack = btScalar(1024) * SIMD_EPSILON * magnitude;
-    const std::uint32_t epoch = nextEpoch(scratch);
-    NodeBoxView view0(set0, inverse, slack, scratch.nodes0, epoch);
-    NodeBoxView view1(set1, cache, slack, scratch.nodes1, epoch);
+              btMax(largestCoordinate(m_cache.m_T1to0), largestCoordinate(m_inverse.m_T1to0)));
+    m_slack = btScalar(1024) * SIMD_EPSILON * magnitude;
+}
 
-    // Bullet's recursion, with an explicit stack: children pushed in reverse so that they are visited in its order.
-    std::vector<std::array<int, 2>>& stack = scratch.stack;
-    stack.clear();
-    stack.push_back({0, 0});
-    bool root = true;
-    while (!stack.empty()) {
-        const int node0 = stack.back()[0];
-        const int node1 = stack.back()[1];
-        stack.pop_back();
-        const std::size_t i0 = view0.at(node0);
-        const std::size_t i1 = view1.at(node1);
-        if (!root && (!view0.own(i0).has_collision(view1.mapped(i1)) ||
-                      !view1.own(i1).has_collision(view0.mapped(i0))))
-            continue;
-        const bool leaf0 = set0.isLeafNode(node0);
-        const bool leaf1 = set1.isLeafNode(node1);
-        if (leaf0 && leaf1) {
-            // Bullet's leaf test is the same two overlaps up to rounding far below the slack: where both hold with
-            // twice the slack to spare it passes for sure; only pairs near its boundary need it.
-            const bool surely = overlapsBy(view0.own(i0), view1.mapped(i1), 2 * slack) &&
-                                overlapsBy(view1.own(i1), view0.mapped(i0), 2 * slack);
-            if (root || surely || view0.own(i0).overlapping_trans_cache(view1.own(i1), cache, false)) {
-                interleaved.push_back(set0.getNodeData(node0));
-                interleaved.push_back(set1.getNodeData(node1));
-            }
-        } else if (leaf0) {
-            stack.push_back({node0, set1.getRightNode(node1)});
-            stack.push_back({node0, set1.getLeftNode(node1)});
-        } else if (leaf1) {
-            stack.push_back({set0.getRightNode(node0), node1});
-            stack.push_back({set0.getLeftNode(node0), node1});
-        } else {
-            const int left0 = set0.getLeftNode(node0), right0 = set0.getRightNode(node0);
-            const int left1 = set1.getLeftNode(node1), right1 = set1.getRightNode(node1);
-            stack.push_back({right0, right1});
-            stack.push_back({right0, left1});
-            stack.push_back({left0, right1});
-            stack.push_back({left0, left1});
-        }
-        root = false;
+namespace {
+
+/// Bullet's recursion step on one node pair: false when the descent stops there (the boxes apart, or a leaf pair
+/// Bullet's test rejects); otherwise a leaf pair is a primitive pair (`leaves` true) or `children` gets the node
+/// pairs below in Bullet's order.
+struct Step {
+    bool keep = false;
+    bool leaves = false;
+    std::array<NodePair, 4> children{};
+    int childCount = 0;
+};
+
+Step step(const btGImpactBoxSet& set0, const btGImpactBoxSet& set1, NodeBoxView& view0, NodeBoxView& view1,
+          const BT_BOX_BOX_TRANSFORM_CACHE& cache, btScalar slack, const NodePair& p) {
+    Step s;
+    const std::size_t i0 = view0.at(p.node0);
+    const std::size_t i1 = view1.at(p.node1);
+    if (!p.root &&
+        (!view0.own(i0).has_collision(view1.mapped(i1)) || !view1.own(i1).has_collision(view0.mapped(i0))))
+        return s;
+    const bool leaf0 = set0.isLeafNode(p.node0);
+    const bool leaf1 = set1.isLeafNode(p.node1);
+    if (leaf0 && leaf1) {
+        // Bullet's leaf test is the same two overlaps up to rounding far below the slack: where both hold with
+        // twice the slack to spare it passes for sure; only pairs near its boundary need it.
+        const bool surely = overlapsBy(view0.own(i0), view1.mapped(i1), 2 * slack) &&
+                            overlapsBy(view1.own(i1), view0.mapped(i0), 2 * slack);
+        s.keep = p.root || surely || view0.own(i0).overlapping_trans_cache(view1.own(i1), cache, false);
+        s.leaves = true;
+        return s;
     }
+    s.keep = true;
+    const auto add = [&s](int n0, int n1) { s.children[static_cast<std::size_t>(s.childCount++)] = {n0, n1, false}; };
+    if (leaf0) {
+        add(p.node0, set1.getLeftNode(p.node1));
+        add(p.node0, set1.getRightNode(p.node1));
+    } else if (leaf1) {
+        add(set0.getLeftNode(p.node0), p.node1);
+        add(set0.getRightNode(p.node0), p.node1);
+    } else {
+        const int left0 = set0.getLeftNode(p.node0), right0 = set0.getRightNode(p.node0);
+        const int left1 = set1.getLeftNode(p.node1), right1 = set1.getRightNode(p.node1);
+        add(left0, left1);
+        add(left0, right1);
+        add(right0, left1);
+        add(right0, right1);
+    }
+    return s;
+}
+
+}  // namespace
+
+void LeafPairSearch::split(std::size_t target, LeafPairScratch& scratch, std::vector<NodePair>& out) const {
+    out.clear();
+    if (!m_rootsOverlap) return;
+    out.push_back({0, 0, true});
+    const std::uint32_t epoch = nextEpoch(scratch);
+    NodeBoxView view0(m_set0, m_inverse, m_slack, scratch.nodes0, epoch);
+    NodeBoxView view1(m_set1, m_cache, m_slack, scratch.nodes1, epoch);
+    std::vector<NodePair>& next = scratch.front;
+    bool expanded = true;
+    while (out.size() < target && expanded) {
+        // One level: every internal pair the descent keeps is replaced by its children, in place (Bullet's order
+        // is preserved); leaf pairs stay (their descent is their own test).
+        next.clear();
+        expanded = false;
+        for (const NodePair& p : out) {
+            if (m_set0.isLeafNode(p.node0) && m_set1.isLeafNode(p.node1)) {
+                next.push_back(p);
+                continue;
+            }
+            const Step s = step(m_set0, m_set1, view0, view1, m_cache, m_slack, p);
+            if (!s.keep) continue;
+            next.insert(next.end(), s.children.begin(), s.children.begin() + s.childCount);
+            expanded = true;
+        }
+        out.swap(next);
+    }
+}
+
+void LeafPairSearch::descend(const NodePair& start, LeafPairScratch& scratch, std::vector<int>& interleaved) const {
+    if (!m_rootsOverlap) return;
+    const std::uint32_t epoch = nextEpoch(scratch);
+    NodeBoxView view0(m_set0, m_inverse, m_slack, scratch.nodes0, epoch);
+    NodeBoxView view1(m_set1, m_cache, m_slack, scratch.nodes1, epoch);
+    // Bullet's recursion, with an explicit stack: children pushed in reverse so that they are visited in its order.
+    std::vector<NodePair>& stack = scratch.stack;
+    stack.clear();
+    stack.push_back(start);
+    while (!stack.empty()) {
+        const NodePair p = stack.back();
+        stack.pop_back();
+        const Step s = step(m_set0, m_set1, view0, view1, m_cache, m_slack, p);
+        if (!s.keep) continue;
+        if (s.leaves) {
+            interleaved.push_back(m_set0.getNodeData(p.node0));
+            interleaved.push_back(m_set1.getNodeData(p.node1));
+            continue;
+        }
+        for (int c = s.childCount; c-- > 0;) stack.push_back(s.children[static_cast<std::size_t>(c)]);
+    }
+}
+
+void findLeafPairs(const btGImpactBoxSet& set0, const btTransform& trans0, const btGImpactBoxSet& set1,
+                   const btTransform& trans1, LeafPairScratch& scratch, std::vector<int>& interleaved) {
+    const LeafPairSearch search(set0, trans0, set1, trans1);
+    search.descend({0, 0, true}, scratch, interleaved);
 }
 
 }  // namespace detail

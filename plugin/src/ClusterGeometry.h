@@ -6,7 +6,7 @@
 #include "FrameState.h"
 #include "MeshCache.h"
 #include "PruningBackend.h"
-#include "TaskPool.h"
+#include "cullide/TaskPool.h"
 
 #include <cstdint>
 #include <vector>

@@ -2,7 +2,7 @@
 // the two objects' surviving triangles together, then the robust triangle test, on worker threads.
 #pragma once
 
-#include "TaskPool.h"
+#include "cullide/TaskPool.h"
 #include "cullide/Object.h"
 #include "cullide/Result.h"
 

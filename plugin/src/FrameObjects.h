@@ -1,7 +1,7 @@
 // Validation of a frame's objects and the CPU box pre-pass shared by the GPU and the reference culler.
 #pragma once
 
-#include "TaskPool.h"
+#include "cullide/TaskPool.h"
 #include "cullide/Object.h"
 #include "cullide/Result.h"
 

@@ -6,7 +6,7 @@
 #include "ClusterGeometry.h"
 #include "FrameState.h"
 #include "PruningBackend.h"
-#include "TaskPool.h"
+#include "cullide/TaskPool.h"
 #include "TriangleSets.h"
 #include "cullide/Settings.h"
 

@@ -1,6 +1,6 @@
 // The brute-force oracle: every triangle pair of every box-overlapping object pair, exact test.
 #include "FrameObjects.h"
-#include "TaskPool.h"
+#include "cullide/TaskPool.h"
 #include "WorldMeshes.h"
 #include "cullide/Timer.h"
 #include "cullide/Culler.h"

@@ -1,4 +1,4 @@
-#include "TaskPool.h"
+#include "cullide/TaskPool.h"
 
 #include <algorithm>
 

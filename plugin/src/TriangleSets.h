@@ -4,7 +4,7 @@
 #pragma once
 
 #include "FrameState.h"
-#include "TaskPool.h"
+#include "cullide/TaskPool.h"
 #include "cullide/Stats.h"
 
 #include <cstdint>

@@ -2,7 +2,7 @@
 // the box pre-pass, and their world-space triangles, built only for the objects that the pre-pass keeps.
 #pragma once
 
-#include "TaskPool.h"
+#include "cullide/TaskPool.h"
 #include "cullide/Object.h"
 
 #include <cstdint>

@@ -2,6 +2,8 @@
 // same order, for tori in many relative poses (apart, touching, interpenetrating, coincident, scaled, one triangle).
 #include "BulletTestWorld.h"
 #include "GImpactLeafPairs.h"
+#include "GImpactMeshContacts.h"
+#include "cullide/TaskPool.h"
 
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <BulletCollision/CollisionShapes/btBoxShape.h>
@@ -9,6 +11,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <random>
 #include <vector>
 
@@ -85,6 +89,38 @@ TEST(GImpactLeafPairs, FarAwayFromTheOriginAndScaled) {
         t1.setOrigin(t1.getOrigin() + far);
         ASSERT_EQ(ourPairs(set, t0, set, t1), bulletPairs(set, t0, set, t1)) << "trial " << trial;
     }
+}
+
+// The search cut into parts (for the narrow-phase threads): the parts' pairs, concatenated in split order, are
+// Bullet's pairs in Bullet's order, for every part count, small trees and large, apart to coincident.
+TEST(GImpactLeafPairs, SplitPartsConcatenateToBulletsPairs) {
+    ShapeStore shapes;
+    btCollisionShape* big = shapes.gimpactTorus(1.0f, 0.35f, 32, 16, 0.02f);
+    btCollisionShape* small = shapes.gimpactTorus(0.6f, 0.2f, 12, 8, 0.0f);
+    const btGImpactBoxSet* sets[] = {&boxSetOf(big), &boxSetOf(small)};
+    std::mt19937 rng(13);
+    detail::LeafPairScratch scratch;
+    std::vector<detail::NodePair> parts;
+    std::size_t mostParts = 0;
+    for (int trial = 0; trial < 120; ++trial) {
+        const btGImpactBoxSet& a = *sets[trial % 2];
+        const btGImpactBoxSet& b = *sets[(trial / 2) % 2];
+        const btTransform t0 = randomPose(rng, trial < 60 ? btScalar(0.3) : btScalar(2.0));
+        const btTransform t1 = trial % 13 == 0 ? t0 : randomPose(rng, trial < 60 ? btScalar(0.3) : btScalar(2.0));
+        const std::vector<int> expected = bulletPairs(a, t0, b, t1);
+        const detail::LeafPairSearch search(a, t0, b, t1);
+        for (std::size_t target : {1, 2, 3, 8, 33, 1000}) {
+            search.split(target, scratch, parts);
+            std::vector<int> got;
+            for (const detail::NodePair& part : parts) search.descend(part, scratch, got);
+            ASSERT_EQ(got, expected) << "trial " << trial << ", target " << target << ", " << parts.size() << " parts";
+            if (target == 1) {
+                EXPECT_LE(parts.size(), 1u);
+            }
+            mostParts = std::max(mostParts, parts.size());
+        }
+    }
+    EXPECT_GT(mostParts, 500u);  // the large targets do cut the search into many parts
 }
 
 TEST(GImpactLeafPairs, SmallTreeAgainstLargeTree) {
@@ -218,6 +254,91 @@ TEST(GImpactPairs, CompoundsAndLonePartsGetBulletsContactsBitForBit) {
         points += expected.size();
     }
     EXPECT_GT(points, 16u);
+}
+
+// The narrow-phase threads: for 1 to 8 threads, every manifold point is Bullet's bit for bit, with pairs small and
+// large (a 8K-triangle pair is cut into search parts), several pairs at once and one alone.
+TEST(GImpactPairs, EveryThreadCountGetsBulletsContactsBitForBit) {
+    ShapeStore shapes;
+    btCollisionShape* fine = shapes.gimpactTorus(2, btScalar(0.5), 128, 32, btScalar(0.01));  // 8,192 triangles
+    btCollisionShape* coarse = shapes.gimpactTorus(2, btScalar(0.5), 24, 10, btScalar(0.02));
+    TestWorld reference(PipelineKind::Default);
+    btGImpactCollisionAlgorithm::registerAlgorithm(&reference.dispatcher());
+    reference.world().setGravity(btVector3(0, 0, 0));
+    std::vector<btRigidBody*> refBodies;
+    for (btCollisionShape* shape : {fine, fine, coarse}) refBodies.push_back(reference.addBody(shape, 1, btTransform::getIdentity()));
+    std::mt19937 rng(17);
+    std::vector<std::array<btTransform, 3>> poses;
+    for (int pose = 0; pose < 10; ++pose)
+        poses.push_back({randomPose(rng, 0.3f), randomPose(rng, 0.3f), randomPose(rng, pose < 5 ? 0.3f : 9.0f)});
+    std::vector<std::vector<std::vector<btScalar>>> expected;
+    for (const auto& pose : poses) {
+        for (std::size_t b = 0; b < 3; ++b) refBodies[b]->setWorldTransform(pose[b]);
+        reference.detectCollisions(0);
+        expected.push_back(manifoldPoints(reference.world()));
+    }
+    for (unsigned threads : {1u, 2u, 3u, 8u}) {
+        TestWorld w(PipelineKind::Cullide, referenceFactory());
+        w.cullideDispatcher()->setNarrowPhaseThreads(threads);
+        btGImpactCollisionAlgorithm::registerAlgorithm(&w.dispatcher());
+        w.world().setGravity(btVector3(0, 0, 0));
+        std::vector<btRigidBody*> bodies;
+        for (btCollisionShape* shape : {fine, fine, coarse}) bodies.push_back(w.addBody(shape, 1, btTransform::getIdentity()));
+        std::size_t threaded = 0, tasks = 0, points = 0;
+        for (std::size_t pose = 0; pose < poses.size(); ++pose) {
+            for (std::size_t b = 0; b < 3; ++b) bodies[b]->setWorldTransform(poses[pose][b]);
+            w.detectCollisions(0);
+            ASSERT_EQ(manifoldPoints(w.world()), expected[pose]) << threads << " threads, pose " << pose;
+            threaded += w.cullideDispatcher()->getLastStepStats().threadedMeshPairs;
+            tasks += w.cullideDispatcher()->getLastStepStats().threadedTasks;
+            points += expected[pose].size();
+        }
+        EXPECT_GT(points, 40u);
+        if (threads == 1) {
+            EXPECT_EQ(threaded, 0u);  // computed by each pair's algorithm, as before
+        } else {
+            EXPECT_GE(threaded, 20u);          // every pose's crossing pairs went ahead
+            EXPECT_GT(tasks, threaded + 50u);  // and the fine pair's search was cut into parts
+        }
+    }
+}
+
+// The contacts computed ahead are used only for the inputs they were computed for: another transform (by one bit),
+// another shape or the objects the other way round find nothing, and the algorithm computes the pair itself.
+TEST(GImpactMeshContacts, AheadResultsMatchTheirInputsExactly) {
+    ShapeStore shapes;
+    auto* torus = static_cast<btGImpactMeshShape*>(shapes.gimpactTorus(2, btScalar(0.5), 48, 16, btScalar(0.01)));
+    auto* other = static_cast<btGImpactMeshShape*>(shapes.gimpactTorus(2, btScalar(0.5), 24, 10, btScalar(0.01)));
+    btCollisionObject a, b;
+    std::mt19937 rng(19);
+    const btTransform t0 = randomPose(rng, 0.3f), t1 = randomPose(rng, 0.3f);
+    std::vector<detail::MeshContact> sequential;
+    detail::meshPairContacts(*torus, t0, *torus, t1, detail::threadScratch(), sequential);
+    ASSERT_GT(sequential.size(), 4u);
+    TaskPool pool(3);
+    detail::MeshContactBatch batch;
+    for (TaskPool* p : {static_cast<TaskPool*>(nullptr), &pool}) {
+        batch.clear();
+        batch.add(&a, &b, *torus, *torus, t0, t1);
+        batch.run(p);
+        const std::vector<detail::MeshContact>* found = batch.find(&a, &b, torus, torus, t0, t1);
+        ASSERT_NE(found, nullptr);
+        ASSERT_EQ(found->size(), sequential.size());
+        for (std::size_t i = 0; i < sequential.size(); ++i) {
+            const detail::MeshContact& x = (*found)[i];
+            const detail::MeshContact& y = sequential[i];
+            EXPECT_TRUE(x.point == y.point && x.normal == y.normal && x.distance == y.distance &&
+                        x.part0 == y.part0 && x.face0 == y.face0 && x.part1 == y.part1 && x.face1 == y.face1)
+                << "point " << i;
+        }
+        btTransform nudged = t1;
+        nudged.getOrigin().setX(std::nextafter(t1.getOrigin().x(), btScalar(1e30)));
+        EXPECT_EQ(batch.find(&a, &b, torus, torus, t0, nudged), nullptr);
+        EXPECT_EQ(batch.find(&a, &b, torus, other, t0, t1), nullptr);
+        EXPECT_EQ(batch.find(&b, &a, torus, torus, t1, t0), nullptr);
+    }
+    batch.clear();
+    EXPECT_EQ(batch.find(&a, &b, torus, torus, t0, t1), nullptr);
 }
 
 }  // namespace

@@ -35,8 +35,10 @@ class btCollisionConfiguration;
 namespace cullide {
 namespace detail {
 class GImpactLeafIndex;
+class MeshContactBatch;
 struct AdapterAccess;
 }
+class TaskPool;
 
 struct CullideDispatchStats {
     std::size_t pairsDispatched = 0;    ///< pairs in the dispatched caches (all dispatchAllCollisionPairs calls)
@@ -51,6 +53,10 @@ struct CullideDispatchStats {
     std::size_t convexPairs = 0;
     std::size_t convexCandidates = 0;   ///< ... triangles of Bullet's box query
     std::size_t convexTriangles = 0;    ///< ... of which within reach of the convex shape: run through GJK
+    /// GImpact mesh-mesh pairs whose contacts were computed ahead, on the narrow-phase threads
+    /// (setNarrowPhaseThreads), and their search parts (a large pair's search is cut into several)
+    std::size_t threadedMeshPairs = 0;
+    std::size_t threadedTasks = 0;
     double dispatchMs = 0.0;            ///< wall time in dispatchAllCollisionPairs
     void reset() { *this = CullideDispatchStats{}; }
 };
@@ -80,12 +86,27 @@ public:
     const CullideDispatchStats& getTotalStats() const { return m_total; }
     void resetStats() { m_total.reset(); }
 
+    /// Threads for the GImpact mesh-mesh narrow phase (0, the default: the machine's hardware threads, at most 8;
+    /// 1: none besides the calling one). With more than one, every dispatch first computes the contacts of its
+    /// btGImpactMeshShape pairs together — many pairs, and the parts of a large pair's box-tree search, on a worker
+    /// pool — and each pair's algorithm then adds its points to the manifold on the calling thread, in Bullet's
+    /// dispatch order. The points and manifolds are the same bit for bit for every thread count: the workers only
+    /// read the shapes (locked by the calling thread) and compute values; manifolds, allocators and the
+    /// application's contact callbacks are used on the calling thread only.
+    void setNarrowPhaseThreads(unsigned threads);
+    unsigned getNarrowPhaseThreads() const { return m_threads; }
+
 private:
     friend struct detail::AdapterAccess;
     /// Used by the algorithms: counters for the current dispatch.
     CullideDispatchStats& currentStats() { return m_current; }
     /// Used by the GImpact algorithm: primitive -> leaf node of GImpact box sets (Bullet's candidate criterion).
     detail::GImpactLeafIndex& gimpactLeafIndex() { return *m_leafIndex; }
+    /// Used by the GImpact algorithm: the mesh-mesh contacts computed ahead for the current dispatch.
+    const detail::MeshContactBatch& meshContacts() const { return *m_meshContacts; }
+    /// Lists the pair cache's GImpact mesh-mesh pairs that the dispatch will run through the GImpact algorithm and
+    /// computes their contacts on the worker pool.
+    void computeMeshContactsAhead(btOverlappingPairCache* pairCache, const btDispatcherInfo& dispatchInfo);
 
     CullideCollisionDispatcher(detail::PrecisionChecked, btCollisionConfiguration* collisionConfiguration,
                                CullideBroadphase* broadphase);
@@ -95,6 +116,9 @@ private:
     CullideDispatchStats m_lastStep;
     CullideDispatchStats m_total;
     std::unique_ptr<detail::GImpactLeafIndex> m_leafIndex;
+    std::unique_ptr<detail::MeshContactBatch> m_meshContacts;
+    std::unique_ptr<TaskPool> m_pool;  // made on first use, for m_threads
+    unsigned m_threads = 0;
 };
 
 }  // namespace cullide

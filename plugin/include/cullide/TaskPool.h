@@ -1,9 +1,11 @@
-// A small persistent worker pool: parallelFor over an index range with dynamic chunking. Deterministic results
-// are the caller's job (write to per-index slots).
+// A small persistent worker pool (used by the culler's CPU stages and the Bullet adapter's narrow phase):
+// parallelFor over an index range with dynamic chunking. Deterministic results are the caller's job (write to
+// per-index slots).
 #pragma once
 
 #include <condition_variable>
 #include <cstddef>
+#include <exception>
 #include <functional>
 #include <mutex>
 #include <thread>

@@ -1,0 +1,152 @@
+// Bullet's contacts of GImpact mesh-mesh pairs (btGImpactCollisionAlgorithm's gimpact_vs_gimpact for two
+// btGImpactMeshShapes: per part pair, the box-set pair search, then collide_sat_triangles), computed as values:
+// the points in the order Bullet adds them to the manifold, with the shape identifiers it sets for each. The
+// dispatcher's algorithm then adds them to the manifold itself, so the manifold is Bullet's bit for bit.
+//
+// Computing them touches nothing but the shapes' data (read-only, the parts locked by the caller) and per-thread
+// scratch: no manifold, no callback, no allocator of Bullet's. So many pairs, and the parts of one large pair's
+// descent, run on worker threads (MeshContactBatch) while the manifolds are still made on the calling thread, in
+// Bullet's dispatch order.
+#pragma once
+
+#include "GImpactLeafPairs.h"
+
+#include <BulletCollision/Gimpact/btGImpactShape.h>
+#include <BulletCollision/Gimpact/btTriangleShapeEx.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <unordered_map>
+#include <vector>
+
+class btCollisionObject;
+
+namespace cullide {
+class TaskPool;
+namespace detail {
+
+/// One point as collide_sat_triangles hands it to btGImpactCollisionAlgorithm::addContactPoint, with the part and
+/// triangle of each side that Bullet sets as the result's shape identifiers.
+struct MeshContact {
+    btVector3 point;
+    btVector3 normal;
+    btScalar distance;
+    int part0, face0, part1, face1;
+};
+
+/// A GImpact part's triangles as Bullet's collide_sat_triangles prepares them (mapped to world space by the body's
+/// transform, plane built), each computed on first use within one begin() .. begin() span. The part must be locked.
+class WorldTriangles {
+public:
+    void begin(int count);
+    /// Triangle `prim` of `part` in world space, or nullptr when the part has no such primitive.
+    btPrimitiveTriangle* get(const btGImpactMeshShapePart& part, int prim, const btTransform& t);
+
+private:
+    btAlignedObjectArray<btPrimitiveTriangle> m_triangles;
+    std::vector<std::uint32_t> m_stamp;
+    std::uint32_t m_epoch = 0;
+    std::size_t m_count = 0;
+};
+
+/// Working memory of one thread's contact computations.
+struct MeshContactScratch {
+    LeafPairScratch leaves;
+    WorldTriangles world0, world1;
+    std::vector<int> interleaved;
+};
+
+/// This thread's scratch (worker threads and the dispatching thread alike).
+MeshContactScratch& threadScratch();
+
+/// One part pair of a mesh pair: its indices and world transforms (as the algorithm's wrappers give them).
+struct PartPair {
+    const btGImpactMeshShapePart* part0;
+    const btGImpactMeshShapePart* part1;
+    int index0, index1;
+    const btTransform* trans0;
+    const btTransform* trans1;
+};
+
+/// Bullet's triangle routine (the conservative plane test, then the clip method) over the triangle pairs
+/// `interleaved` (prim0, prim1, ...) of one part pair, in that order; the points appended to `out`. Both parts
+/// locked; world0 / world1 begun for these parts by the caller.
+void triangleContacts(const PartPair& parts, const std::vector<int>& interleaved, WorldTriangles& world0,
+                      WorldTriangles& world1, std::vector<MeshContact>& out);
+
+/// Bullet's whole mesh-mesh contact search for two btGImpactMeshShapes whose parts all have box sets: part pairs
+/// in Bullet's order (part 0 descending, then part 1 descending), Bullet's box-set pairs of each in Bullet's order,
+/// Bullet's triangle routine on each. Locks and unlocks the parts itself.
+void meshPairContacts(const btGImpactMeshShape& shape0, const btTransform& trans0, const btGImpactMeshShape& shape1,
+                      const btTransform& trans1, MeshContactScratch& scratch, std::vector<MeshContact>& out);
+
+/// The mesh-mesh pairs of one dispatch, their contacts computed together on a worker pool before the dispatch
+/// makes the manifolds. A large pair's search is split into parts (LeafPairSearch::split) so that even one pair
+/// keeps every worker busy; each part's points go to its own list, and a pair's points are its parts' lists in
+/// order: the same points in the same order as meshPairContacts, whatever the thread count or scheduling.
+class MeshContactBatch {
+public:
+    MeshContactBatch() = default;
+    MeshContactBatch(const MeshContactBatch&) = delete;
+    MeshContactBatch& operator=(const MeshContactBatch&) = delete;
+
+    /// Forgets the previous dispatch's pairs (keeps the memory).
+    void clear();
+    /// A pair the dispatch will process with the objects in this order; both shapes are btGImpactMeshShapes whose
+    /// parts all have box sets. The transforms are copied.
+    void add(const btCollisionObject* object0, const btCollisionObject* object1, const btGImpactMeshShape& shape0,
+             const btGImpactMeshShape& shape1, const btTransform& trans0, const btTransform& trans1);
+    std::size_t size() const { return m_pairCount; }
+    /// Computes every pair's points on `pool` (nullptr: on this thread). The parts are locked on this thread for
+    /// the duration. On an exception inside, the batch is left empty (the algorithm then computes its pairs itself).
+    void run(TaskPool* pool);
+    /// The points of (object0, object1) when the batch computed them for exactly these shapes and transforms;
+    /// nullptr otherwise (the caller computes them itself).
+    const std::vector<MeshContact>* find(const btCollisionObject* object0, const btCollisionObject* object1,
+                                         const btCollisionShape* shape0, const btCollisionShape* shape1,
+                                         const btTransform& trans0, const btTransform& trans1) const;
+
+    /// Statistics of the last run: search parts (tasks) and the pairs whose search was split.
+    std::size_t taskCount() const { return m_tasks.size(); }
+    std::size_t splitPairs() const { return m_splitPairs; }
+
+private:
+    struct Pair {
+        const btCollisionObject* object0;
+        const btCollisionObject* object1;
+        const btGImpactMeshShape* shape0;
+        const btGImpactMeshShape* shape1;
+        btTransform trans0, trans1;
+        std::size_t firstTask, endTask;
+        std::vector<MeshContact> contacts;
+    };
+    struct Task {
+        std::size_t pair;
+        std::size_t search;
+        int part0, part1;
+        NodePair start;
+    };
+    struct PairKeyHash {
+        std::size_t operator()(const std::pair<const btCollisionObject*, const btCollisionObject*>& k) const {
+            return std::hash<const void*>()(k.first) * 31u ^ std::hash<const void*>()(k.second);
+        }
+    };
+
+    void makeTasks(std::size_t target, MeshContactScratch& scratch);
+    void runTask(std::size_t task, MeshContactScratch& scratch);
+    void lockParts(bool lock) const;
+
+    std::vector<Pair> m_pairs;  // the first m_pairCount are this dispatch's
+    std::size_t m_pairCount = 0;
+    std::vector<LeafPairSearch> m_searches;
+    std::vector<Task> m_tasks;
+    std::vector<std::vector<MeshContact>> m_taskContacts;
+    std::vector<NodePair> m_split;
+    std::unordered_map<std::pair<const btCollisionObject*, const btCollisionObject*>, std::size_t, PairKeyHash>
+        m_index;
+    std::size_t m_splitPairs = 0;
+    bool m_ready = false;
+};
+
+}  // namespace detail
+}  // namespace cullide
