@@ -3,7 +3,7 @@
 // CullideCollisionDispatcher), side by side in one process (issue #12, item 7).
 //
 //   cullide-swap-bench [--steps N] [--env-frames N] [--scene NAME]... [--json FILE] [--gimpact-pair-culling]
-//                      [--no-penetration-fallback]
+//                      [--no-penetration-fallback] [--narrow-phase-threads N]
 //
 // Scenes: rigid-body dynamics worlds of the kinds Bullet's own benchmarks use, and the paper's environments as
 // collision-only btCollisionWorlds (*-world; the first min(--steps, --env-frames) frames, default 40).
@@ -55,6 +55,8 @@ using Random = cullide::bench::SeededRandom;
 bool g_penetrationFallback = true;
 /// CullideBroadphase::setGImpactPairCulling for the CULLIDE world (--gimpact-pair-culling sets it).
 bool g_gimpactPairCulling = false;
+/// CullideCollisionDispatcher::setNarrowPhaseThreads for the CULLIDE world (--narrow-phase-threads N; 0: default).
+unsigned g_narrowPhaseThreads = 0;
 
 /// Shapes and mesh data shared by the three worlds of a scene (one set, as an application would share them).
 struct Shapes {
@@ -274,7 +276,9 @@ void makePipeline(Pipeline p, btCollisionConfiguration& config, const btVector3&
         if (std::getenv("SWAP_BENCH_CONVEX_MESH") != nullptr) bp->setConvexMeshCulling(true);
         bp->setDeepPenetrationFallback(g_penetrationFallback);
         bp->setGImpactPairCulling(g_gimpactPairCulling);
-        dispatcher = std::make_unique<cullide::CullideCollisionDispatcher>(&config, bp.get());
+        auto d = std::make_unique<cullide::CullideCollisionDispatcher>(&config, bp.get());
+        d->setNarrowPhaseThreads(g_narrowPhaseThreads);
+        dispatcher = std::move(d);
         broadphase = std::move(bp);
         return;
     }
@@ -712,11 +716,13 @@ int main(int argc, char** argv) {
             g_penetrationFallback = false;
         } else if (a == "--gimpact-pair-culling") {
             g_gimpactPairCulling = true;
+        } else if (a == "--narrow-phase-threads" && i + 1 < argc) {
+            g_narrowPhaseThreads = static_cast<unsigned>(std::max(0, std::atoi(argv[++i])));
         } else if (a == "--json" && i + 1 < argc) {
             json = argv[++i];
         } else {
             std::fprintf(stderr, "usage: cullide-swap-bench [--steps N] [--env-frames N] [--scene NAME]... [--json FILE] "
-                                 "[--gimpact-pair-culling] [--no-penetration-fallback]\nscenes:");
+                                 "[--gimpact-pair-culling] [--no-penetration-fallback] [--narrow-phase-threads N]\nscenes:");
             for (const SceneFactory& f : kScenes) std::fprintf(stderr, " %s", f.name);
             for (const CollisionSceneSpec& c : kCollisionScenes) std::fprintf(stderr, " %s", c.name);
             std::fprintf(stderr, "\n");

@@ -173,14 +173,15 @@ void MeshContactBatch::run(TaskPool* pool) {
     const Unlock unlock{*this};
     try {
         const std::size_t threads = pool != nullptr ? pool->size() : 1;
-        makeTasks(threads > 1 ? 4 * threads : 1, threadScratch());
+        makeTasks(threads > 1 ? 16 * threads : 1, threadScratch());
         if (m_taskContacts.size() < m_tasks.size()) m_taskContacts.resize(m_tasks.size());
         const auto body = [this](std::size_t begin, std::size_t end) {
             MeshContactScratch& scratch = threadScratch();
             for (std::size_t t = begin; t < end; ++t) runTask(t, scratch);
         };
+        // Chunks of several tasks where there are many (hundreds of small pairs): fewer turns of the pool's lock.
         if (pool != nullptr)
-            pool->parallelFor(m_tasks.size(), 1, body);
+            pool->parallelFor(m_tasks.size(), std::max<std::size_t>(1, m_tasks.size() / (16 * threads)), body);
         else
             body(0, m_tasks.size());
         for (std::size_t i = 0; i < m_pairCount; ++i) {
