@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <array>
+#include <initializer_list>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -50,11 +51,16 @@ btTransform randomPose(std::mt19937& rng, btScalar spread) {
     return btTransform(q, btVector3(spread * u(rng), spread * u(rng), spread * u(rng)));
 }
 
-TEST(GImpactLeafPairs, SamePairsInBulletsOrder) {
+/// A large torus (1,024 triangles, margin 0.02) and a small one (192, margin 0): their box sets.
+struct TwoTori {
     ShapeStore shapes;
-    btCollisionShape* big = shapes.gimpactTorus(1.0f, 0.35f, 32, 16, 0.02f);
-    btCollisionShape* small = shapes.gimpactTorus(0.6f, 0.2f, 12, 8, 0.0f);
-    const btGImpactBoxSet* sets[] = {&boxSetOf(big), &boxSetOf(small)};
+    const btGImpactBoxSet* sets[2] = {&boxSetOf(shapes.gimpactTorus(1.0f, 0.35f, 32, 16, 0.02f)),
+                                      &boxSetOf(shapes.gimpactTorus(0.6f, 0.2f, 12, 8, 0.0f))};
+};
+
+TEST(GImpactLeafPairs, SamePairsInBulletsOrder) {
+    const TwoTori tori;
+    const btGImpactBoxSet* const* sets = tori.sets;
     std::mt19937 rng(7);
     int posesWithPairs = 0;
     std::size_t largest = 0;
@@ -94,10 +100,8 @@ TEST(GImpactLeafPairs, FarAwayFromTheOriginAndScaled) {
 // The search cut into parts (for the narrow-phase threads): the parts' pairs, concatenated in split order, are
 // Bullet's pairs in Bullet's order, for every part count, small trees and large, apart to coincident.
 TEST(GImpactLeafPairs, SplitPartsConcatenateToBulletsPairs) {
-    ShapeStore shapes;
-    btCollisionShape* big = shapes.gimpactTorus(1.0f, 0.35f, 32, 16, 0.02f);
-    btCollisionShape* small = shapes.gimpactTorus(0.6f, 0.2f, 12, 8, 0.0f);
-    const btGImpactBoxSet* sets[] = {&boxSetOf(big), &boxSetOf(small)};
+    const TwoTori tori;
+    const btGImpactBoxSet* const* sets = tori.sets;
     std::mt19937 rng(13);
     detail::LeafPairScratch scratch;
     std::vector<detail::NodePair> parts;
@@ -162,6 +166,15 @@ std::vector<std::vector<btScalar>> manifoldPoints(btCollisionWorld& world) {
     return out;
 }
 
+/// Registers GImpact's algorithm, turns gravity off and adds a body per shape at the origin (mass 1), in order.
+std::vector<btRigidBody*> addGImpactBodies(TestWorld& x, std::initializer_list<btCollisionShape*> shapes) {
+    btGImpactCollisionAlgorithm::registerAlgorithm(&x.dispatcher());
+    x.world().setGravity(btVector3(0, 0, 0));
+    std::vector<btRigidBody*> bodies;
+    for (btCollisionShape* shape : shapes) bodies.push_back(x.addBody(shape, 1, btTransform::getIdentity()));
+    return bodies;
+}
+
 /// Crossing tori in many poses, Bullet's pipeline beside the CULLIDE pair: every manifold point must be the same,
 /// bit for bit. Returns how many pairs went through the dispatcher's path of interest (see the callers).
 std::size_t expectBulletsContactsBitForBit(bool gimpactPairCulling) {
@@ -170,15 +183,8 @@ std::size_t expectBulletsContactsBitForBit(bool gimpactPairCulling) {
     TestWorld reference(PipelineKind::Default);
     TestWorld w(PipelineKind::Cullide, referenceFactory());
     w.cullideBroadphase()->setGImpactPairCulling(gimpactPairCulling);
-    std::vector<btRigidBody*> bodies[2];
-    int i = 0;
-    for (TestWorld* x : {&reference, &w}) {
-        btGImpactCollisionAlgorithm::registerAlgorithm(&x->dispatcher());
-        x->world().setGravity(btVector3(0, 0, 0));
-        bodies[i].push_back(x->addBody(torus, 1, btTransform::getIdentity()));
-        bodies[i].push_back(x->addBody(torus, 1, btTransform::getIdentity()));
-        ++i;
-    }
+    const std::vector<btRigidBody*> bodies[2] = {addGImpactBodies(reference, {torus, torus}),
+                                                 addGImpactBodies(w, {torus, torus})};
     std::mt19937 rng(5);
     std::size_t points = 0;
     std::size_t viaPath = 0;
@@ -231,16 +237,8 @@ TEST(GImpactPairs, CompoundsAndLonePartsGetBulletsContactsBitForBit) {
     lonePart.updateBound();
     TestWorld reference(PipelineKind::Default);
     TestWorld w(PipelineKind::Cullide, referenceFactory());
-    std::vector<btRigidBody*> bodies[2];
-    int i = 0;
-    for (TestWorld* x : {&reference, &w}) {
-        btGImpactCollisionAlgorithm::registerAlgorithm(&x->dispatcher());
-        x->world().setGravity(btVector3(0, 0, 0));
-        bodies[i].push_back(x->addBody(torus, 1, btTransform::getIdentity()));
-        bodies[i].push_back(x->addBody(&compound, 1, btTransform::getIdentity()));
-        bodies[i].push_back(x->addBody(&lonePart, 1, btTransform::getIdentity()));
-        ++i;
-    }
+    const std::vector<btRigidBody*> bodies[2] = {addGImpactBodies(reference, {torus, &compound, &lonePart}),
+                                                 addGImpactBodies(w, {torus, &compound, &lonePart})};
     std::mt19937 rng(11);
     std::size_t points = 0;
     for (int pose = 0; pose < 16; ++pose) {
@@ -263,10 +261,7 @@ TEST(GImpactPairs, EveryThreadCountGetsBulletsContactsBitForBit) {
     btCollisionShape* fine = shapes.gimpactTorus(2, btScalar(0.5), 128, 32, btScalar(0.01));  // 8,192 triangles
     btCollisionShape* coarse = shapes.gimpactTorus(2, btScalar(0.5), 24, 10, btScalar(0.02));
     TestWorld reference(PipelineKind::Default);
-    btGImpactCollisionAlgorithm::registerAlgorithm(&reference.dispatcher());
-    reference.world().setGravity(btVector3(0, 0, 0));
-    std::vector<btRigidBody*> refBodies;
-    for (btCollisionShape* shape : {fine, fine, coarse}) refBodies.push_back(reference.addBody(shape, 1, btTransform::getIdentity()));
+    const std::vector<btRigidBody*> refBodies = addGImpactBodies(reference, {fine, fine, coarse});
     std::mt19937 rng(17);
     std::vector<std::array<btTransform, 3>> poses;
     for (int pose = 0; pose < 10; ++pose)
@@ -280,10 +275,7 @@ TEST(GImpactPairs, EveryThreadCountGetsBulletsContactsBitForBit) {
     for (unsigned threads : {1u, 2u, 3u, 8u}) {
         TestWorld w(PipelineKind::Cullide, referenceFactory());
         w.cullideDispatcher()->setNarrowPhaseThreads(threads);
-        btGImpactCollisionAlgorithm::registerAlgorithm(&w.dispatcher());
-        w.world().setGravity(btVector3(0, 0, 0));
-        std::vector<btRigidBody*> bodies;
-        for (btCollisionShape* shape : {fine, fine, coarse}) bodies.push_back(w.addBody(shape, 1, btTransform::getIdentity()));
+        const std::vector<btRigidBody*> bodies = addGImpactBodies(w, {fine, fine, coarse});
         std::size_t threaded = 0, tasks = 0, points = 0;
         for (std::size_t pose = 0; pose < poses.size(); ++pose) {
             for (std::size_t b = 0; b < 3; ++b) bodies[b]->setWorldTransform(poses[pose][b]);

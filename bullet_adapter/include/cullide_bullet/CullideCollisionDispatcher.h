@@ -18,6 +18,9 @@
 // - Everything else (primitives, compound-compound and compound-convex per child, planes, soft bodies) goes to
 //   Bullet's algorithms unchanged; so does any pair for which the broadphase has no fresh triangle
 //   data (a character controller's private pair cache after the ghost moved, contactTest, another broadphase).
+// - GImpact mesh-mesh pairs computed with Bullet's contacts (the default) have their points computed before the
+//   dispatch loop, on the narrow-phase threads (setNarrowPhaseThreads); each pair's algorithm then adds them to its
+//   manifold on the calling thread, in Bullet's order: the same manifolds for every thread count.
 // - Triangle pairs are processed in sorted order: contacts are deterministic.
 // - Algorithms larger than the configuration's pool element are allocated from the heap, never from the pool.
 #pragma once
