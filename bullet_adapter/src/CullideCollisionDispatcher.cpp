@@ -17,9 +17,9 @@
 #include <LinearMath/btPoolAllocator.h>
 
 #include <algorithm>
-#include <thread>
 #include <array>
 #include <cstdint>
+#include <thread>
 #include <typeinfo>
 #include <unordered_map>
 #include <vector>

@@ -113,7 +113,6 @@ void MeshContactBatch::clear() {
     m_index.clear();
     m_searches.clear();
     m_tasks.clear();
-    m_splitPairs = 0;
     m_ready = false;
 }
 
@@ -138,7 +137,6 @@ void MeshContactBatch::makeTasks(std::size_t target, MeshContactScratch& scratch
     for (std::size_t i = 0; i < m_pairCount; ++i) {
         Pair& p = m_pairs[i];
         p.firstTask = m_tasks.size();
-        bool split = false;
         for (int p0 = p.shape0->getMeshPartCount(); p0-- > 0;) {
             for (int p1 = p.shape1->getMeshPartCount(); p1-- > 0;) {
                 const btGImpactBoxSet& set0 = *p.shape0->getMeshPart(p0)->getBoxSet();
@@ -147,7 +145,6 @@ void MeshContactBatch::makeTasks(std::size_t target, MeshContactScratch& scratch
                 if (!m_searches.back().rootsOverlap()) continue;
                 if (target > 1 && set0.getNodeCount() >= kSplitNodes && set1.getNodeCount() >= kSplitNodes) {
                     m_searches.back().split(target, scratch.leaves, m_split);
-                    split = true;
                 } else {
                     m_split.assign(1, NodePair{0, 0, true});
                 }
@@ -155,7 +152,6 @@ void MeshContactBatch::makeTasks(std::size_t target, MeshContactScratch& scratch
             }
         }
         p.endTask = m_tasks.size();
-        m_splitPairs += split ? 1 : 0;
     }
 }
 
@@ -163,7 +159,6 @@ void MeshContactBatch::run(TaskPool* pool) {
     m_ready = false;
     m_searches.clear();
     m_tasks.clear();
-    m_splitPairs = 0;
     if (m_pairCount == 0) return;
     struct Unlock {
         const MeshContactBatch& batch;

@@ -106,9 +106,8 @@ public:
                                          const btCollisionShape* shape0, const btCollisionShape* shape1,
                                          const btTransform& trans0, const btTransform& trans1) const;
 
-    /// Statistics of the last run: search parts (tasks) and the pairs whose search was split.
+    /// Search parts (tasks) of the last run.
     std::size_t taskCount() const { return m_tasks.size(); }
-    std::size_t splitPairs() const { return m_splitPairs; }
 
 private:
     struct Pair {
@@ -144,7 +143,6 @@ private:
     std::vector<NodePair> m_split;
     std::unordered_map<std::pair<const btCollisionObject*, const btCollisionObject*>, std::size_t, PairKeyHash>
         m_index;
-    std::size_t m_splitPairs = 0;
     bool m_ready = false;
 };
 
