@@ -306,7 +306,7 @@ public:
     }
 
     /// Bullet's GImpact-GImpact algorithm, contact for contact, at a fraction of its cost: per part pair in Bullet's
-    /// order, Bullet's box-set pairs in Bullet's order (findLeafPairs: Bullet's descent with each node box mapped
+    /// order, Bullet's box-set pairs in Bullet's order (LeafPairSearch: Bullet's descent with each node box mapped
     /// into the other tree's frame once per call), through Bullet's own triangle routine (the conservative plane test,
     /// then the clip method), with each triangle mapped to world space and given its plane once per call instead of
     /// once per pair it is in. Same inputs to the same routines in the same order: the same manifold. The points

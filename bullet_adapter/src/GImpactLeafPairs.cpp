@@ -208,11 +208,5 @@ void LeafPairSearch::descend(const NodePair& start, LeafPairScratch& scratch, st
     }
 }
 
-void findLeafPairs(const btGImpactBoxSet& set0, const btTransform& trans0, const btGImpactBoxSet& set1,
-                   const btTransform& trans1, LeafPairScratch& scratch, std::vector<int>& interleaved) {
-    const LeafPairSearch search(set0, trans0, set1, trans1);
-    search.descend({0, 0, true}, scratch, interleaved);
-}
-
 }  // namespace detail
 }  // namespace cullide

@@ -55,7 +55,8 @@ public:
     /// level by level in Bullet's order while fewer than `target`) up to about 4 * target pairs below it.
     void split(std::size_t target, LeafPairScratch& scratch, std::vector<NodePair>& out) const;
     /// The primitive pairs of the descent from `start`, appended to `interleaved` as prim0, prim1, ... in Bullet's
-    /// order.
+    /// order. From the root pair ({0, 0, true}): the pairs btGImpactQuantizedBvh::find_collision(&set0, trans0,
+    /// &set1, trans1, pairSet) finds, so that Bullet's triangle routine run over them builds the same manifold.
     void descend(const NodePair& start, LeafPairScratch& scratch, std::vector<int>& interleaved) const;
 
 private:
@@ -66,12 +67,6 @@ private:
     btScalar m_slack = 0;
     bool m_rootsOverlap = false;
 };
-
-/// The primitive pairs that btGImpactQuantizedBvh::find_collision(&set0, trans0, &set1, trans1, pairSet) finds,
-/// appended to `interleaved` as prim0, prim1, ... in Bullet's order, so that Bullet's triangle routine run over them
-/// builds the same manifold (LeafPairSearch from the root pair).
-void findLeafPairs(const btGImpactBoxSet& set0, const btTransform& trans0, const btGImpactBoxSet& set1,
-                   const btTransform& trans1, LeafPairScratch& scratch, std::vector<int>& interleaved);
 
 }  // namespace detail
 }  // namespace cullide

@@ -1,4 +1,4 @@
-// detail::findLeafPairs against Bullet's own btGImpactQuantizedBvh::find_collision: the same primitive pairs in the
+// detail::LeafPairSearch against Bullet's own btGImpactQuantizedBvh::find_collision: the same primitive pairs in the
 // same order, for tori in many relative poses (apart, touching, interpenetrating, coincident, scaled, one triangle).
 #include "BulletTestWorld.h"
 #include "GImpactLeafPairs.h"
@@ -36,7 +36,7 @@ std::vector<int> ourPairs(const btGImpactBoxSet& set0, const btTransform& t0, co
                           const btTransform& t1) {
     detail::LeafPairScratch scratch;
     std::vector<int> out;
-    detail::findLeafPairs(set0, t0, set1, t1, scratch, out);
+    detail::LeafPairSearch(set0, t0, set1, t1).descend({0, 0, true}, scratch, out);
     return out;
 }
 
@@ -208,7 +208,7 @@ std::size_t expectBulletsContactsBitForBit(bool gimpactPairCulling) {
 }
 
 // The default: GImpact-GImpact pairs are not culled; the dispatcher runs Bullet's pair search and triangle routine
-// through findLeafPairs and triangles mapped once per call.
+// through LeafPairSearch and triangles mapped once per call.
 TEST(GImpactPairs, NotCulledTheyGetBulletsContactsBitForBit) {
     EXPECT_EQ(expectBulletsContactsBitForBit(false), 24u);
 }
