@@ -400,7 +400,7 @@ struct Row {
     double pairs[3] = {0, 0, 0};
     std::size_t contactPairSteps = 0, lost = 0, extra = 0;
     cullide::CullideFrameStats last;
-    double cullidePairs = 0, fallbackPairs = 0, penetrationPairs = 0;  ///< dispatcher, per step
+    double cullidePairs = 0, fallbackPairs = 0, penetrationPairs = 0, apartPairs = 0;  ///< dispatcher, per step
     double buildMs = 0, cullMs = 0, recordMs = 0;  ///< CullideBroadphase's stages, per step
     /// Lost pairs explained (explainLost, the first kLostChecks), and of those the meshes without a triangle pair
     /// within the culling margin at the detected state.
@@ -418,6 +418,7 @@ void addCullideStep(btCollisionDispatcher& dispatcher, btBroadphaseInterface& br
     row.cullidePairs += double(d.cullidePairs) / steps;
     row.fallbackPairs += double(d.fallbackPairs) / steps;
     row.penetrationPairs += double(d.penetrationPairs) / steps;
+    row.apartPairs += double(d.apartPairs) / steps;
     row.convexCandidates += double(d.convexCandidates) / steps;
     row.convexTriangles += double(d.convexTriangles) / steps;
     const auto& b = static_cast<cullide::CullideBroadphase&>(broadphase).getLastFrameStats();
@@ -658,14 +659,15 @@ Row runCollisionScene(const CollisionSceneSpec& spec, int frames) {
 
 void printRow(const Row& r) {
     const double best = std::min(r.ms[0], r.ms[1]);
-    std::printf("%-16s %6zu %5d | %8.2f %8.2f %8.2f | %5.2fx | bp %6.2f/%6.2f nar %7.2f/%7.2f | pairs %8.0f/%8.0f | "
+    std::printf("%-16s %6zu %5d | %8.2f %8.2f %8.2f | %5.2fx | bp %6.2f/%6.2f/%6.2f nar %7.2f/%7.2f/%7.2f | pairs %8.0f/%8.0f/%8.0f | "
                 "lost %zu of %zu (checked %zu: %zu apart) extra %zu | dispatcher: culled %.1f, full %.1f "
-                "(penetrating %.1f) | culling frame %.2f ms, culler %.2f, records %.2f; last step: %zu object pairs, "
+                "(penetrating %.1f), apart %.1f | culling frame %.2f ms, culler %.2f, records %.2f; last step: %zu object pairs, "
                 "%zu pruned | contact keys missing %zu of %zu, deepest point diff max %.3g mean %.3g (%zu pair-steps) | "
                 "GImpact-convex triangles %.0f of %.0f\n",
                 r.scene.c_str(), r.bodies, r.steps, r.ms[0], r.ms[1], r.ms[2], r.ms[2] / best, r.broadphaseMs[0],
-                r.broadphaseMs[2], r.narrowMs[0], r.narrowMs[2], r.pairs[0], r.pairs[2], r.lost, r.contactPairSteps,
-                r.lostChecked, r.lostApart, r.extra, r.cullidePairs, r.fallbackPairs, r.penetrationPairs, r.buildMs, r.cullMs, r.recordMs, r.last.objectPairs,
+                r.broadphaseMs[1], r.broadphaseMs[2], r.narrowMs[0], r.narrowMs[1], r.narrowMs[2], r.pairs[0],
+                r.pairs[1], r.pairs[2], r.lost, r.contactPairSteps,
+                r.lostChecked, r.lostApart, r.extra, r.cullidePairs, r.fallbackPairs, r.penetrationPairs, r.apartPairs, r.buildMs, r.cullMs, r.recordMs, r.last.objectPairs,
                 r.last.prunedPairs, r.pointsMissing, r.points, r.deepestDiffMax,
                 r.comparedPairSteps ? r.deepestDiffSum / double(r.comparedPairSteps) : 0.0, r.comparedPairSteps,
                 r.convexTriangles, r.convexCandidates);
@@ -681,14 +683,15 @@ void writeJson(const std::string& path, const std::vector<Row>& rows) {
         std::snprintf(buf, sizeof buf,
                       "  {\"scene\": \"%s\", \"what\": \"%s\", \"bodies\": %zu, \"steps\": %d, \"dbvt_ms\": %.4f, "
                       "\"sap_ms\": %.4f, \"cullide_ms\": %.4f, \"ratio\": %.4f, \"dbvt_broadphase_ms\": %.4f, "
-                      "\"cullide_broadphase_ms\": %.4f, \"dbvt_narrow_ms\": %.4f, \"cullide_narrow_ms\": %.4f, "
-                      "\"dbvt_pairs\": %.1f, \"cullide_pairs\": %.1f, \"contact_pair_steps\": %zu, \"lost\": %zu, "
+                      "\"sap_broadphase_ms\": %.4f, \"cullide_broadphase_ms\": %.4f, \"dbvt_narrow_ms\": %.4f, "
+                      "\"sap_narrow_ms\": %.4f, \"cullide_narrow_ms\": %.4f, \"dbvt_pairs\": %.1f, \"sap_pairs\": %.1f, "
+                      "\"cullide_pairs\": %.1f, \"apart_pairs\": %.1f, \"contact_pair_steps\": %zu, \"lost\": %zu, "
                       "\"lost_checked\": %zu, \"lost_apart\": %zu, \"extra\": %zu, \"culled_pairs\": %zu, "
                       "\"pruned_pairs\": %zu, \"points\": %zu, \"points_missing\": %zu, \"deepest_diff_max\": %.6g, "
                       "\"deepest_diff_mean\": %.6g, \"penetration_fallback\": %s}%s\n",
                       r.scene.c_str(), r.what.c_str(), r.bodies, r.steps, r.ms[0], r.ms[1], r.ms[2],
-                      r.ms[2] / std::min(r.ms[0], r.ms[1]), r.broadphaseMs[0], r.broadphaseMs[2], r.narrowMs[0],
-                      r.narrowMs[2], r.pairs[0], r.pairs[2], r.contactPairSteps, r.lost, r.lostChecked, r.lostApart,
+                      r.ms[2] / std::min(r.ms[0], r.ms[1]), r.broadphaseMs[0], r.broadphaseMs[1], r.broadphaseMs[2],
+                      r.narrowMs[0], r.narrowMs[1], r.narrowMs[2], r.pairs[0], r.pairs[1], r.pairs[2], r.apartPairs, r.contactPairSteps, r.lost, r.lostChecked, r.lostApart,
                       r.extra, r.last.culledPairs, r.last.prunedPairs, r.points, r.pointsMissing, r.deepestDiffMax,
                       r.comparedPairSteps ? r.deepestDiffSum / double(r.comparedPairSteps) : 0.0,
                       g_penetrationFallback ? "true" : "false", i + 1 < rows.size() ? "," : "");
@@ -737,7 +740,7 @@ int main(int argc, char** argv) {
             return 2;
         }
     }
-    std::printf("%-16s %6s %5s | %8s %8s %8s | %6s | step ms per world (lockstep, same states, order rotating)\n",
+    std::printf("%-16s %6s %5s | %8s %8s %8s | %6s | step ms per world (lockstep, same states, order rotating); bp, nar, pairs: dbvt/sap/cullide\n",
                 "scene", "bodies", "steps", "dbvt", "sap", "cullide", "ratio");
     std::vector<Row> rows;
     for (const SceneFactory& f : kScenes) {

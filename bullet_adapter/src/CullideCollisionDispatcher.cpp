@@ -1,5 +1,6 @@
 #include "cullide_bullet/CullideCollisionDispatcher.h"
 #include "AdapterAccess.h"
+#include "ApartPairs.h"
 #include "GImpactLeafPairs.h"
 #include "GImpactMeshContacts.h"
 #include "ShapeGeometry.h"
@@ -597,6 +598,27 @@ const btGImpactMeshShape* asGImpactMesh(const btCollisionShape* shape) {
     return mesh;
 }
 
+/// Bullet's dispatch loop (btCollisionDispatcher's: the near callback for every pair), except for pairs provably
+/// apart (ApartPairs.h): their points are cleared and their algorithm is not called.
+class SkipApartPairs final : public btOverlapCallback {
+public:
+    SkipApartPairs(btCollisionDispatcher& dispatcher, const btDispatcherInfo& info)
+        : m_dispatcher(dispatcher), m_info(info) {}
+    bool processOverlap(btBroadphasePair& pair) override {
+        if (bullet::clearIfApart(pair, m_dispatcher, m_scratch))
+            ++skipped;
+        else
+            btCollisionDispatcher::defaultNearCallback(pair, m_dispatcher, m_info);
+        return false;  // the pair stays in the cache
+    }
+    std::size_t skipped = 0;
+
+private:
+    btCollisionDispatcher& m_dispatcher;
+    const btDispatcherInfo& m_info;
+    btManifoldArray m_scratch;
+};
+
 template <typename T>
 bool registeredIs(const btCollisionAlgorithmCreateFunc* f) {
     return f != nullptr && typeid(*f) == typeid(T);
@@ -704,7 +726,15 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
         m_leafIndex->beginDispatch();  // once per step, not for a character controller's private cache
     cullide::Timer watch;
     computeMeshContactsAhead(pairCache, dispatchInfo);
-    btCollisionDispatcher::dispatchAllCollisionPairs(pairCache, dispatchInfo, dispatcher);
+    const bool ownCache = m_broadphase != nullptr && pairCache == m_broadphase->getOverlappingPairCache();
+    if (ownCache && dispatchInfo.m_dispatchFunc == btDispatcherInfo::DISPATCH_DISCRETE &&
+        getNearCallback() == &btCollisionDispatcher::defaultNearCallback) {
+        SkipApartPairs loop(*this, dispatchInfo);
+        pairCache->processAllOverlappingPairs(&loop, dispatcher, dispatchInfo);
+        m_current.apartPairs = loop.skipped;
+    } else {
+        btCollisionDispatcher::dispatchAllCollisionPairs(pairCache, dispatchInfo, dispatcher);
+    }
     m_meshContacts->clear();
     m_current.dispatchMs = watch.ms();
     m_current.pairsDispatched = static_cast<std::size_t>(pairCache->getNumOverlappingPairs());
@@ -719,6 +749,7 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
     m_total.convexTriangles += m_current.convexTriangles;
     m_total.threadedMeshPairs += m_current.threadedMeshPairs;
     m_total.threadedTasks += m_current.threadedTasks;
+    m_total.apartPairs += m_current.apartPairs;
     m_total.dispatchMs += m_current.dispatchMs;
     if (m_broadphase != nullptr && pairCache == m_broadphase->getOverlappingPairCache()) m_lastStep = m_current;
     m_current = outer;

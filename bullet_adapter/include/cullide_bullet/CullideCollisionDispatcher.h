@@ -21,6 +21,10 @@
 // - GImpact mesh-mesh pairs computed with Bullet's contacts (the default) have their points computed before the
 //   dispatch loop, on the narrow-phase threads (setNarrowPhaseThreads); each pair's algorithm then adds them to its
 //   manifold on the calling thread, in Bullet's order: the same manifolds for every thread count.
+// - A pair whose broadphase boxes are farther apart than its manifold's contact breaking threshold can make no
+//   contact point: its algorithm is skipped and its manifolds' points are cleared, as btAxisSweep3 would drop the
+//   pair (rigid and plain collision objects without GImpact shapes, discrete dispatch, Bullet's near callback;
+//   src/ApartPairs.h). The pair cache stays the broadphase's.
 // - Triangle pairs are processed in sorted order: contacts are deterministic.
 // - Algorithms larger than the configuration's pool element are allocated from the heap, never from the pool.
 #pragma once
@@ -60,6 +64,9 @@ struct CullideDispatchStats {
     /// (setNarrowPhaseThreads), and their search parts (a large pair's search is cut into several)
     std::size_t threadedMeshPairs = 0;
     std::size_t threadedTasks = 0;
+    /// Pairs whose broadphase boxes were farther apart than their contact breaking threshold: no algorithm call,
+    /// their manifolds' points cleared (btDbvtBroadphase's fattened pairs that btAxisSweep3 would not hold)
+    std::size_t apartPairs = 0;
     double dispatchMs = 0.0;            ///< wall time in dispatchAllCollisionPairs
     void reset() { *this = CullideDispatchStats{}; }
 };

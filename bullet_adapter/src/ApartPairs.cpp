@@ -1,0 +1,64 @@
+#include "ApartPairs.h"
+
+#include <BulletCollision/BroadphaseCollision/btCollisionAlgorithm.h>
+#include <BulletCollision/CollisionDispatch/btCollisionObject.h>
+#include <BulletCollision/CollisionShapes/btCollisionShape.h>
+#include <BulletCollision/NarrowPhaseCollision/btPersistentManifold.h>
+
+namespace cullide::bullet {
+namespace {
+
+bool rigidOrPlain(const btCollisionObject& object) {
+    const int type = object.getInternalType();
+    return type == btCollisionObject::CO_COLLISION_OBJECT || type == btCollisionObject::CO_RIGID_BODY;
+}
+
+bool gimpact(const btCollisionObject& object) {
+    return object.getCollisionShape()->getShapeType() == GIMPACT_SHAPE_PROXYTYPE;
+}
+
+}  // namespace
+
+btScalar boxDistanceSquared(const btVector3& min0, const btVector3& max0, const btVector3& min1,
+                            const btVector3& max1) {
+    btScalar sum = 0;
+    for (int a = 0; a < 3; ++a) {
+        const btScalar gap = btMax(min1[a] - max0[a], min0[a] - max1[a]);
+        if (gap > 0) sum += gap * gap;
+    }
+    return sum;
+}
+
+btScalar manifoldBreakingThreshold(const btCollisionDispatcher& dispatcher, const btCollisionObject& object0,
+                                   const btCollisionObject& object1) {
+    if ((dispatcher.getDispatcherFlags() & btCollisionDispatcher::CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD) == 0)
+        return gContactBreakingThreshold;
+    return btMin(object0.getCollisionShape()->getContactBreakingThreshold(gContactBreakingThreshold),
+                 object1.getCollisionShape()->getContactBreakingThreshold(gContactBreakingThreshold));
+}
+
+bool clearIfApart(btBroadphasePair& pair, btCollisionDispatcher& dispatcher, btManifoldArray& scratch) {
+    if (pair.m_algorithm == nullptr) return false;  // first dispatch of the pair: made as Bullet makes it
+    const btBroadphaseProxy& proxy0 = *pair.m_pProxy0;
+    const btBroadphaseProxy& proxy1 = *pair.m_pProxy1;
+    const btScalar gap2 = boxDistanceSquared(proxy0.m_aabbMin, proxy0.m_aabbMax, proxy1.m_aabbMin, proxy1.m_aabbMax);
+    if (!(gap2 > 0)) return false;  // overlapping (or NaN) boxes: the algorithm decides
+    const auto* object0 = static_cast<const btCollisionObject*>(proxy0.m_clientObject);
+    const auto* object1 = static_cast<const btCollisionObject*>(proxy1.m_clientObject);
+    if (object0 == nullptr || object1 == nullptr || !rigidOrPlain(*object0) || !rigidOrPlain(*object1) ||
+        gimpact(*object0) || gimpact(*object1) || !dispatcher.needsCollision(object0, object1))
+        return false;
+    const btScalar t = manifoldBreakingThreshold(dispatcher, *object0, *object1);
+    if (!(t >= 0 && gap2 > t * t)) return false;
+    scratch.resize(0);
+    pair.m_algorithm->getAllContactManifolds(scratch);
+    for (int i = 0; i < scratch.size(); ++i) {  // a manifold made with a larger threshold (a custom getNewManifold)
+        const btScalar own = scratch[i]->getContactBreakingThreshold();
+        if (!(gap2 > own * own)) return false;
+    }
+    for (int i = 0; i < scratch.size(); ++i)
+        if (scratch[i]->getNumContacts() > 0) scratch[i]->clearManifold();
+    return true;
+}
+
+}  // namespace cullide::bullet

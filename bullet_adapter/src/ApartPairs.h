@@ -1,0 +1,45 @@
+// Object pairs whose broadphase boxes are farther apart than any point their manifold could accept.
+//
+// btDbvtBroadphase keeps a pair while its fattened leaves overlap (a 0.05 margin, and until its lazy clean-up sees
+// them apart), so Bullet's default pipeline runs the narrow phase (a GJK run for two hulls) on many pairs whose
+// objects' own boxes do not meet; btAxisSweep3 holds only pairs whose boxes overlap. Such a pair can make no
+// contact point: every algorithm adds its points through btManifoldResult::addContactPoint, which drops a point
+// deeper than the manifold's contact breaking threshold t, and the boxes contain the shapes (with their margins),
+// so the shapes are at least as far apart as the boxes. The dispatcher therefore skips the algorithm of a pair whose
+// boxes are more than t apart and clears the points its manifolds still hold — the points a refresh would drop, and
+// that btAxisSweep3 drops with the pair — so the narrow phase costs what btAxisSweep3's does, while the pair cache,
+// and so the simulation islands, stay btDbvtBroadphase's.
+//
+// Left to Bullet's own near callback (the algorithm runs as in Bullet): pairs the dispatch would not collide
+// (needsCollision: sleeping contacts keep their points), a pair never processed yet (its algorithm and manifold are
+// made as in Bullet), soft bodies and other non-rigid objects, GImpact shapes (Bullet's clip method can report points
+// from triangle boxes that overlap only in its own box test; CULLIDE's records decide those pairs), and every pair
+// when the application installed its own near callback.
+#pragma once
+
+#include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
+#include <BulletCollision/BroadphaseCollision/btCollisionAlgorithm.h>
+#include <BulletCollision/CollisionDispatch/btCollisionDispatcher.h>
+#include <LinearMath/btVector3.h>
+
+namespace cullide::bullet {
+
+/// The squared Euclidean distance between two axis-aligned boxes (0 when they touch or overlap).
+btScalar boxDistanceSquared(const btVector3& min0, const btVector3& max0, const btVector3& min1,
+                            const btVector3& max1);
+
+/// The contact breaking threshold the dispatcher gives the pair's manifolds (btCollisionDispatcher::getNewManifold:
+/// relative to the smaller shape when CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD is set, else
+/// gContactBreakingThreshold).
+btScalar manifoldBreakingThreshold(const btCollisionDispatcher& dispatcher, const btCollisionObject& object0,
+                                   const btCollisionObject& object1);
+
+/// If the pair's algorithm can be skipped — both objects rigid bodies or plain collision objects, neither with a
+/// GImpact shape, an algorithm already made, and their boxes more than the breaking threshold of the pair (and of
+/// every manifold its algorithm holds) apart — clears the points of its manifolds (Bullet's contact-destroyed
+/// callbacks run as for a refresh) and returns true. Otherwise changes nothing. `scratch` is reused between calls.
+/// Pairs the dispatch would not collide (`needsCollision`) are left alone. The caller checks the rest: discrete
+/// dispatch, Bullet's own near callback.
+bool clearIfApart(btBroadphasePair& pair, btCollisionDispatcher& dispatcher, btManifoldArray& scratch);
+
+}  // namespace cullide::bullet

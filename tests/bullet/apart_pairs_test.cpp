@@ -1,0 +1,174 @@
+// Pairs whose broadphase boxes are farther apart than their manifold's contact breaking threshold
+// (bullet_adapter/src/ApartPairs.h): the dispatcher skips their algorithm and clears their points. Guarded here: the
+// box distance and the threshold (against the manifolds Bullet's dispatcher makes), and a collision world mirrored
+// in Bullet's default pipeline where objects approach, part, sleep and are teleported, with every manifold point
+// compared bit for bit while pairs are skipped. The CPU reference culler is used (no GL needed).
+#include "ApartPairs.h"
+#include "SceneSupport.h"
+
+#include <BulletCollision/NarrowPhaseCollision/btPersistentManifold.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <vector>
+
+namespace cullide::test {
+namespace {
+
+btVector3 v(double x, double y, double z) { return btVector3(btScalar(x), btScalar(y), btScalar(z)); }
+
+TEST(ApartPairs, BoxDistanceIsEuclideanAndZeroWhenBoxesMeet) {
+    const btVector3 lo(0, 0, 0), hi(1, 1, 1);
+    EXPECT_EQ(bullet::boxDistanceSquared(lo, hi, v(0.5, 0.5, 0.5), v(2, 2, 2)), btScalar(0));  // overlap
+    EXPECT_EQ(bullet::boxDistanceSquared(lo, hi, v(1, 0, 0), v(2, 1, 1)), btScalar(0));        // touching faces
+    EXPECT_EQ(bullet::boxDistanceSquared(lo, hi, v(3, 0, 0), v(4, 1, 1)), btScalar(4));        // apart along x
+    EXPECT_EQ(bullet::boxDistanceSquared(v(3, 0, 0), v(4, 1, 1), lo, hi), btScalar(4));        // either order
+    EXPECT_EQ(bullet::boxDistanceSquared(lo, hi, v(-3, -4, 0.5), v(-2, -3, 2)), btScalar(13));  // corner: 2² + 3²
+}
+
+TEST(ApartPairs, ThresholdIsTheOneTheDispatcherGivesTheManifold) {
+    ShapeStore shapes;
+    btDefaultCollisionConfiguration config;
+    btCollisionDispatcher dispatcher(&config);
+    btCollisionObject small, large;
+    small.setCollisionShape(shapes.sphere(btScalar(0.25)));
+    large.setCollisionShape(shapes.hull(v(3, 2.5, 2), 40, 3));
+    const int relative = dispatcher.getDispatcherFlags();
+    ASSERT_NE(relative & btCollisionDispatcher::CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD, 0);
+    for (const int flags : {relative, 0}) {  // relative threshold (Bullet's default), absolute
+        dispatcher.setDispatcherFlags(flags);
+        for (const auto& [a, b] : {std::pair{&small, &large}, std::pair{&large, &small}, std::pair{&large, &large}}) {
+            btPersistentManifold* m = dispatcher.getNewManifold(a, b);
+            EXPECT_EQ(bullet::manifoldBreakingThreshold(dispatcher, *a, *b), m->getContactBreakingThreshold());
+            dispatcher.releaseManifold(m);
+        }
+    }
+    EXPECT_EQ(bullet::manifoldBreakingThreshold(dispatcher, large, large), gContactBreakingThreshold);
+    dispatcher.setDispatcherFlags(relative);
+    EXPECT_GT(bullet::manifoldBreakingThreshold(dispatcher, large, large), gContactBreakingThreshold)
+        << "a large shape's relative threshold exceeds the AABB expansion";
+}
+
+/// One btCollisionWorld with Bullet's default pipeline or the two-line swap.
+struct World {
+    btDefaultCollisionConfiguration config;
+    std::unique_ptr<btBroadphaseInterface> broadphase;
+    std::unique_ptr<btCollisionDispatcher> dispatcher;
+    std::unique_ptr<btCollisionWorld> world;
+    std::vector<std::unique_ptr<btCollisionObject>> objects;
+
+    explicit World(PipelineKind kind) {
+        if (kind == PipelineKind::Default) {
+            broadphase = std::make_unique<btDbvtBroadphase>();
+            dispatcher = std::make_unique<btCollisionDispatcher>(&config);
+        } else {
+            auto bp = std::make_unique<CullideBroadphase>(Settings{}, nullptr, referenceFactory());
+            dispatcher = std::make_unique<CullideCollisionDispatcher>(&config, bp.get());
+            broadphase = std::move(bp);
+        }
+        world = std::make_unique<btCollisionWorld>(dispatcher.get(), broadphase.get(), &config);
+    }
+    ~World() {
+        for (auto& o : objects) world->removeCollisionObject(o.get());
+    }
+    void add(btCollisionShape* shape) {
+        objects.push_back(std::make_unique<btCollisionObject>());
+        objects.back()->setCollisionShape(shape);
+        objects.back()->setUserIndex(static_cast<int>(objects.size() - 1));
+        world->addCollisionObject(objects.back().get());
+    }
+};
+
+/// Object i's pose at a step. 0-11: a 4 x 3 grid whose neighbours approach until they touch or overlap and part again
+/// by up to ~0.5, turning slowly. 12-17: three pairs of axis-aligned boxes 3.8 wide. Pairs 0 and 2 swing their gap
+/// through [-0.06, 0.14]: their points at distances between the boxes' expansions (2 x 0.02) and the breaking
+/// threshold (~0.059) come from boxes apart. Pair 1 rests in contact; from step 30 (when everything is put to sleep)
+/// to 40 its second box is teleported 0.14 away: its box (expanded by 0.02 on each side) 0.09 apart, more than the
+/// threshold, but still paired by btDbvtBroadphase's leaves (fattened by 0.05), asleep (Bullet keeps the stale points) and then awake again (from step 36:
+/// Bullet's refresh drops them).
+btTransform pose(int i, int step) {
+    if (i >= 12) {
+        const int pair = (i - 12) / 2;
+        const bool teleported = pair == 1 && step >= 30 && step < 40;
+        const double gap = pair == 1 ? (teleported ? 0.13 : -0.01) : 0.04 + 0.1 * std::cos(0.2 * step + 2.1 * pair);
+        // Pair 1 shifts by 0.002 in its first steps: btDbvtBroadphase fattens a leaf only when it moves.
+        const double x = (i % 2 == 0 ? 0.0 : 3.8 + gap) + (pair == 1 ? 0.001 * std::min(step, 2) : 0.0);
+        return btTransform(btQuaternion::getIdentity(), v(x - 10, 0, 6.0 * pair));
+    }
+    const double phase = 0.23 * step + 0.9 * i;
+    const btQuaternion turn(btVector3(btScalar(0.2), 1, btScalar(0.1)).normalized(), btScalar(0.05 * step + 0.3 * i));
+    return btTransform(turn, v((i % 4) * 4.3 + 0.25 * std::sin(phase), 0.1 * (i / 4), (i / 4) * 4.3 +
+                                                                                          0.25 * std::cos(phase)));
+}
+
+struct Tally {
+    std::size_t pairSteps = 0, mismatches = 0, missing = 0, extra = 0;
+    std::size_t manifoldCountDiffers = 0;  ///< steps whose dispatchers hold different numbers of manifolds
+    std::size_t pointsFromApartBoxes = 0;  ///< Bullet's pair-steps with points although the proxies' boxes are apart
+};
+
+void compare(World& reference, World& cullide, Tally& t) {
+    const ContactMap want = contactsOf(*reference.world);
+    const ContactMap got = contactsOf(*cullide.world);
+    for (const auto& [key, pc] : want) {
+        ++t.pairSteps;
+        const btBroadphaseProxy* p0 = reference.objects[static_cast<std::size_t>(key.first)]->getBroadphaseHandle();
+        const btBroadphaseProxy* p1 = reference.objects[static_cast<std::size_t>(key.second)]->getBroadphaseHandle();
+        if (bullet::boxDistanceSquared(p0->m_aabbMin, p0->m_aabbMax, p1->m_aabbMin, p1->m_aabbMax) > 0)
+            ++t.pointsFromApartBoxes;
+        const auto it = got.find(key);
+        if (it == got.end()) {
+            ++t.missing;
+            continue;
+        }
+        const PairContacts& g = it->second;
+        if (g.points != pc.points || g.positionsOnB != pc.positionsOnB || g.normalsOnB != pc.normalsOnB ||
+            g.distances != pc.distances)
+            ++t.mismatches;
+    }
+    for (const auto& [key, pc] : got) t.extra += want.count(key) ? 0 : 1;
+    // Skipped pairs keep their algorithm and (empty) manifolds, as in Bullet: what the island manager reads.
+    if (reference.dispatcher->getNumManifolds() != cullide.dispatcher->getNumManifolds()) ++t.manifoldCountDiffers;
+}
+
+TEST(ApartPairs, SkippedPairsKeepBulletsPointsBitForBit) {
+    ShapeStore shapes;
+    // Large shapes: their size-relative breaking threshold (0.02 x the angular motion disc, ~0.05-0.09) exceeds
+    // the two boxes' 0.02 expansions, so Bullet makes points between objects whose boxes are apart.
+    btCollisionShape* kinds[] = {shapes.hull(v(2.0, 1.6, 1.8), 40, 5), shapes.box(v(1.9, 1.5, 1.7)),
+                                 shapes.sphere(btScalar(1.9)), shapes.capsule(btScalar(1.2), btScalar(1.4))};
+    World reference(PipelineKind::Default), cullide(PipelineKind::Cullide);
+    for (World* w : {&reference, &cullide})
+        for (int i = 0; i < 18; ++i) w->add(kinds[i < 12 ? i % 4 : 1]);
+    Tally t;
+    for (int step = 0; step < 60; ++step) {
+        for (World* w : {&reference, &cullide}) {
+            for (std::size_t i = 0; i < w->objects.size(); ++i) {
+                btCollisionObject& o = *w->objects[i];
+                if (step == 30) o.setActivationState(ISLAND_SLEEPING);  // both asleep: points kept as they are
+                if (step == 36) o.setActivationState(ACTIVE_TAG);
+                o.setWorldTransform(pose(static_cast<int>(i), step));
+            }
+            w->world->performDiscreteCollisionDetection();
+        }
+        compare(reference, cullide, t);
+    }
+    const std::size_t apart = static_cast<CullideCollisionDispatcher&>(*cullide.dispatcher).getTotalStats().apartPairs;
+    std::printf("[ measure  ] apart pairs: %zu pair-steps with contacts (%zu with boxes apart), %zu pair-steps "
+                "skipped, missing %zu, extra %zu, point mismatches %zu\n",
+                t.pairSteps, t.pointsFromApartBoxes, apart, t.missing, t.extra, t.mismatches);
+    EXPECT_GT(t.pairSteps, 100u) << "scene too sparse";
+    EXPECT_GE(t.pointsFromApartBoxes, 3u) << "the scene must have points between objects whose boxes are apart";
+    EXPECT_GT(apart, 30u) << "the dispatcher must skip pairs here";
+    EXPECT_EQ(t.missing, 0u);
+    EXPECT_EQ(t.extra, 0u);
+    EXPECT_EQ(t.mismatches, 0u);
+    EXPECT_EQ(t.manifoldCountDiffers, 0u);
+}
+
+}  // namespace
+}  // namespace cullide::test
