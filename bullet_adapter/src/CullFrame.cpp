@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <unordered_set>
 
 namespace cullide::bullet {
 
@@ -49,7 +50,13 @@ CulledObject& CullFrame::enter(btBroadphaseProxy* p, std::uint64_t step, Cullide
     c.cullIndex = static_cast<std::uint32_t>(m_objects.size());
     const btCollisionObject* obj = objectOf(p);
     const btCollisionShape* shape = obj->getCollisionShape();
-    const bool isStatic = obj->isStaticObject();
+    // World-space and cached only while it rests: Bullet's static flag alone does not say that (plain
+    // btCollisionObjects in a collision world are static-flagged and moved by the application).
+    const btTransform& t = obj->getWorldTransform();
+    const bool moved = c.seen && !(c.lastFrom == t);
+    c.lastFrom = t;
+    c.seen = true;
+    const bool isStatic = obj->isStaticObject() && !moved;
     Object o;
     MarginEntry entry;
     entry.kind = geometryKindOf(shape);
@@ -63,6 +70,10 @@ CulledObject& CullFrame::enter(btBroadphaseProxy* p, std::uint64_t step, Cullide
             o.staticKey = c.key;
             o.version = c.version;
         } else {
+            if (c.worldValid || c.world.vertices.capacity() != 0) {  // a world-space copy from when it rested
+                c.world = TriangleMesh{};
+                c.worldValid = false;
+            }
             // The shape's local mesh and this step's transform: the culler maps the vertices only if the object
             // comes near another one (the same arithmetic as updateWorld, see toTransform).
             c.toWorld = toTransform(obj->getWorldTransform());
@@ -132,6 +143,30 @@ void CullFrame::invalidateShape(const btCollisionShape* shape) {
             c.worldValid = false;
         }
     }
+}
+
+namespace {
+template <typename T>
+std::size_t heapBytes(const std::vector<T>& v) {
+    return v.capacity() * sizeof(T);
+}
+std::size_t heapBytes(const TriangleMesh& m) { return heapBytes(m.vertices) + heapBytes(m.triangles); }
+}  // namespace
+
+CullideMemoryStats CullFrame::memory() const {
+    CullideMemoryStats m;
+    std::unordered_set<const ShapeTriangles*> geometries;  // each held once, however many objects point to it
+    for (const auto& [proxy, c] : m_culled) {
+        ++m.objects;
+        m.objectBytes += sizeof(proxy) + sizeof(c) + heapBytes(c.world);
+        m.worldCopies += c.world.triangles.empty() ? 0 : 1;
+        const ShapeTriangles* g = c.geometry.get();
+        if (g == nullptr || !geometries.insert(g).second) continue;
+        ++m.shapes;
+        m.sharedGeometryBytes += sizeof(ShapeTriangles) + heapBytes(g->vertices) + heapBytes(g->triangles) +
+                                 heapBytes(g->refs) + heapBytes(g->local);
+    }
+    return m;
 }
 
 void CullFrame::clear() {

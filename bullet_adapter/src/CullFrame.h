@@ -30,6 +30,10 @@ struct CulledObject {
     TriangleMesh world;
     btTransform worldFrom;
     bool worldValid = false;
+    /// The transform it had when it last entered the culling frame (seen: it entered before): a static-flagged
+    /// object that moved since is culled as a moving one (local mesh + transform, no world-space copy kept).
+    btTransform lastFrom;
+    bool seen = false;
     std::uint64_t version = 0;
     // This step.
     std::uint64_t step = 0;       ///< the last step it entered the culling frame
@@ -62,6 +66,8 @@ public:
     void invalidateShape(const btCollisionShape* shape);
     /// Every proxy is gone (resetPool): nothing is kept.
     void clear();
+    /// Bytes kept: shared geometry once per shape, records and world copies per object.
+    CullideMemoryStats memory() const;
 
 private:
     CulledObject& enter(btBroadphaseProxy* p, std::uint64_t step, CullideFrameStats& stats);

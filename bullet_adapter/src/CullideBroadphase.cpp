@@ -274,6 +274,7 @@ void CullideBroadphase::setGImpactPairCulling(bool enable) { m_impl->gimpactPair
 bool CullideBroadphase::getGImpactPairCulling() const { return m_impl->gimpactPairCulling; }
 
 const CullideFrameStats& CullideBroadphase::getLastFrameStats() const { return m_impl->stats; }
+CullideMemoryStats CullideBroadphase::getMemoryStats() const { return m_impl->cullFrame.memory(); }
 std::size_t CullideBroadphase::getRejectedCount() const {
     return m_impl->objectLevel.parkCalls() + m_impl->cullerRejections;
 }

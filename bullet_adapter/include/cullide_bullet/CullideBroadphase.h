@@ -86,6 +86,18 @@ struct CullideFrameStats {
     Stats culler;                        ///< the culler's own statistics
 };
 
+/// What the broadphase keeps between steps for the objects that took part in culled pairs (getMemoryStats): local
+/// triangle geometry once per shape, however many bodies share it, and per object its record (transform, keys) plus
+/// a world-space copy of its triangles where one is kept (static objects; pairs whose triangles the broadphase tests
+/// itself). Heap bytes of the containers (capacity), not counting the culler's own caches.
+struct CullideMemoryStats {
+    std::size_t shapes = 0;               ///< shapes with local geometry (each held once)
+    std::size_t sharedGeometryBytes = 0;  ///< their vertices, triangles and Bullet ids, in both precisions
+    std::size_t objects = 0;              ///< objects kept
+    std::size_t objectBytes = 0;          ///< their records and world-space copies
+    std::size_t worldCopies = 0;          ///< objects holding a world-space copy
+};
+
 class CullideBroadphase : public btBroadphaseInterface {
 public:
     /// Creates the culler for `settings` (createGpuCuller unless another factory is given).
@@ -164,6 +176,8 @@ public:
     bool getGImpactPairCulling() const;
 
     const CullideFrameStats& getLastFrameStats() const;
+    /// What is kept between steps (computed on each call: a pass over the kept objects and shapes).
+    CullideMemoryStats getMemoryStats() const;
     /// Number of rejected non-finite AABBs (createProxy/setAabb calls) and geometry since construction.
     std::size_t getRejectedCount() const;
     /// The culler's current distance margin d.
