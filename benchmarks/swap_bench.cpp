@@ -400,6 +400,7 @@ struct Row {
     double pairs[3] = {0, 0, 0};
     std::size_t contactPairSteps = 0, lost = 0, extra = 0;
     cullide::CullideFrameStats last;
+    cullide::CullideMemoryStats memory;  ///< what the CULLIDE broadphase keeps after the last step
     double cullidePairs = 0, fallbackPairs = 0, penetrationPairs = 0, apartPairs = 0;  ///< dispatcher, per step
     double buildMs = 0, cullMs = 0, recordMs = 0;  ///< CullideBroadphase's stages, per step
     /// Lost pairs explained (explainLost, the first kLostChecks), and of those the meshes without a triangle pair
@@ -551,6 +552,7 @@ Row runScene(const SceneFactory& factory, int steps) {
         row.pairs[k] = double(worlds[k]->narrowPairs) / steps;
     }
     row.last = static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get())->getLastFrameStats();
+    row.memory = static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get())->getMemoryStats();
     return row;
 }
 
@@ -654,6 +656,7 @@ Row runCollisionScene(const CollisionSceneSpec& spec, int frames) {
         row.pairs[k] = double(worlds[k]->narrowPairs) / frames;
     }
     row.last = static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get())->getLastFrameStats();
+    row.memory = static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get())->getMemoryStats();
     return row;
 }
 
@@ -663,14 +666,17 @@ void printRow(const Row& r) {
                 "lost %zu of %zu (checked %zu: %zu apart) extra %zu | dispatcher: culled %.1f, full %.1f "
                 "(penetrating %.1f), apart %.1f | culling frame %.2f ms, culler %.2f, records %.2f; last step: %zu object pairs, "
                 "%zu pruned | contact keys missing %zu of %zu, deepest point diff max %.3g mean %.3g (%zu pair-steps) | "
-                "GImpact-convex triangles %.0f of %.0f\n",
+                "GImpact-convex triangles %.0f of %.0f | kept: %zu shapes %zu B shared, %zu objects %zu B "
+                "(%zu world copies), %.0f B per object\n",
                 r.scene.c_str(), r.bodies, r.steps, r.ms[0], r.ms[1], r.ms[2], r.ms[2] / best, r.broadphaseMs[0],
                 r.broadphaseMs[1], r.broadphaseMs[2], r.narrowMs[0], r.narrowMs[1], r.narrowMs[2], r.pairs[0],
                 r.pairs[1], r.pairs[2], r.lost, r.contactPairSteps,
                 r.lostChecked, r.lostApart, r.extra, r.cullidePairs, r.fallbackPairs, r.penetrationPairs, r.apartPairs, r.buildMs, r.cullMs, r.recordMs, r.last.objectPairs,
                 r.last.prunedPairs, r.pointsMissing, r.points, r.deepestDiffMax,
                 r.comparedPairSteps ? r.deepestDiffSum / double(r.comparedPairSteps) : 0.0, r.comparedPairSteps,
-                r.convexTriangles, r.convexCandidates);
+                r.convexTriangles, r.convexCandidates, r.memory.shapes, r.memory.sharedGeometryBytes,
+                r.memory.objects, r.memory.objectBytes, r.memory.worldCopies,
+                r.memory.objects ? double(r.memory.objectBytes) / double(r.memory.objects) : 0.0);
     std::fflush(stdout);
 }
 
