@@ -77,6 +77,7 @@ void ObjectLevel::park(btBroadphaseProxy* p, const char* where, const std::strin
 }
 
 void ObjectLevel::unpark(btBroadphaseProxy* p) {
+    if (m_parked.empty()) return;  // the common case: no hash lookup per setAabb
     const auto it = m_parked.find(p);
     if (it == m_parked.end()) return;
     p->m_collisionFilterMask = it->second;
