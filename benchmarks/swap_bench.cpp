@@ -3,7 +3,10 @@
 // CullideCollisionDispatcher), side by side in one process (issue #12, item 7).
 //
 //   cullide-swap-bench [--steps N] [--env-frames N] [--scene NAME]... [--json FILE] [--gimpact-pair-culling]
-//                      [--no-penetration-fallback] [--narrow-phase-threads N]
+//                      [--no-penetration-fallback] [--narrow-phase-threads N] [--sap-object-level]
+//
+// --sap-object-level: the CULLIDE world's object level is a btAxisSweep3 with the SAP world's bounds
+// (CullideBroadphase::setObjectLevel, for applications that used btAxisSweep3) instead of the default btDbvtBroadphase.
 //
 // Scenes: rigid-body dynamics worlds of the kinds Bullet's own benchmarks use, and the paper's environments as
 // collision-only btCollisionWorlds (*-world; the first min(--steps, --env-frames) frames, default 40).
@@ -57,6 +60,8 @@ bool g_penetrationFallback = true;
 bool g_gimpactPairCulling = false;
 /// CullideCollisionDispatcher::setNarrowPhaseThreads for the CULLIDE world (--narrow-phase-threads N; 0: default).
 unsigned g_narrowPhaseThreads = 0;
+/// The CULLIDE world's object level: btAxisSweep3 with the SAP world's bounds (--sap-object-level) or the default.
+bool g_sapObjectLevel = false;
 
 /// Shapes and mesh data shared by the three worlds of a scene (one set, as an application would share them).
 struct Shapes {
@@ -276,6 +281,7 @@ void makePipeline(Pipeline p, btCollisionConfiguration& config, const btVector3&
         if (std::getenv("SWAP_BENCH_CONVEX_MESH") != nullptr) bp->setConvexMeshCulling(true);
         bp->setDeepPenetrationFallback(g_penetrationFallback);
         bp->setGImpactPairCulling(g_gimpactPairCulling);
+        if (g_sapObjectLevel) bp->setObjectLevel(std::make_unique<btAxisSweep3>(sapMin, sapMax));
         auto d = std::make_unique<cullide::CullideCollisionDispatcher>(&config, bp.get());
         d->setNarrowPhaseThreads(g_narrowPhaseThreads);
         dispatcher = std::move(d);
@@ -727,11 +733,14 @@ int main(int argc, char** argv) {
             g_gimpactPairCulling = true;
         } else if (a == "--narrow-phase-threads" && i + 1 < argc) {
             g_narrowPhaseThreads = static_cast<unsigned>(std::max(0, std::atoi(argv[++i])));
+        } else if (a == "--sap-object-level") {
+            g_sapObjectLevel = true;
         } else if (a == "--json" && i + 1 < argc) {
             json = argv[++i];
         } else {
             std::fprintf(stderr, "usage: cullide-swap-bench [--steps N] [--env-frames N] [--scene NAME]... [--json FILE] "
-                                 "[--gimpact-pair-culling] [--no-penetration-fallback] [--narrow-phase-threads N]\nscenes:");
+                                 "[--gimpact-pair-culling] [--no-penetration-fallback] [--narrow-phase-threads N] "
+                                 "[--sap-object-level]\nscenes:");
             for (const SceneFactory& f : kScenes) std::fprintf(stderr, " %s", f.name);
             for (const CollisionSceneSpec& c : kCollisionScenes) std::fprintf(stderr, " %s", c.name);
             std::fprintf(stderr, "\n");

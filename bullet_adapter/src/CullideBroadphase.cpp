@@ -18,6 +18,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <stdexcept>
 #include <utility>
 
 namespace cullide {
@@ -269,6 +270,17 @@ bool CullideBroadphase::getDeepPenetrationFallback() const { return m_impl->deep
 
 void CullideBroadphase::setConvexMeshCulling(bool enable) { m_impl->convexMeshCulling = enable; }
 bool CullideBroadphase::getConvexMeshCulling() const { return m_impl->convexMeshCulling; }
+
+void CullideBroadphase::setObjectLevel(std::unique_ptr<btBroadphaseInterface> objectLevel) {
+    if (objectLevel == nullptr) throw std::invalid_argument("CullideBroadphase::setObjectLevel: null broadphase");
+    if (dynamic_cast<CullideBroadphase*>(objectLevel.get()) != nullptr)
+        throw std::invalid_argument("CullideBroadphase::setObjectLevel: the object level must be a Bullet broadphase, "
+                                    "not another CullideBroadphase");
+    if (m_impl->objectLevel.proxyCount() != 0)
+        throw std::logic_error("CullideBroadphase::setObjectLevel: proxies exist already; set the object level "
+                               "before adding collision objects");
+    m_impl->objectLevel.replace(std::move(objectLevel));
+}
 
 void CullideBroadphase::setGImpactPairCulling(bool enable) { m_impl->gimpactPairCulling = enable; }
 bool CullideBroadphase::getGImpactPairCulling() const { return m_impl->gimpactPairCulling; }

@@ -34,6 +34,11 @@ std::string boxText(const btVector3& mn, const btVector3& mx) {
 ObjectLevel::ObjectLevel(btOverlappingPairCache* pairCache)
     : m_tree(new btDbvtBroadphase(pairCache)) {}  // btDbvtBroadphase's aligned operator new
 
+void ObjectLevel::replace(std::unique_ptr<btBroadphaseInterface> level) {
+    m_tree = std::move(level);
+    m_parked.clear();
+}
+
 btBroadphaseProxy* ObjectLevel::createProxy(const btVector3& mn, const btVector3& mx, int shapeType, void* userPtr,
                                             int group, int mask, btDispatcher* dispatcher) {
     const bool finite = finiteBox(mn, mx);

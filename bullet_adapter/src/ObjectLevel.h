@@ -1,6 +1,7 @@
 // The broadphase's object level: Bullet's own btDbvtBroadphase (incremental trees, fattened leaves, lazy pair
 // removal, filters, the overlap filter callback, ray and box queries), so that its pair cache holds exactly the pairs
-// Bullet's default pipeline would, plus a guard for non-finite AABBs: such a proxy would poison the tree's volumes
+// Bullet's default pipeline would — or the application's own Bullet broadphase (replace), e.g. a btAxisSweep3 — plus
+// a guard for non-finite AABBs: such a proxy would poison the tree's volumes
 // for every object, so it is parked far away with a filter mask of 0 and its pairs removed until its box is finite.
 #pragma once
 
@@ -22,9 +23,12 @@ public:
     void setAabb(btBroadphaseProxy* p, const btVector3& mn, const btVector3& mx, btDispatcher* dispatcher);
     void destroyProxy(btBroadphaseProxy* p, btDispatcher* dispatcher);
 
-    /// The tree itself, for what it answers as Bullet's (pairs, getAabb, rayTest, aabbTest, resetPool).
-    btDbvtBroadphase& tree() { return *m_tree; }
-    const btDbvtBroadphase& tree() const { return *m_tree; }
+    /// Replaces the object level by `level` (not null; only while there are no proxies).
+    void replace(std::unique_ptr<btBroadphaseInterface> level);
+
+    /// The Bullet broadphase itself, for what it answers as Bullet's (pairs, getAabb, rayTest, aabbTest, resetPool).
+    btBroadphaseInterface& tree() { return *m_tree; }
+    const btBroadphaseInterface& tree() const { return *m_tree; }
     btOverlappingPairCache* cache() const { return m_tree->getOverlappingPairCache(); }
 
     bool isParked(const btBroadphaseProxy* p) const { return m_parked.count(p) != 0; }
@@ -37,7 +41,7 @@ private:
     void park(btBroadphaseProxy* p, const char* where, const std::string& why, btDispatcher* dispatcher);
     void unpark(btBroadphaseProxy* p);
 
-    std::unique_ptr<btDbvtBroadphase> m_tree;
+    std::unique_ptr<btBroadphaseInterface> m_tree;
     std::size_t m_proxyCount = 0;
     std::size_t m_parkCalls = 0;
     /// Proxies with a non-finite AABB, with the filter mask they had: restored when the AABB is finite again.

@@ -3,10 +3,14 @@
 // deciding whether those pairs make contacts.
 #include "SceneSupport.h"
 
+#include <BulletCollision/BroadphaseCollision/btAxisSweep3.h>
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <gtest/gtest.h>
 
+#include <memory>
 #include <set>
+#include <stdexcept>
+#include <vector>
 
 namespace cullide::test {
 namespace {
@@ -175,6 +179,94 @@ TEST(ObjectLevel, InterpenetratingPairsSkipTheCullerForAFewSteps) {
     EXPECT_EQ(culled, (std::vector<std::size_t>{1, 0, 0, 0, 0, 1, 0}));
     EXPECT_EQ(skipped, (std::vector<std::size_t>{0, 1, 1, 1, 1, 0, 1}));
     EXPECT_EQ(penetrating, (std::vector<std::size_t>{1, 0, 0, 0, 0, 1, 0}));
+}
+
+/// A dynamics world over any broadphase: Bullet's btAxisSweep3 or btDbvtBroadphase with Bullet's dispatcher, or the
+/// swap with the given object level.
+struct AnyWorld {
+    btDefaultCollisionConfiguration config;
+    std::unique_ptr<btBroadphaseInterface> broadphase;
+    std::unique_ptr<btCollisionDispatcher> dispatcher;
+    btSequentialImpulseConstraintSolver solver;
+    std::unique_ptr<btDiscreteDynamicsWorld> world;
+    std::vector<std::unique_ptr<btRigidBody>> bodies;
+    std::vector<std::unique_ptr<btDefaultMotionState>> motion;
+
+    AnyWorld(std::unique_ptr<btBroadphaseInterface> objectLevel, bool swap) {
+        if (swap) {
+            auto bp = std::make_unique<CullideBroadphase>(Settings{}, nullptr, referenceFactory());
+            if (objectLevel) bp->setObjectLevel(std::move(objectLevel));
+            dispatcher = std::make_unique<CullideCollisionDispatcher>(&config, bp.get());
+            broadphase = std::move(bp);
+        } else {
+            broadphase = std::move(objectLevel);
+            dispatcher = std::make_unique<btCollisionDispatcher>(&config);
+        }
+        world = std::make_unique<btDiscreteDynamicsWorld>(dispatcher.get(), broadphase.get(), &solver, &config);
+        world->setGravity(btVector3(0, 0, 0));
+    }
+    ~AnyWorld() {
+        for (auto& b : bodies) world->removeRigidBody(b.get());
+    }
+    btRigidBody* add(btCollisionShape* shape, btScalar mass, const btTransform& t) {
+        btVector3 inertia(0, 0, 0);
+        if (mass > 0) shape->calculateLocalInertia(mass, inertia);
+        motion.push_back(std::make_unique<btDefaultMotionState>(t));
+        bodies.push_back(std::make_unique<btRigidBody>(mass, motion.back().get(), shape, inertia));
+        bodies.back()->setUserIndex(static_cast<int>(bodies.size() - 1));
+        world->addRigidBody(bodies.back().get());
+        return bodies.back().get();
+    }
+};
+
+std::unique_ptr<btBroadphaseInterface> sweep() {
+    return std::make_unique<btAxisSweep3>(btVector3(-50, -50, -50), btVector3(50, 50, 50));
+}
+
+/// An application that used btAxisSweep3 hands it to the swap (setObjectLevel): the pair cache is btAxisSweep3's,
+/// step by step (not btDbvtBroadphase's, which differs here: fattened leaves), ray tests answer as its, contacts are
+/// made on its pairs.
+TEST(ObjectLevel, AnApplicationsBroadphaseBecomesTheObjectLevel) {
+    ShapeStore shapes;
+    btCollisionShape* box = shapes.box(btVector3(btScalar(0.5), btScalar(0.5), btScalar(0.5)));
+    AnyWorld sap(sweep(), false), dbvt(std::make_unique<btDbvtBroadphase>(), false), swap(sweep(), true);
+    AnyWorld* worlds[] = {&sap, &dbvt, &swap};
+    for (AnyWorld* w : worlds)
+        for (int i = 0; i < 40; ++i) w->add(box, i % 5 == 0 ? 0 : 1, at(0.9 * (i % 8), 0.9 * (i / 8), 0));
+    int dbvtDiffers = 0;
+    for (int step = 0; step < 30; ++step) {
+        for (AnyWorld* w : worlds) {
+            for (std::size_t i = 3; i < w->bodies.size(); i += 7) {  // movers
+                const double x = 0.9 * double((step + 3 * int(i)) % 12) - 2.0;
+                w->bodies[i]->setWorldTransform(at(x, 0.9 * double(i % 5), 0));
+            }
+            w->world->performDiscreteCollisionDetection();
+        }
+        ASSERT_EQ(pairsOf(*swap.world), pairsOf(*sap.world)) << "step " << step;
+        EXPECT_EQ(contactsOf(*swap.world).size(), contactsOf(*sap.world).size()) << "step " << step;
+        dbvtDiffers += pairsOf(*dbvt.world) != pairsOf(*sap.world) ? 1 : 0;
+        btCollisionWorld::AllHitsRayResultCallback want(btVector3(-3, 0.1f, 0.2f), btVector3(9, 3.3f, 0.2f));
+        btCollisionWorld::AllHitsRayResultCallback got(want.m_rayFromWorld, want.m_rayToWorld);
+        sap.world->rayTest(want.m_rayFromWorld, want.m_rayToWorld, want);
+        swap.world->rayTest(got.m_rayFromWorld, got.m_rayToWorld, got);
+        EXPECT_EQ(got.m_hitFractions.size(), want.m_hitFractions.size()) << "step " << step;
+    }
+    EXPECT_GT(dbvtDiffers, 0) << "the scene must tell btAxisSweep3's pairs from btDbvtBroadphase's";
+}
+
+TEST(ObjectLevel, SetObjectLevelValidatesItsInput) {
+    CullideBroadphase bp(Settings{}, nullptr, referenceFactory());
+    EXPECT_THROW(bp.setObjectLevel(nullptr), std::invalid_argument);
+    EXPECT_THROW(bp.setObjectLevel(std::make_unique<CullideBroadphase>(Settings{}, nullptr, referenceFactory())),
+                 std::invalid_argument);
+    bp.setObjectLevel(sweep());  // no proxies yet: fine
+    btCollisionObject object;
+    btBoxShape shape(btVector3(1, 1, 1));
+    object.setCollisionShape(&shape);
+    btBroadphaseProxy* proxy = bp.createProxy(btVector3(-1, -1, -1), btVector3(1, 1, 1), BOX_SHAPE_PROXYTYPE, &object,
+                                              1, -1, nullptr);
+    EXPECT_THROW(bp.setObjectLevel(sweep()), std::logic_error);
+    bp.destroyProxy(proxy, nullptr);
 }
 
 }  // namespace

@@ -8,7 +8,9 @@
 // - The object level is Bullet's own btDbvtBroadphase, owned by this class: the pair cache holds exactly the pairs
 //   Bullet's default pipeline would (filters, the overlap filter callback, static and kinematic objects in
 //   collision-only worlds, ghost objects, planes, fattened leaves, lazy removal), objects that did not move cost
-//   nothing, and rayTest / aabbTest answer as Bullet's. A proxy with a non-finite AABB is parked (one line on stderr,
+//   nothing, and rayTest / aabbTest answer as Bullet's. An application that used another Bullet broadphase (a
+//   btAxisSweep3 with its world bounds, a tuned btDbvtBroadphase) hands it over with setObjectLevel and keeps its
+//   pairs and its costs. A proxy with a non-finite AABB is parked (one line on stderr,
 //   a counter, no pairs, filter mask 0 while parked) instead of poisoning the tree: nothing else is affected.
 // - The CULLIDE levels run only for the cache's pairs whose narrow phase reads the surviving triangles
 //   (GImpact-triangle mesh, plain or btScaledBvhTriangleMeshShape; GImpact-GImpact with setGImpactPairCulling(true);
@@ -150,6 +152,14 @@ public:
     /// the fallback on, a pair found interpenetrating skips the culler for the next 4 steps (Bullet's full algorithm
     /// runs it: Bullet's contacts, without paying for culling it would not read), then is culled again.
     void setDeepPenetrationFallback(bool enable);
+
+    /// Makes `objectLevel` — any Bullet broadphase, e.g. the btAxisSweep3 an application used before the swap — the
+    /// object level instead of the internal btDbvtBroadphase: its pair cache, pairs, rayTest, aabbTest and per-step
+    /// cost become this broadphase's, and the CULLIDE levels run on its pairs as on the default one's. Owned from
+    /// then on. Only before the first proxy is created (std::logic_error otherwise); std::invalid_argument for null
+    /// or for another CullideBroadphase. The pair cache given to the constructor is left unused: give the
+    /// replacement its own.
+    void setObjectLevel(std::unique_ptr<btBroadphaseInterface> objectLevel);
     bool getDeepPenetrationFallback() const;
 
     /// Convex hulls and compounds against triangle meshes through the culler's levels (default: off). On, the
