@@ -3,6 +3,7 @@
 
 #include "cullide/Culler.h"
 
+#include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <BulletCollision/Gimpact/btGImpactShape.h>
 
 #include <algorithm>
@@ -200,6 +201,33 @@ protected:
 private:
     TestWorld& m_owner;
 };
+
+CollisionOnlyWorld::CollisionOnlyWorld(PipelineKind kind) : m_config(std::make_unique<btDefaultCollisionConfiguration>()) {
+    if (kind == PipelineKind::Default) {
+        m_broadphase = std::make_unique<btDbvtBroadphase>();
+        m_dispatcher = std::make_unique<btCollisionDispatcher>(m_config.get());
+    } else {
+        auto broadphase = std::make_unique<CullideBroadphase>(Settings{}, nullptr, referenceFactory());
+        m_dispatcher = std::make_unique<CullideCollisionDispatcher>(m_config.get(), broadphase.get());
+        m_broadphase = std::move(broadphase);
+    }
+    btGImpactCollisionAlgorithm::registerAlgorithm(m_dispatcher.get());
+    m_world = std::make_unique<btCollisionWorld>(m_dispatcher.get(), m_broadphase.get(), m_config.get());
+}
+
+CollisionOnlyWorld::~CollisionOnlyWorld() {
+    for (auto& o : m_objects) m_world->removeCollisionObject(o.get());
+}
+
+btCollisionObject* CollisionOnlyWorld::add(btCollisionShape* shape, const btTransform& t, int group, int mask) {
+    auto o = std::make_unique<btCollisionObject>();  // CF_STATIC_OBJECT, ACTIVE_TAG: Bullet's defaults
+    o->setCollisionShape(shape);
+    o->setWorldTransform(t);
+    o->setUserIndex(static_cast<int>(m_objects.size()));
+    m_world->addCollisionObject(o.get(), group, mask);
+    m_objects.push_back(std::move(o));
+    return m_objects.back().get();
+}
 
 TestWorld::TestWorld(PipelineKind kind, CullideBroadphase::CullerFactory factory, const Settings& settings)
     : m_kind(kind), m_config(std::make_unique<btDefaultCollisionConfiguration>()) {

@@ -101,6 +101,31 @@ private:
     std::vector<btCollisionObject*> m_objectsByIndex;
 };
 
+/// A btCollisionWorld (Bullet as a collision library) with either pipeline (the CULLIDE one with the CPU reference
+/// culler); objects are plain btCollisionObjects (static-flagged, as Bullet makes them), and objects added in the
+/// same order get the same user index. Bullet's GImpact algorithm is registered.
+class CollisionOnlyWorld {
+public:
+    explicit CollisionOnlyWorld(PipelineKind kind);
+    ~CollisionOnlyWorld();
+    CollisionOnlyWorld(const CollisionOnlyWorld&) = delete;
+    CollisionOnlyWorld& operator=(const CollisionOnlyWorld&) = delete;
+
+    btCollisionObject* add(btCollisionShape* shape, const btTransform& t, int group = btBroadphaseProxy::DefaultFilter,
+                           int mask = btBroadphaseProxy::AllFilter);
+    btCollisionWorld& world() { return *m_world; }
+    btCollisionDispatcher& dispatcher() { return *m_dispatcher; }
+    btCollisionObject& object(std::size_t i) { return *m_objects[i]; }
+    std::size_t size() const { return m_objects.size(); }
+
+private:
+    std::unique_ptr<btDefaultCollisionConfiguration> m_config;
+    std::unique_ptr<btBroadphaseInterface> m_broadphase;
+    std::unique_ptr<btCollisionDispatcher> m_dispatcher;
+    std::unique_ptr<btCollisionWorld> m_world;
+    std::vector<std::unique_ptr<btCollisionObject>> m_objects;
+};
+
 /// Contacts of one object pair (indices = user indices).
 struct PairContacts {
     int points = 0;

@@ -13,8 +13,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <memory>
-#include <vector>
 
 namespace cullide::test {
 namespace {
@@ -53,36 +51,6 @@ TEST(ApartPairs, ThresholdIsTheOneTheDispatcherGivesTheManifold) {
         << "a large shape's relative threshold exceeds the AABB expansion";
 }
 
-/// One btCollisionWorld with Bullet's default pipeline or the two-line swap.
-struct World {
-    btDefaultCollisionConfiguration config;
-    std::unique_ptr<btBroadphaseInterface> broadphase;
-    std::unique_ptr<btCollisionDispatcher> dispatcher;
-    std::unique_ptr<btCollisionWorld> world;
-    std::vector<std::unique_ptr<btCollisionObject>> objects;
-
-    explicit World(PipelineKind kind) {
-        if (kind == PipelineKind::Default) {
-            broadphase = std::make_unique<btDbvtBroadphase>();
-            dispatcher = std::make_unique<btCollisionDispatcher>(&config);
-        } else {
-            auto bp = std::make_unique<CullideBroadphase>(Settings{}, nullptr, referenceFactory());
-            dispatcher = std::make_unique<CullideCollisionDispatcher>(&config, bp.get());
-            broadphase = std::move(bp);
-        }
-        world = std::make_unique<btCollisionWorld>(dispatcher.get(), broadphase.get(), &config);
-    }
-    ~World() {
-        for (auto& o : objects) world->removeCollisionObject(o.get());
-    }
-    void add(btCollisionShape* shape) {
-        objects.push_back(std::make_unique<btCollisionObject>());
-        objects.back()->setCollisionShape(shape);
-        objects.back()->setUserIndex(static_cast<int>(objects.size() - 1));
-        world->addCollisionObject(objects.back().get());
-    }
-};
-
 /// Object i's pose at a step. 0-11: a 4 x 3 grid whose neighbours approach until they touch or overlap and part again
 /// by up to ~0.5, turning slowly. 12-17: three pairs of axis-aligned boxes 3.8 wide. Pairs 0 and 2 swing their gap
 /// through [-0.06, 0.14]: their points at distances between the boxes' expansions (2 x 0.02) and the breaking
@@ -111,13 +79,13 @@ struct Tally {
     std::size_t pointsFromApartBoxes = 0;  ///< Bullet's pair-steps with points although the proxies' boxes are apart
 };
 
-void compare(World& reference, World& cullide, Tally& t) {
-    const ContactMap want = contactsOf(*reference.world);
-    const ContactMap got = contactsOf(*cullide.world);
+void compare(CollisionOnlyWorld& reference, CollisionOnlyWorld& cullide, Tally& t) {
+    const ContactMap want = contactsOf(reference.world());
+    const ContactMap got = contactsOf(cullide.world());
     for (const auto& [key, pc] : want) {
         ++t.pairSteps;
-        const btBroadphaseProxy* p0 = reference.objects[static_cast<std::size_t>(key.first)]->getBroadphaseHandle();
-        const btBroadphaseProxy* p1 = reference.objects[static_cast<std::size_t>(key.second)]->getBroadphaseHandle();
+        const btBroadphaseProxy* p0 = reference.object(static_cast<std::size_t>(key.first)).getBroadphaseHandle();
+        const btBroadphaseProxy* p1 = reference.object(static_cast<std::size_t>(key.second)).getBroadphaseHandle();
         if (bullet::boxDistanceSquared(p0->m_aabbMin, p0->m_aabbMax, p1->m_aabbMin, p1->m_aabbMax) > 0)
             ++t.pointsFromApartBoxes;
         const auto it = got.find(key);
@@ -132,7 +100,7 @@ void compare(World& reference, World& cullide, Tally& t) {
     }
     for (const auto& [key, pc] : got) t.extra += want.count(key) ? 0 : 1;
     // Skipped pairs keep their algorithm and (empty) manifolds, as in Bullet: what the island manager reads.
-    if (reference.dispatcher->getNumManifolds() != cullide.dispatcher->getNumManifolds()) ++t.manifoldCountDiffers;
+    if (reference.dispatcher().getNumManifolds() != cullide.dispatcher().getNumManifolds()) ++t.manifoldCountDiffers;
 }
 
 TEST(ApartPairs, SkippedPairsKeepBulletsPointsBitForBit) {
@@ -141,23 +109,23 @@ TEST(ApartPairs, SkippedPairsKeepBulletsPointsBitForBit) {
     // the two boxes' 0.02 expansions, so Bullet makes points between objects whose boxes are apart.
     btCollisionShape* kinds[] = {shapes.hull(v(2.0, 1.6, 1.8), 40, 5), shapes.box(v(1.9, 1.5, 1.7)),
                                  shapes.sphere(btScalar(1.9)), shapes.capsule(btScalar(1.2), btScalar(1.4))};
-    World reference(PipelineKind::Default), cullide(PipelineKind::Cullide);
-    for (World* w : {&reference, &cullide})
-        for (int i = 0; i < 18; ++i) w->add(kinds[i < 12 ? i % 4 : 1]);
+    CollisionOnlyWorld reference(PipelineKind::Default), cullide(PipelineKind::Cullide);
+    for (CollisionOnlyWorld* w : {&reference, &cullide})
+        for (int i = 0; i < 18; ++i) w->add(kinds[i < 12 ? i % 4 : 1], pose(i, 0));
     Tally t;
     for (int step = 0; step < 60; ++step) {
-        for (World* w : {&reference, &cullide}) {
-            for (std::size_t i = 0; i < w->objects.size(); ++i) {
-                btCollisionObject& o = *w->objects[i];
+        for (CollisionOnlyWorld* w : {&reference, &cullide}) {
+            for (std::size_t i = 0; i < w->size(); ++i) {
+                btCollisionObject& o = w->object(i);
                 if (step == 30) o.setActivationState(ISLAND_SLEEPING);  // both asleep: points kept as they are
                 if (step == 36) o.setActivationState(ACTIVE_TAG);
                 o.setWorldTransform(pose(static_cast<int>(i), step));
             }
-            w->world->performDiscreteCollisionDetection();
+            w->world().performDiscreteCollisionDetection();
         }
         compare(reference, cullide, t);
     }
-    const std::size_t apart = static_cast<CullideCollisionDispatcher&>(*cullide.dispatcher).getTotalStats().apartPairs;
+    const std::size_t apart = static_cast<CullideCollisionDispatcher&>(cullide.dispatcher()).getTotalStats().apartPairs;
     std::printf("[ measure  ] apart pairs: %zu pair-steps with contacts (%zu with boxes apart), %zu pair-steps "
                 "skipped, missing %zu, extra %zu, point mismatches %zu\n",
                 t.pairSteps, t.pointsFromApartBoxes, apart, t.missing, t.extra, t.mismatches);

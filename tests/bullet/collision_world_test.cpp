@@ -17,45 +17,6 @@
 namespace cullide::test {
 namespace {
 
-/// One btCollisionWorld with either pipeline; objects added in the same order get the same user index.
-class CollisionWorld {
-public:
-    explicit CollisionWorld(PipelineKind kind) {
-        if (kind == PipelineKind::Default) {
-            m_broadphase = std::make_unique<btDbvtBroadphase>();
-            m_dispatcher = std::make_unique<btCollisionDispatcher>(&m_config);
-        } else {
-            auto broadphase = std::make_unique<CullideBroadphase>(Settings{}, nullptr, referenceFactory());
-            m_dispatcher = std::make_unique<CullideCollisionDispatcher>(&m_config, broadphase.get());
-            m_broadphase = std::move(broadphase);
-        }
-        btGImpactCollisionAlgorithm::registerAlgorithm(m_dispatcher.get());
-        m_world = std::make_unique<btCollisionWorld>(m_dispatcher.get(), m_broadphase.get(), &m_config);
-    }
-    ~CollisionWorld() {
-        for (auto& o : m_objects) m_world->removeCollisionObject(o.get());
-    }
-    btCollisionObject* add(btCollisionShape* shape, const btTransform& t, int group, int mask) {
-        auto o = std::make_unique<btCollisionObject>();  // CF_STATIC_OBJECT, ACTIVE_TAG: Bullet's defaults
-        o->setCollisionShape(shape);
-        o->setWorldTransform(t);
-        o->setUserIndex(static_cast<int>(m_objects.size()));
-        m_world->addCollisionObject(o.get(), group, mask);
-        m_objects.push_back(std::move(o));
-        return m_objects.back().get();
-    }
-    btCollisionWorld& world() { return *m_world; }
-    btCollisionObject& object(std::size_t i) { return *m_objects[i]; }
-    std::size_t size() const { return m_objects.size(); }
-
-private:
-    btDefaultCollisionConfiguration m_config;
-    std::unique_ptr<btBroadphaseInterface> m_broadphase;
-    std::unique_ptr<btCollisionDispatcher> m_dispatcher;
-    std::unique_ptr<btCollisionWorld> m_world;
-    std::vector<std::unique_ptr<btCollisionObject>> m_objects;
-};
-
 /// Rejects pairs of two objects whose user indices are both multiples of 3 (an application's own rule).
 struct SkipMultiplesOfThree : btOverlapFilterCallback {
     bool needBroadphaseCollision(btBroadphaseProxy* p0, btBroadphaseProxy* p1) const override {
@@ -86,7 +47,7 @@ Counts runScene(bool filterCallback) {
                                  shapes.gimpactTorus(btScalar(0.6), btScalar(0.2), 16, 8, btScalar(0.01))};
     btCollisionShape* landscape = shapes.landscape(16, btScalar(1.0), btScalar(0.6));
     btCollisionShape* plane = shapes.plane(btVector3(0, 1, 0), btScalar(-2));
-    CollisionWorld reference(PipelineKind::Default), cullide(PipelineKind::Cullide);
+    CollisionOnlyWorld reference(PipelineKind::Default), cullide(PipelineKind::Cullide);
     SkipMultiplesOfThree callback;
     if (filterCallback) {
         reference.world().getPairCache()->setOverlapFilterCallback(&callback);
@@ -99,7 +60,7 @@ Counts runScene(bool filterCallback) {
                                 btScalar(-6 + (i / 6) * 1.1 + 0.3 * std::cos(phase))));
         return t;
     };
-    for (CollisionWorld* w : {&reference, &cullide}) {
+    for (CollisionOnlyWorld* w : {&reference, &cullide}) {
         w->add(landscape, btTransform(btQuaternion::getIdentity(), btVector3(-8, 0, -8)), 1, -1);
         w->add(plane, btTransform::getIdentity(), 1, -1);
         for (int i = 0; i < 40; ++i) {
@@ -111,7 +72,7 @@ Counts runScene(bool filterCallback) {
     }
     Counts c;
     for (int step = 0; step < 24; ++step) {
-        for (CollisionWorld* w : {&reference, &cullide}) {
+        for (CollisionOnlyWorld* w : {&reference, &cullide}) {
             for (std::size_t i = 2; i < w->size(); ++i) {
                 btCollisionObject& o = w->object(i);
                 o.setWorldTransform(place(static_cast<int>(i) - 2, step));
