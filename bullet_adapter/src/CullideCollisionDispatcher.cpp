@@ -722,11 +722,10 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
                                                            btDispatcher* dispatcher) {
     const CullideDispatchStats outer = m_current;  // nested dispatches (rare) keep the outer counters
     m_current.reset();
-    if (pairCache == (m_broadphase != nullptr ? m_broadphase->getOverlappingPairCache() : nullptr))
-        m_leafIndex->beginDispatch();  // once per step, not for a character controller's private cache
+    const bool ownCache = m_broadphase != nullptr && pairCache == m_broadphase->getOverlappingPairCache();
+    if (ownCache) m_leafIndex->beginDispatch();  // once per step, not for a character controller's private cache
     cullide::Timer watch;
     computeMeshContactsAhead(pairCache, dispatchInfo);
-    const bool ownCache = m_broadphase != nullptr && pairCache == m_broadphase->getOverlappingPairCache();
     if (ownCache && dispatchInfo.m_dispatchFunc == btDispatcherInfo::DISPATCH_DISCRETE &&
         getNearCallback() == &btCollisionDispatcher::defaultNearCallback) {
         SkipApartPairs loop(*this, dispatchInfo);
@@ -751,7 +750,7 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
     m_total.threadedTasks += m_current.threadedTasks;
     m_total.apartPairs += m_current.apartPairs;
     m_total.dispatchMs += m_current.dispatchMs;
-    if (m_broadphase != nullptr && pairCache == m_broadphase->getOverlappingPairCache()) m_lastStep = m_current;
+    if (ownCache) m_lastStep = m_current;
     m_current = outer;
 }
 

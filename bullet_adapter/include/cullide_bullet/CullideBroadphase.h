@@ -90,8 +90,8 @@ struct CullideFrameStats {
 
 /// What the broadphase keeps between steps for the objects that took part in culled pairs (getMemoryStats): local
 /// triangle geometry once per shape, however many bodies share it, and per object its record (transform, keys) plus
-/// a world-space copy of its triangles where one is kept (static objects; pairs whose triangles the broadphase tests
-/// itself). Heap bytes of the containers (capacity), not counting the culler's own caches.
+/// a world-space copy of its triangles where one is kept (resting static-flagged objects; with
+/// setGImpactPairCulling(true), objects whose pairs the broadphase tests itself). Heap bytes of the containers (capacity), not counting the culler's own caches.
 struct CullideMemoryStats {
     std::size_t shapes = 0;               ///< shapes with local geometry (each held once)
     std::size_t sharedGeometryBytes = 0;  ///< their vertices, triangles and Bullet ids, in both precisions
@@ -152,6 +152,7 @@ public:
     /// the fallback on, a pair found interpenetrating skips the culler for the next 4 steps (Bullet's full algorithm
     /// runs it: Bullet's contacts, without paying for culling it would not read), then is culled again.
     void setDeepPenetrationFallback(bool enable);
+    bool getDeepPenetrationFallback() const;
 
     /// Makes `objectLevel` — any Bullet broadphase, e.g. the btAxisSweep3 an application used before the swap — the
     /// object level instead of the internal btDbvtBroadphase: its pair cache, pairs, rayTest, aabbTest and per-step
@@ -160,7 +161,6 @@ public:
     /// or for another CullideBroadphase. The pair cache given to the constructor is left unused: give the
     /// replacement its own.
     void setObjectLevel(std::unique_ptr<btBroadphaseInterface> objectLevel);
-    bool getDeepPenetrationFallback() const;
 
     /// Convex hulls and compounds against triangle meshes through the culler's levels (default: off). On, the
     /// dispatcher's convex-concave algorithm reads only the mesh triangles CULLIDE kept near the hull; off, such
