@@ -246,6 +246,33 @@ SceneSpec toriPile(Shapes& s) {
     return sc;
 }
 
+/// bench_run's stepping scene 'stack' (55 boxes in a pyramid on a static box), here in lockstep.
+SceneSpec boxPyramid(Shapes& s) {
+    SceneSpec sc{"stack", "55 boxes in a pyramid on a static box (bench_run's stepping scene)", {}};
+    sc.bodies.push_back({s.own(new btBoxShape(btVector3(20, 1, 20))), 0, at(0, -1, 0)});
+    btCollisionShape* box = s.own(new btBoxShape(btVector3(btScalar(0.5), btScalar(0.5), btScalar(0.5))));
+    const int levels = 10;
+    for (int level = 0; level < levels; ++level)
+        for (int i = 0; i < levels - level; ++i)
+            sc.bodies.push_back({box, 1, at((i - 0.5 * (levels - level - 1)) * 1.02, 0.5 + level, 0)});
+    return sc;
+}
+
+/// Like bench_run's stepping scene 'landscape': 150 primitives and hulls dropped on one 8,192-triangle BVH part.
+SceneSpec landscapeSmall(Shapes& s) {
+    SceneSpec sc{"landscape-150", "150 boxes/spheres/capsules/hulls (24 points) over one BVH part (8K triangles)", {}};
+    sc.bodies.push_back({s.landscape(64, 0.75, -24, -24), 0, at(0, 0, 0)});
+    Random rng(7);
+    std::vector<btCollisionShape*> kinds = {s.own(new btSphereShape(btScalar(0.4))),
+                                            s.own(new btBoxShape(btVector3(btScalar(0.4), btScalar(0.3), btScalar(0.35)))),
+                                            s.own(new btCapsuleShape(btScalar(0.25), btScalar(0.6)))};
+    for (int k = 0; k < 3; ++k) kinds.push_back(s.hull(rng, 24, 0.5, 0.4, 0.45));
+    for (int i = 0; i < 150; ++i)
+        sc.bodies.push_back({kinds[static_cast<std::size_t>(i) % kinds.size()], 1,
+                             at(rng.uniform(-22, 22), rng.uniform(4, 10), rng.uniform(-22, 22))});
+    return sc;
+}
+
 struct SceneFactory {
     const char* name;
     SceneSpec (*make)(Shapes&);
@@ -253,7 +280,8 @@ struct SceneFactory {
 const SceneFactory kScenes[] = {{"boxes-3000", boxesFalling},      {"pyramid-walls", pyramidWallsTower},
                                 {"hulls-1000", hullStack},         {"landscape-prims", primitivesOnLandscape},
                                 {"landscape-hulls", hullsOnLandscape}, {"landscape-rays", hullsOnLandscapeRays},
-                                {"tori-pile", toriPile}};
+                                {"tori-pile", toriPile},           {"stack", boxPyramid},
+                                {"landscape-150", landscapeSmall}};
 
 /// A dynamics world that times the parts of its step.
 class TimedWorld final : public btDiscreteDynamicsWorld {
