@@ -97,12 +97,12 @@ public:
     void resetStats() { m_total.reset(); }
 
     /// Threads for the GImpact mesh-mesh narrow phase (0, the default: the machine's hardware threads, at most 8,
-    /// read once per process; 1: none besides the calling one). With more than one, every dispatch first computes the contacts of its
-    /// btGImpactMeshShape pairs together — many pairs, and the parts of a large pair's box-tree search, on a worker
-    /// pool — and each pair's algorithm then adds its points to the manifold on the calling thread, in Bullet's
-    /// dispatch order. The points and manifolds are the same bit for bit for every thread count: the workers only
-    /// read the shapes (locked by the calling thread) and compute values; manifolds, allocators and the
-    /// application's contact callbacks are used on the calling thread only.
+    /// read once per process; 1: none besides the calling one). With more than one, every dispatch first computes the
+    /// contacts of its btGImpactMeshShape pairs together — many pairs, and the parts of a large pair's box-tree
+    /// search, on a worker pool — and each pair's algorithm then adds its points to the manifold on the calling
+    /// thread, in Bullet's dispatch order. The points and manifolds are the same bit for bit for every thread count:
+    /// the workers only read the shapes (locked by the calling thread) and compute values; manifolds, allocators and
+    /// the application's contact callbacks are used on the calling thread only.
     void setNarrowPhaseThreads(unsigned threads);
     unsigned getNarrowPhaseThreads() const { return m_threads; }
 
