@@ -3,6 +3,7 @@
 // CullideCollisionDispatcher), side by side in one process (issue #12, item 7).
 //
 //   cullide-swap-bench [--steps N] [--env-frames N] [--scene NAME]... [--json FILE] [--gimpact-pair-culling]
+//                      [--gimpact-mesh-culling] [--gimpact-convex-culling]
 //                      [--no-penetration-fallback] [--narrow-phase-threads N] [--sap-object-level]
 //
 // --sap-object-level: the CULLIDE world's object level is a btAxisSweep3 with the SAP world's bounds
@@ -58,6 +59,9 @@ using Random = cullide::bench::SeededRandom;
 bool g_penetrationFallback = true;
 /// CullideBroadphase::setGImpactPairCulling for the CULLIDE world (--gimpact-pair-culling sets it).
 bool g_gimpactPairCulling = false;
+/// setGImpactMeshCulling / setGImpactConvexCulling (--gimpact-mesh-culling, --gimpact-convex-culling).
+bool g_gimpactMeshCulling = false;
+bool g_gimpactConvexCulling = false;
 /// CullideCollisionDispatcher::setNarrowPhaseThreads for the CULLIDE world (--narrow-phase-threads N; 0: default).
 unsigned g_narrowPhaseThreads = 0;
 /// The CULLIDE world's object level: btAxisSweep3 with the SAP world's bounds (--sap-object-level) or the default.
@@ -273,6 +277,28 @@ SceneSpec landscapeSmall(Shapes& s) {
     return sc;
 }
 
+/// GImpact bodies among others over a static landscape: 60 tori (one shape), 100 hulls and 100 boxes dropped on two
+/// BVH parts (16K triangles) - GImpact against BVH, against convex shapes and against GImpact, in one scene.
+SceneSpec gimpactLandscape(Shapes& s) {
+    SceneSpec sc{"gimpact-landscape", "60 GImpact tori (1,024 triangles), 100 hulls, 100 boxes over 2 BVH parts (16K)",
+                 {}};
+    sc.gimpact = true;
+    for (int p = 0; p < 2; ++p) sc.bodies.push_back({s.landscape(64, 0.5, -32 + p * 32.0, -16), 0, at(0, 0, 0)});
+    btCollisionShape* torus = s.torus(1.0, 0.3, 32, 16);
+    Random rng(17);
+    btCollisionShape* box = s.own(new btBoxShape(btVector3(btScalar(0.4), btScalar(0.3), btScalar(0.35))));
+    std::vector<btCollisionShape*> hulls;
+    for (int k = 0; k < 4; ++k) hulls.push_back(s.hull(rng, 40, 0.5, 0.4, 0.45));
+    for (int i = 0; i < 260; ++i) {
+        btTransform t = at(rng.uniform(-28, 28), rng.uniform(3, 12), rng.uniform(-12, 12));
+        t.setRotation(btQuaternion(btVector3(rng.uniform(-1, 1), 1, rng.uniform(-1, 1)).normalized(),
+                                   rng.uniform(0, 3)));
+        btCollisionShape* shape = i % 13 < 3 ? torus : i % 2 == 0 ? box : hulls[static_cast<std::size_t>(i) % 4];
+        sc.bodies.push_back({shape, 1, t});
+    }
+    return sc;
+}
+
 struct SceneFactory {
     const char* name;
     SceneSpec (*make)(Shapes&);
@@ -281,7 +307,7 @@ const SceneFactory kScenes[] = {{"boxes-3000", boxesFalling},      {"pyramid-wal
                                 {"hulls-1000", hullStack},         {"landscape-prims", primitivesOnLandscape},
                                 {"landscape-hulls", hullsOnLandscape}, {"landscape-rays", hullsOnLandscapeRays},
                                 {"tori-pile", toriPile},           {"stack", boxPyramid},
-                                {"landscape-150", landscapeSmall}};
+                                {"landscape-150", landscapeSmall}, {"gimpact-landscape", gimpactLandscape}};
 
 /// A dynamics world that times the parts of its step.
 class TimedWorld final : public btDiscreteDynamicsWorld {
@@ -309,6 +335,8 @@ void makePipeline(Pipeline p, btCollisionConfiguration& config, const btVector3&
         if (std::getenv("SWAP_BENCH_CONVEX_MESH") != nullptr) bp->setConvexMeshCulling(true);
         bp->setDeepPenetrationFallback(g_penetrationFallback);
         bp->setGImpactPairCulling(g_gimpactPairCulling);
+        bp->setGImpactMeshCulling(g_gimpactMeshCulling);
+        bp->setGImpactConvexCulling(g_gimpactConvexCulling);
         if (g_sapObjectLevel) bp->setObjectLevel(std::make_unique<btAxisSweep3>(sapMin, sapMax));
         auto d = std::make_unique<cullide::CullideCollisionDispatcher>(&config, bp.get());
         d->setNarrowPhaseThreads(g_narrowPhaseThreads);
@@ -759,6 +787,10 @@ int main(int argc, char** argv) {
             g_penetrationFallback = false;
         } else if (a == "--gimpact-pair-culling") {
             g_gimpactPairCulling = true;
+        } else if (a == "--gimpact-mesh-culling") {
+            g_gimpactMeshCulling = true;
+        } else if (a == "--gimpact-convex-culling") {
+            g_gimpactConvexCulling = true;
         } else if (a == "--narrow-phase-threads" && i + 1 < argc) {
             g_narrowPhaseThreads = static_cast<unsigned>(std::max(0, std::atoi(argv[++i])));
         } else if (a == "--sap-object-level") {
@@ -767,7 +799,8 @@ int main(int argc, char** argv) {
             json = argv[++i];
         } else {
             std::fprintf(stderr, "usage: cullide-swap-bench [--steps N] [--env-frames N] [--scene NAME]... [--json FILE] "
-                                 "[--gimpact-pair-culling] [--no-penetration-fallback] [--narrow-phase-threads N] "
+                                 "[--gimpact-pair-culling] [--gimpact-mesh-culling] [--gimpact-convex-culling] "
+                                 "[--no-penetration-fallback] [--narrow-phase-threads N] "
                                  "[--sap-object-level]\nscenes:");
             for (const SceneFactory& f : kScenes) std::fprintf(stderr, " %s", f.name);
             for (const CollisionSceneSpec& c : kCollisionScenes) std::fprintf(stderr, " %s", c.name);

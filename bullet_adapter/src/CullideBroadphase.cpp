@@ -76,9 +76,8 @@ struct CullideBroadphase::Impl {
     std::size_t cullerRejections = 0;  ///< objects the culler rejected, every step (getRejectedCount)
 
     bool deepPenetrationFallback = true;
-    /// Hulls and compounds against triangle meshes go through the culler's levels (see trianglesConsumed).
-    bool convexMeshCulling = false;
-    bool gimpactPairCulling = false;
+    /// The kinds of pair that go through the culler's levels for their triangles (see trianglesConsumed).
+    bullet::CulledKinds culledKinds;
 
     Impl(const Settings& s, btOverlappingPairCache* pairCache, CullerFactory f)
         : objectLevel(pairCache), culler(s, std::move(f), kDefaultMargin) {}
@@ -98,13 +97,13 @@ struct CullideBroadphase::Impl {
         // Every culled pair has a GImpact shape, or a triangle mesh with convex-mesh culling on: most pairs stop here.
         auto mayBe = [&](const btCollisionShape* s) {
             const int type = s->getShapeType();
-            return type == GIMPACT_SHAPE_PROXYTYPE || (convexMeshCulling && bullet::isTriangleMeshType(type));
+            return type == GIMPACT_SHAPE_PROXYTYPE || (culledKinds.convexVsMesh && bullet::isTriangleMeshType(type));
         };
         if (!mayBe(sa) && !mayBe(sb)) return false;
         const bullet::GeometryKind ka = bullet::geometryKindOf(sa);
         const bullet::GeometryKind kb = bullet::geometryKindOf(sb);
-        if (!bullet::trianglesConsumed(ka, kb, convexMeshCulling, gimpactPairCulling) &&
-            !bullet::prunedByCuller(ka, sa->isConvex(), kb, sb->isConvex()))
+        if (!bullet::trianglesConsumed(ka, kb, culledKinds) &&
+            !bullet::prunedByCuller(ka, sa->isConvex(), kb, sb->isConvex(), culledKinds))
             return false;
         return !objectLevel.isParked(a) && !objectLevel.isParked(b) && !infiniteBox(a) && !infiniteBox(b);
     }
@@ -268,8 +267,8 @@ void CullideBroadphase::invalidateShape(const btCollisionShape* shape) {
 void CullideBroadphase::setDeepPenetrationFallback(bool enable) { m_impl->deepPenetrationFallback = enable; }
 bool CullideBroadphase::getDeepPenetrationFallback() const { return m_impl->deepPenetrationFallback; }
 
-void CullideBroadphase::setConvexMeshCulling(bool enable) { m_impl->convexMeshCulling = enable; }
-bool CullideBroadphase::getConvexMeshCulling() const { return m_impl->convexMeshCulling; }
+void CullideBroadphase::setConvexMeshCulling(bool enable) { m_impl->culledKinds.convexVsMesh = enable; }
+bool CullideBroadphase::getConvexMeshCulling() const { return m_impl->culledKinds.convexVsMesh; }
 
 void CullideBroadphase::setObjectLevel(std::unique_ptr<btBroadphaseInterface> objectLevel) {
     if (objectLevel == nullptr) throw std::invalid_argument("CullideBroadphase::setObjectLevel: null broadphase");
@@ -282,8 +281,12 @@ void CullideBroadphase::setObjectLevel(std::unique_ptr<btBroadphaseInterface> ob
     m_impl->objectLevel.replace(std::move(objectLevel));
 }
 
-void CullideBroadphase::setGImpactPairCulling(bool enable) { m_impl->gimpactPairCulling = enable; }
-bool CullideBroadphase::getGImpactPairCulling() const { return m_impl->gimpactPairCulling; }
+void CullideBroadphase::setGImpactPairCulling(bool enable) { m_impl->culledKinds.gimpactVsGimpact = enable; }
+bool CullideBroadphase::getGImpactPairCulling() const { return m_impl->culledKinds.gimpactVsGimpact; }
+void CullideBroadphase::setGImpactMeshCulling(bool enable) { m_impl->culledKinds.gimpactVsMesh = enable; }
+bool CullideBroadphase::getGImpactMeshCulling() const { return m_impl->culledKinds.gimpactVsMesh; }
+void CullideBroadphase::setGImpactConvexCulling(bool enable) { m_impl->culledKinds.gimpactVsConvex = enable; }
+bool CullideBroadphase::getGImpactConvexCulling() const { return m_impl->culledKinds.gimpactVsConvex; }
 
 const CullideFrameStats& CullideBroadphase::getLastFrameStats() const { return m_impl->stats; }
 CullideMemoryStats CullideBroadphase::getMemoryStats() const { return m_impl->cullFrame.memory(); }

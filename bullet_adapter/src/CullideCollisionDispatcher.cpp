@@ -156,6 +156,11 @@ struct ConvexReach {
     btVector3 min, max;
     btScalar threshold = 0;
     btScalar slack = 0;
+    /// When the convex shape is a triangle (of a concave shape, in Bullet's GImpact-concave loop): its vertices in
+    /// its frame and its margin, for the separating-plane tests of triangleCanTouch.
+    bool triangle = false;
+    btVector3 vertices[3];
+    btScalar triangleMargin = 0;
 };
 
 /// Safety factor on the reach: GJK's and the polyhedral clipper's tolerances are far below it.
@@ -182,24 +187,55 @@ ConvexReach convexReach(const btCollisionObjectWrapper& meshWrap, const btCollis
     const btScalar scale = btMax(btMax(largestCoordinate(reach.min), largestCoordinate(reach.max)),
                                  largestCoordinate(reach.meshToConvex.getOrigin()));
     reach.slack = 64 * SIMD_EPSILON * scale;
+    if (convexWrap.getCollisionShape()->getShapeType() == TRIANGLE_SHAPE_PROXYTYPE) {
+        const auto* t = static_cast<const btTriangleShape*>(convexWrap.getCollisionShape());
+        reach.triangle = true;
+        for (int k = 0; k < 3; ++k) reach.vertices[k] = t->m_vertices1[k];
+        reach.triangleMargin = t->getMargin();
+    }
     return reach;
+}
+
+/// True when every point of `points` lies farther than `d` on one side of the plane through `a`, `b`, `c` (false
+/// for a degenerate triangle: no plane).
+bool allBeyondPlane(const btVector3& a, const btVector3& b, const btVector3& c, const btVector3* points, btScalar d) {
+    btVector3 n = (b - a).cross(c - a);
+    const btScalar length = n.length();
+    if (!(length > SIMD_EPSILON)) return false;
+    n /= length;
+    btScalar lo = n.dot(points[0] - a), hi = lo;
+    for (int k = 1; k < 3; ++k) {
+        const btScalar h = n.dot(points[k] - a);
+        lo = btMin(lo, h);
+        hi = btMax(hi, h);
+    }
+    return lo > d || hi < -d;
 }
 
 /// False when the triangle's box, mapped into the convex shape's frame, stays farther from the convex shape's box
 /// along an axis than factor * (the triangle's margin + the breaking threshold): the triangle is farther than that
 /// from the shape, so the convex algorithm cannot make a point from it.
+///
+/// When the convex shape is itself a triangle, also false when either triangle lies entirely on one side of the
+/// other's plane, farther than factor * (both margins + the breaking threshold): the distance of two sets is at least
+/// their separation along any direction.
 bool convexCanTouch(const btTriangleShapeEx& triangle, const ConvexReach& reach) {
-    btVector3 lo = reach.meshToConvex(triangle.m_vertices1[0]);
-    btVector3 hi = lo;
+    btVector3 mapped[3];
+    for (int k = 0; k < 3; ++k) mapped[k] = reach.meshToConvex(triangle.m_vertices1[k]);
+    btVector3 lo = mapped[0], hi = mapped[0];
     for (int k = 1; k < 3; ++k) {
-        const btVector3 v = reach.meshToConvex(triangle.m_vertices1[k]);
-        lo.setMin(v);
-        hi.setMax(v);
+        lo.setMin(mapped[k]);
+        hi.setMax(mapped[k]);
     }
     const btScalar d = kConvexReachFactor * (triangle.getMargin() + reach.threshold) + reach.slack;
     for (int k = 0; k < 3; ++k)
         if (lo[k] > reach.max[k] + d || hi[k] < reach.min[k] - d) return false;
-    return true;
+    if (!reach.triangle) return true;
+    const btScalar both =
+        kConvexReachFactor * (triangle.getMargin() + reach.triangleMargin + reach.threshold) + reach.slack;
+    const btVector3* other = reach.vertices;
+    return !allBeyondPlane(other[0], other[1], other[2], mapped, both) &&
+           !allBeyondPlane(mapped[0], mapped[1], mapped[2], other, both);
 }
 
 /// GImpact pairs on CULLIDE's lists. GImpact-GImpact: the surviving triangle pairs go straight to Bullet's
@@ -384,53 +420,130 @@ private:
         const btCollisionObjectWrapper* meshWrap = swapped ? body1Wrap : body0Wrap;
         const btCollisionObjectWrapper* convexWrap = swapped ? body0Wrap : body1Wrap;
         const auto* mesh = static_cast<const btGImpactMeshShape*>(meshWrap->getCollisionShape());
-        const btCollisionShape* convex = convexWrap->getCollisionShape();
-        const ConvexReach reach = convexReach(*meshWrap, *convexWrap);
         ++stats.convexPairs;
         int& part = swapped ? m_part1 : m_part0;
-        int& face = swapped ? m_triface1 : m_triface0;
-        for (part = mesh->getMeshPartCount(); part-- > 0;) {
-            const btGImpactMeshShapePart* meshPart = mesh->getMeshPart(part);
-            candidates.resize(0);
-            gimpact_vs_shape_find_pairs(meshWrap->getWorldTransform(), convexWrap->getWorldTransform(), meshPart,
-                                        convex, candidates);
-            if (candidates.size() == 0) continue;
-            meshPart->lockChildShapes();
-            btTriangleShapeEx triangle;
-            for (int i = candidates.size(); i-- > 0;) {
-                meshPart->getBulletTriangle(candidates[i], triangle);
-                ++stats.convexCandidates;
-                if (!convexCanTouch(triangle, reach)) continue;
-                ++stats.convexTriangles;
-                face = candidates[i];
-                // The wrapper carries (m_part0, m_triface0) whichever side the mesh is, as Bullet's loop does.
-                const btCollisionObjectWrapper triangleWrap(meshWrap, &triangle, meshWrap->getCollisionObject(),
-                                                            meshWrap->getWorldTransform(), m_part0, m_triface0);
-                collideChild(triangleWrap, *convexWrap, triangle, *convex, swapped);
-            }
-            meshPart->unlockChildShapes();
+        for (part = mesh->getMeshPartCount(); part-- > 0;)
+            partAgainstConvex(meshWrap, *mesh->getMeshPart(part), convexWrap, swapped, stats);
+        if (getLastManifold() != nullptr) m_resultOut->refreshContactPoints();
+    }
+
+    /// GImpact mesh against a concave shape (a triangle mesh, a heightfield; not a plane; either order), with Bullet's
+    /// contacts: Bullet's gimpact_vs_concave per mesh part in Bullet's order — the concave shape's triangles within the
+    /// part's box (processAllTriangles, Bullet's query and order), each as a triangle shape against the part
+    /// through Bullet's per-triangle loop, with Bullet's shape identifiers and result wrappers — minus, for each mesh
+    /// triangle, the part's candidate triangles that cannot make a point with it (partAgainstConvex). Bullet runs a
+    /// convex-convex test (GJK) on every candidate of its box query.
+    void processWithConcave(const btCollisionObjectWrapper* gimpactWrap, const btCollisionObjectWrapper* meshWrap,
+                            bool swapped, const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut,
+                            CullideDispatchStats& stats) {
+        clearCache();
+        m_resultOut = resultOut;
+        m_dispatchInfo = &dispatchInfo;
+        ++stats.concavePairs;
+        const auto* gimpact = static_cast<const btGImpactMeshShape*>(gimpactWrap->getCollisionShape());
+        const auto* concave = static_cast<const btConcaveShape*>(meshWrap->getCollisionShape());
+        // Bullet's gimpact_vs_concave computes the part's box in the concave shape's frame this way.
+        const btTransform gimpactInConcave = meshWrap->getWorldTransform().inverse() * gimpactWrap->getWorldTransform();
+        int& part = swapped ? m_part1 : m_part0;
+        for (part = gimpact->getMeshPartCount(); part-- > 0;) {
+            ConcaveTriangles callback(*this, gimpactWrap, meshWrap, *gimpact->getMeshPart(part), concave->getMargin(),
+                                      swapped, stats);
+            btVector3 lo, hi;
+            gimpact->getMeshPart(part)->getAabb(gimpactInConcave, lo, hi);
+            concave->processAllTriangles(&callback, lo, hi);
         }
         if (getLastManifold() != nullptr) m_resultOut->refreshContactPoints();
     }
 
-    /// One candidate triangle against the convex shape, with the result's wrapper of the mesh side replaced by the
-    /// triangle's for the call (the contact's shape identifiers and callbacks see the triangle).
-    void collideChild(const btCollisionObjectWrapper& triangleWrap, const btCollisionObjectWrapper& convexWrap,
-                      const btTriangleShapeEx& triangle, const btCollisionShape& convex, bool swapped) {
-        const bool first = m_resultOut->getBody0Wrap()->getCollisionObject() == triangleWrap.getCollisionObject();
-        const btCollisionObjectWrapper* previous = first ? m_resultOut->getBody0Wrap() : m_resultOut->getBody1Wrap();
-        if (first)
-            m_resultOut->setBody0Wrap(&triangleWrap);
-        else
-            m_resultOut->setBody1Wrap(&triangleWrap);
-        if (swapped)
-            shape_vs_shape_collision(&convexWrap, &triangleWrap, &convex, &triangle);
-        else
-            shape_vs_shape_collision(&triangleWrap, &convexWrap, &triangle, &convex);
-        if (first)
-            m_resultOut->setBody0Wrap(previous);
-        else
-            m_resultOut->setBody1Wrap(previous);
+    /// Bullet's btGImpactTriangleCallback: one triangle of the concave shape, as a triangle shape with the concave
+    /// shape's margin and its part and index as the shape identifiers of its side, against one GImpact mesh part.
+    class ConcaveTriangles final : public btTriangleCallback {
+    public:
+        ConcaveTriangles(CullideGImpactAlgorithm& algorithm, const btCollisionObjectWrapper* gimpactWrap,
+                         const btCollisionObjectWrapper* meshWrap, const btGImpactMeshShapePart& part,
+                         btScalar margin, bool swapped, CullideDispatchStats& stats)
+            : m_algorithm(algorithm), m_gimpactWrap(gimpactWrap), m_meshWrap(meshWrap), m_part(part),
+              m_margin(margin), m_swapped(swapped), m_stats(stats) {}
+
+        void processTriangle(btVector3* triangle, int partId, int triangleIndex) override {
+            btTriangleShapeEx shape(triangle[0], triangle[1], triangle[2]);
+            shape.setMargin(m_margin);
+            (m_swapped ? m_algorithm.m_part0 : m_algorithm.m_part1) = partId;
+            (m_swapped ? m_algorithm.m_triface0 : m_algorithm.m_triface1) = triangleIndex;
+            const btCollisionObjectWrapper wrap(m_meshWrap, &shape, m_meshWrap->getCollisionObject(),
+                                                m_meshWrap->getWorldTransform(), partId, triangleIndex);
+            const WrapperInResult in(*m_algorithm.m_resultOut, wrap);
+            m_algorithm.partAgainstConvex(m_gimpactWrap, m_part, &wrap, m_swapped, m_stats);
+        }
+
+    private:
+        CullideGImpactAlgorithm& m_algorithm;
+        const btCollisionObjectWrapper* m_gimpactWrap;
+        const btCollisionObjectWrapper* m_meshWrap;
+        const btGImpactMeshShapePart& m_part;
+        btScalar m_margin;
+        bool m_swapped;
+        CullideDispatchStats& m_stats;
+    };
+
+    /// Puts `wrap` in the result in place of the wrapper of its object for the scope, as Bullet's loops do around a
+    /// child shape (the contact's shape identifiers and callbacks see the child).
+    class WrapperInResult {
+    public:
+        WrapperInResult(btManifoldResult& result, const btCollisionObjectWrapper& wrap)
+            : m_result(result), m_first(result.getBody0Wrap()->getCollisionObject() == wrap.getCollisionObject()),
+              m_previous(m_first ? result.getBody0Wrap() : result.getBody1Wrap()) {
+            if (m_first)
+                m_result.setBody0Wrap(&wrap);
+            else
+                m_result.setBody1Wrap(&wrap);
+        }
+        ~WrapperInResult() {
+            if (m_first)
+                m_result.setBody0Wrap(m_previous);
+            else
+                m_result.setBody1Wrap(m_previous);
+        }
+        WrapperInResult(const WrapperInResult&) = delete;
+        WrapperInResult& operator=(const WrapperInResult&) = delete;
+
+    private:
+        btManifoldResult& m_result;
+        bool m_first;
+        const btCollisionObjectWrapper* m_previous;
+    };
+
+    /// Bullet's gimpact_vs_shape for one GImpact mesh part against a convex shape: the part's box query with the
+    /// convex shape's box in the part's frame, then every candidate triangle (last to first) against the convex shape
+    /// through the dispatcher's convex algorithm, with Bullet's shape identifiers — minus the candidates that cannot
+    /// make a point (convexCanTouch).
+    void partAgainstConvex(const btCollisionObjectWrapper* meshWrap, const btGImpactMeshShapePart& meshPart,
+                           const btCollisionObjectWrapper* convexWrap, bool swapped, CullideDispatchStats& stats) {
+        const btCollisionShape* convex = convexWrap->getCollisionShape();
+        candidates.resize(0);
+        gimpact_vs_shape_find_pairs(meshWrap->getWorldTransform(), convexWrap->getWorldTransform(), &meshPart, convex,
+                                    candidates);
+        if (candidates.size() == 0) return;
+        const ConvexReach reach = convexReach(*meshWrap, *convexWrap);
+        int& face = swapped ? m_triface1 : m_triface0;
+        meshPart.lockChildShapes();
+        btTriangleShapeEx triangle;
+        for (int i = candidates.size(); i-- > 0;) {
+            face = candidates[i];
+            meshPart.getBulletTriangle(candidates[i], triangle);
+            ++stats.convexCandidates;
+            if (!convexCanTouch(triangle, reach)) continue;
+            ++stats.convexTriangles;
+            // The wrapper carries (m_part0, m_triface0) whichever side the mesh is, as Bullet's loop does.
+            const btCollisionObjectWrapper triangleWrap(meshWrap, &triangle, meshWrap->getCollisionObject(),
+                                                        meshWrap->getWorldTransform(), m_part0, m_triface0);
+            const WrapperInResult in(*m_resultOut, triangleWrap);
+            if (swapped)
+                shape_vs_shape_collision(convexWrap, &triangleWrap, convex, &triangle);
+            else
+                shape_vs_shape_collision(&triangleWrap, convexWrap, &triangle, convex);
+        }
+        meshPart.unlockChildShapes();
     }
 
     /// GImpact mesh against a triangle mesh (either order): as Bullet's processCollision, with a stand-in mesh that
@@ -444,9 +557,20 @@ private:
         const bool gimpactFirst = body0Wrap->getCollisionShape()->getShapeType() == GIMPACT_SHAPE_PROXYTYPE;
         const btCollisionObjectWrapper* gimpactWrap = gimpactFirst ? body0Wrap : body1Wrap;
         const btCollisionObjectWrapper* meshWrap = gimpactFirst ? body1Wrap : body0Wrap;
-        if (triangles == nullptr || !meshWrap->getCollisionShape()->isConcave()) {
+        if (!meshWrap->getCollisionShape()->isConcave() ||
+            meshWrap->getCollisionShape()->getShapeType() == STATIC_PLANE_PROXYTYPE) {
+            // A compound, a plane (Bullet collides GImpact vertices with it), ...: Bullet's algorithm as it is.
             ++stats.fallbackPairs;
             btGImpactCollisionAlgorithm::processCollision(body0Wrap, body1Wrap, dispatchInfo, resultOut);
+            return;
+        }
+        if (triangles == nullptr) {  // not culled (the default): Bullet's contacts
+            if (isGImpactMesh(*gimpactWrap)) {
+                processWithConcave(gimpactWrap, meshWrap, !gimpactFirst, dispatchInfo, resultOut, stats);
+            } else {
+                ++stats.fallbackPairs;
+                btGImpactCollisionAlgorithm::processCollision(body0Wrap, body1Wrap, dispatchInfo, resultOut);
+            }
             return;
         }
         ++stats.cullidePairs;
@@ -703,9 +827,11 @@ btCollisionAlgorithm* CullideCollisionDispatcher::findAlgorithm(const btCollisio
         // custom registration wins.
         const btCollisionAlgorithmCreateFunc* registered = m_doubleDispatchContactPoints[t0][t1];
         btCollisionAlgorithmCreateFunc* replacement = nullptr;
-        const bool gimpactPair = (t0 == GIMPACT_SHAPE_PROXYTYPE &&
-                                  (t1 == GIMPACT_SHAPE_PROXYTYPE || bullet::isTriangleMeshType(t1))) ||
-                                 (bullet::isTriangleMeshType(t0) && t1 == GIMPACT_SHAPE_PROXYTYPE);
+        // GImpact against GImpact or against a concave shape (triangle meshes, heightfields, ...) but a plane, which
+        // Bullet's algorithm collides with the mesh's vertices (GIMPACT_VS_PLANE_COLLISION).
+        const auto concave = [](int t) { return btBroadphaseProxy::isConcave(t) && t != STATIC_PLANE_PROXYTYPE; };
+        const bool gimpactPair = (t0 == GIMPACT_SHAPE_PROXYTYPE && concave(t1)) ||
+                                 (concave(t0) && t1 == GIMPACT_SHAPE_PROXYTYPE);
         const bool gimpactConvexPair = CullideGImpactAlgorithm::trimeshAgainstConvex(body0Wrap, body1Wrap) ||
                                        CullideGImpactAlgorithm::trimeshAgainstConvex(body1Wrap, body0Wrap);
         // Convex-mesh pairs read the culler's triangles only with convex-mesh culling on; otherwise Bullet's own
@@ -756,6 +882,7 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
     m_total.clearedPairs += m_current.clearedPairs;
     m_total.penetrationPairs += m_current.penetrationPairs;
     m_total.convexPairs += m_current.convexPairs;
+    m_total.concavePairs += m_current.concavePairs;
     m_total.convexCandidates += m_current.convexCandidates;
     m_total.convexTriangles += m_current.convexTriangles;
     m_total.threadedMeshPairs += m_current.threadedMeshPairs;

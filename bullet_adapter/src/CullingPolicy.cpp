@@ -4,16 +4,18 @@
 
 namespace cullide::bullet {
 
-bool trianglesConsumed(GeometryKind a, GeometryKind b, bool convexVsMesh, bool gimpactVsGimpact) {
+bool trianglesConsumed(GeometryKind a, GeometryKind b, const CulledKinds& kinds) {
     if (a > b) std::swap(a, b);  // enum order: None, GImpactMesh, TriangleMesh, ConvexHull, Compound
     if (a == GeometryKind::GImpactMesh)
-        return (gimpactVsGimpact && b == GeometryKind::GImpactMesh) || b == GeometryKind::TriangleMesh;
+        return (kinds.gimpactVsGimpact && b == GeometryKind::GImpactMesh) ||
+               (kinds.gimpactVsMesh && b == GeometryKind::TriangleMesh);
     if (a == GeometryKind::TriangleMesh)
-        return convexVsMesh && (b == GeometryKind::ConvexHull || b == GeometryKind::Compound);
+        return kinds.convexVsMesh && (b == GeometryKind::ConvexHull || b == GeometryKind::Compound);
     return false;
 }
 
-bool prunedByCuller(GeometryKind a, bool convexA, GeometryKind b, bool convexB) {
+bool prunedByCuller(GeometryKind a, bool convexA, GeometryKind b, bool convexB, const CulledKinds& kinds) {
+    if (!kinds.gimpactVsConvex) return false;
     auto convex = [](GeometryKind k, bool isConvex) {
         return k == GeometryKind::ConvexHull || k == GeometryKind::Compound || (k == GeometryKind::None && isConvex);
     };

@@ -10,18 +10,26 @@
 
 namespace cullide::bullet {
 
-/// Whether the pair's narrow phase reads the culler's surviving triangles (CullideCollisionDispatcher), so that the
-/// CULLIDE levels run for it: GImpact against a triangle mesh, GImpact against GImpact when `gimpactVsGimpact` is set,
-/// and, when `convexVsMesh` is set, convex hulls and compounds against a triangle mesh. Every other pair (primitives,
-/// hull-hull, hull-GImpact, GImpact-GImpact by default, ...) goes from the object level straight to the dispatcher's
-/// algorithms: nobody would read its triangles.
-bool trianglesConsumed(GeometryKind a, GeometryKind b, bool convexVsMesh, bool gimpactVsGimpact);
+/// The kinds of pair whose narrow phase reads the culler's triangles, each an application's setting
+/// (CullideBroadphase::setConvexMeshCulling, setGImpactPairCulling, setGImpactMeshCulling; all off by default).
+struct CulledKinds {
+    bool convexVsMesh = false;      ///< convex hulls and compounds against a triangle mesh
+    bool gimpactVsGimpact = false;  ///< GImpact against GImpact
+    bool gimpactVsMesh = false;     ///< GImpact against a triangle mesh
+    bool gimpactVsConvex = false;   ///< GImpact against a convex shape: decided by the culler (prunedByCuller)
+};
 
-/// Whether the culler decides a pair that reads no triangles: a GImpact mesh against a convex shape (a hull, a
-/// compound of convex children, or a convex primitive: `convexA`/`convexB`). Bullet's algorithm for such a pair
-/// tests every GImpact triangle whose box meets the other's AABB; the culler proves most AABB-overlapping pairs apart
-/// at a fraction of that (measured on the tori pile, docs/drop-in.md), and a pair it keeps runs Bullet's algorithm.
-bool prunedByCuller(GeometryKind a, bool convexA, GeometryKind b, bool convexB);
+/// Whether the pair's narrow phase reads the culler's surviving triangles (CullideCollisionDispatcher), so that the
+/// CULLIDE levels run for it: the pairs of the kinds set in `kinds`. Every other pair (primitives, hull-hull,
+/// hull-GImpact, by default GImpact-GImpact and GImpact-mesh, ...) goes from the object level straight to the
+/// dispatcher's algorithms: nobody would read its triangles.
+bool trianglesConsumed(GeometryKind a, GeometryKind b, const CulledKinds& kinds);
+
+/// Whether the culler decides a pair that reads no triangles, with `kinds.gimpactVsConvex` set: a GImpact mesh
+/// against a convex shape (a hull, a compound of convex children, or a convex primitive: `convexA`/`convexB`). The
+/// culler proves AABB-overlapping pairs apart and a pair it keeps runs the dispatcher's GImpact-convex loop; measured
+/// on the CPU path the culling costs more than the loop it saves (docs/drop-in.md, session 17), hence off by default.
+bool prunedByCuller(GeometryKind a, bool convexA, GeometryKind b, bool convexB, const CulledKinds& kinds);
 
 /// One object of the culling frame as the margin rule sees it.
 struct MarginEntry {

@@ -16,33 +16,43 @@ TEST(CullingPolicy, OnlyPairsWhoseTrianglesAreReadAreCulled) {
                                 GeometryKind::ConvexHull, GeometryKind::Compound};
     for (GeometryKind a : all)
         for (GeometryKind b : all)
-            for (bool convex : {false, true})
-                for (bool gimpactPairs : {false, true}) {
-                    const bool gimpact = (a == GeometryKind::GImpactMesh &&
-                                          ((gimpactPairs && b == GeometryKind::GImpactMesh) ||
-                                           b == GeometryKind::TriangleMesh)) ||
-                                         (b == GeometryKind::GImpactMesh && a == GeometryKind::TriangleMesh);
-                    auto convexSide = [](GeometryKind k) {
-                        return k == GeometryKind::ConvexHull || k == GeometryKind::Compound;
-                    };
-                    const bool convexMesh = convex && ((convexSide(a) && b == GeometryKind::TriangleMesh) ||
-                                                       (convexSide(b) && a == GeometryKind::TriangleMesh));
-                    EXPECT_EQ(bullet::trianglesConsumed(a, b, convex, gimpactPairs), gimpact || convexMesh)
-                        << int(a) << " " << int(b) << " " << convex << " " << gimpactPairs;
-                    EXPECT_EQ(bullet::trianglesConsumed(a, b, convex, gimpactPairs),
-                              bullet::trianglesConsumed(b, a, convex, gimpactPairs));
-                }
+            for (int bits = 0; bits < 8; ++bits) {
+                bullet::CulledKinds kinds;
+                kinds.convexVsMesh = (bits & 1) != 0;
+                kinds.gimpactVsGimpact = (bits & 2) != 0;
+                kinds.gimpactVsMesh = (bits & 4) != 0;
+                const auto is = [&](GeometryKind x, GeometryKind y) {
+                    return (a == x && b == y) || (a == y && b == x);
+                };
+                const bool gimpact = (kinds.gimpactVsGimpact && is(GeometryKind::GImpactMesh, GeometryKind::GImpactMesh)) ||
+                                     (kinds.gimpactVsMesh && is(GeometryKind::GImpactMesh, GeometryKind::TriangleMesh));
+                const bool convexMesh = kinds.convexVsMesh && (is(GeometryKind::ConvexHull, GeometryKind::TriangleMesh) ||
+                                                               is(GeometryKind::Compound, GeometryKind::TriangleMesh));
+                EXPECT_EQ(bullet::trianglesConsumed(a, b, kinds), gimpact || convexMesh)
+                    << int(a) << " " << int(b) << " " << bits;
+                EXPECT_EQ(bullet::trianglesConsumed(a, b, kinds), bullet::trianglesConsumed(b, a, kinds));
+            }
+    // The defaults: no kind of pair is culled for its triangles.
+    for (GeometryKind a : all)
+        for (GeometryKind b : all) EXPECT_FALSE(bullet::trianglesConsumed(a, b, bullet::CulledKinds{}));
 }
 
-TEST(CullingPolicy, GImpactAgainstConvexShapesIsPrunedByTheCuller) {
+TEST(CullingPolicy, GImpactAgainstConvexShapesIsPrunedByTheCullerWhenAsked) {
     using K = GeometryKind;
-    EXPECT_TRUE(bullet::prunedByCuller(K::GImpactMesh, false, K::None, true));   // a box, a sphere
-    EXPECT_TRUE(bullet::prunedByCuller(K::ConvexHull, true, K::GImpactMesh, false));
-    EXPECT_TRUE(bullet::prunedByCuller(K::GImpactMesh, false, K::Compound, false));
-    EXPECT_FALSE(bullet::prunedByCuller(K::GImpactMesh, false, K::None, false));  // a soft body, a concave shape
-    EXPECT_FALSE(bullet::prunedByCuller(K::TriangleMesh, false, K::None, true));
-    EXPECT_FALSE(bullet::prunedByCuller(K::ConvexHull, true, K::None, true));
-    EXPECT_FALSE(bullet::prunedByCuller(K::GImpactMesh, false, K::GImpactMesh, false));  // reads triangles instead
+    bullet::CulledKinds on;
+    on.gimpactVsConvex = true;
+    EXPECT_TRUE(bullet::prunedByCuller(K::GImpactMesh, false, K::None, true, on));  // a box, a sphere
+    EXPECT_TRUE(bullet::prunedByCuller(K::ConvexHull, true, K::GImpactMesh, false, on));
+    EXPECT_TRUE(bullet::prunedByCuller(K::GImpactMesh, false, K::Compound, false, on));
+    EXPECT_FALSE(bullet::prunedByCuller(K::GImpactMesh, false, K::None, false, on));  // a soft body, a concave shape
+    EXPECT_FALSE(bullet::prunedByCuller(K::TriangleMesh, false, K::None, true, on));
+    EXPECT_FALSE(bullet::prunedByCuller(K::ConvexHull, true, K::None, true, on));
+    EXPECT_FALSE(bullet::prunedByCuller(K::GImpactMesh, false, K::GImpactMesh, false, on));  // reads triangles instead
+    // Off (the default): no pair is decided by the culler.
+    const bullet::CulledKinds off;
+    EXPECT_FALSE(bullet::prunedByCuller(K::GImpactMesh, false, K::None, true, off));
+    EXPECT_FALSE(bullet::prunedByCuller(K::ConvexHull, true, K::GImpactMesh, false, off));
+    EXPECT_FALSE(bullet::prunedByCuller(K::GImpactMesh, false, K::Compound, false, off));
 }
 
 MarginEntry entry(GeometryKind kind, double margin, double disc, bool moving, double coordinate = 0.0) {

@@ -7,6 +7,7 @@
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <BulletCollision/Gimpact/btGImpactShape.h>
 
+#include <BulletCollision/CollisionShapes/btHeightfieldTerrainShape.h>
 #include <BulletCollision/CollisionShapes/btScaledBvhTriangleMeshShape.h>
 #include <gtest/gtest.h>
 
@@ -68,9 +69,9 @@ TEST(BulletGImpact, ToriNoContactMissingAndContactsAgree) {
     expectCulledAgreement(run, 300);
 }
 
-/// GImpact tori falling on a static btBvhTriangleMeshShape landscape: Bullet's GImpact-vs-concave path (a BVH query
-/// of the torus and a convex-convex test per landscape triangle under it) runs on CULLIDE's surviving landscape
-/// triangles only.
+/// GImpact tori falling on a static btBvhTriangleMeshShape landscape, with GImpact-mesh culling on: Bullet's
+/// GImpact-vs-concave path (a BVH query of the torus and a convex-convex test per landscape triangle under it) runs on
+/// CULLIDE's surviving landscape triangles only.
 TEST(BulletGImpact, ToriOnATriangleMeshLandscape) {
     CULLIDE_BULLET_REQUIRE_GL();
     ShapeStore shapes;
@@ -90,6 +91,7 @@ TEST(BulletGImpact, ToriOnATriangleMeshLandscape) {
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide);
     cullide.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
+    cullide.cullideBroadphase()->setGImpactMeshCulling(true);  // the culled GImpact-mesh path
     populate(reference);
     populate(cullide);
     MirrorOptions options;
@@ -127,6 +129,7 @@ TEST(BulletGImpact, ToriOnAScaledTriangleMeshLandscape) {
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide);
     cullide.cullideBroadphase()->setGImpactPairCulling(true);  // every pair through the culler, as above
+    cullide.cullideBroadphase()->setGImpactMeshCulling(true);
     populate(reference);
     populate(cullide);
     MirrorOptions options;
@@ -231,9 +234,9 @@ TEST(BulletGImpact, ToriOnBoxesWithAKinematicTorus) {
 /// GImpact tori on a large tilted ground box, with hulls and spheres among them. Bullet's query box for a torus is
 /// the ground's AABB in the torus's frame, which holds nearly all of the torus: CULLIDE's dispatcher runs Bullet's
 /// per-triangle loop on the triangles within reach of the convex shape only. Every contact point (position,
-/// normal, distance, triangle) must be Bullet's, and most candidate triangles must have been skipped.
-TEST(BulletGImpact, ConvexShapesGetBulletsContactsFromTrianglesWithinReach) {
-    CULLIDE_BULLET_REQUIRE_GL();
+/// normal, distance, triangle) must be Bullet's, and most candidate triangles must have been skipped; with
+/// GImpact-convex culling on as off (the default).
+void expectConvexContactsFromTrianglesWithinReach(bool convexCulling) {
     ShapeStore shapes;
     btCollisionShape* ground = shapes.box(btVector3(12, btScalar(0.5), 12));
     btCollisionShape* torus = shapes.gimpactTorus(1, btScalar(0.3), 24, 12, btScalar(0.04));
@@ -253,6 +256,7 @@ TEST(BulletGImpact, ConvexShapesGetBulletsContactsFromTrianglesWithinReach) {
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide);
     cullide.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
+    cullide.cullideBroadphase()->setGImpactConvexCulling(convexCulling);
     populate(reference);
     populate(cullide);
     MirrorOptions options;
@@ -278,6 +282,88 @@ TEST(BulletGImpact, ConvexShapesGetBulletsContactsFromTrianglesWithinReach) {
     EXPECT_GT(convexPairs, 300u) << "no GImpact-convex pair ran: the scene tests nothing";
     EXPECT_GT(tested, 0u);
     EXPECT_LT(tested * 4, candidates) << "the reach filter kept most of Bullet's candidates";
+}
+
+TEST(BulletGImpact, ConvexShapesGetBulletsContactsFromTrianglesWithinReach) {
+    CULLIDE_BULLET_REQUIRE_GL();
+    expectConvexContactsFromTrianglesWithinReach(false);
+}
+
+TEST(BulletGImpact, ConvexShapesCulledGetBulletsContactsFromTrianglesWithinReach) {
+    CULLIDE_BULLET_REQUIRE_GL();
+    expectConvexContactsFromTrianglesWithinReach(true);
+}
+
+/// GImpact tori dropped on a static concave ground (turned, off the origin), added before the tori (the ground is
+/// body 0 of its pairs) or after them. By default (no GImpact-mesh culling) the dispatcher runs Bullet's gimpact_vs_concave itself, with the
+/// torus triangles out of reach of each ground triangle skipped: every contact point (position, normal, distance,
+/// triangle of both sides) must be Bullet's, and candidates must have been skipped.
+void expectConcaveContactsAsBullets(btCollisionShape* ground, bool groundFirst, const char* what) {
+    ShapeStore shapes;
+    btCollisionShape* torus = shapes.gimpactTorus(1, btScalar(0.3), 24, 12, btScalar(0.04));
+    // Turned and moved off the origin: the GImpact part's box must be mapped into the ground's frame.
+    const btTransform pose(btQuaternion(btVector3(0, 1, 0), btScalar(0.3)),
+                           btVector3(btScalar(0.4), btScalar(-0.2), btScalar(-0.3)));
+    auto populate = [&](TestWorld& w) {
+        btGImpactCollisionAlgorithm::registerAlgorithm(&w.dispatcher());
+        if (groundFirst) w.addBody(ground, 0, pose);
+        for (int k = 0; k < 5; ++k)
+            w.addBody(torus, 1,
+                      btTransform(btQuaternion(btVector3(1, btScalar(0.25) * btScalar(k), 0).normalized(),
+                                               btScalar(0.4) + btScalar(0.5) * btScalar(k)),
+                                  btVector3(btScalar(2.3) * std::sin(btScalar(1.5) * btScalar(k)),
+                                            btScalar(1.5) + btScalar(1.0) * btScalar(k),
+                                            btScalar(2.3) * std::cos(btScalar(1.2) * btScalar(k)))));
+        if (!groundFirst) w.addBody(ground, 0, pose);
+    };
+    TestWorld reference(PipelineKind::Default);
+    TestWorld cullide(PipelineKind::Cullide);
+    populate(reference);
+    populate(cullide);
+    MirrorOptions options;
+    options.steps = 150;  // exact tolerance: point by point
+    std::size_t concavePairs = 0, candidates = 0, tested = 0;
+    options.each = [&](int, TestWorld&, TestWorld& c) {
+        const CullideDispatchStats& d = c.cullideDispatcher()->getLastStepStats();
+        concavePairs += d.concavePairs;
+        candidates += d.convexCandidates;
+        tested += d.convexTriangles;
+    };
+    const MirrorRun run = runMirrored(reference, cullide, options);
+    printMirrorRun(what, run);
+    std::printf("  GImpact-concave: %zu pair-steps, %zu of %zu candidate triangles within reach\n", concavePairs,
+                tested, candidates);
+    expectAgreement(run, 200);
+    EXPECT_GT(run.agreement.pointComparedPairs, 200u) << "contacts must be compared point by point";
+    EXPECT_GT(concavePairs, 200u) << "no GImpact-concave pair ran the reproduction";
+    EXPECT_EQ(run.cullidePairsFromTriangles, 0u) << "GImpact-mesh pairs are not culled by default";
+    EXPECT_GT(tested, 0u);
+    EXPECT_LT(tested, candidates) << "no candidate out of reach was skipped";
+}
+
+TEST(BulletGImpact, TriangleMeshGroundGetsBulletsContactsPointForPoint) {
+    CULLIDE_BULLET_REQUIRE_GL();
+    ShapeStore shapes;
+    btCollisionShape* ground = shapes.landscape(24, btScalar(0.5), btScalar(0.5));
+    expectConcaveContactsAsBullets(ground, true, "gimpact tori on a BVH mesh (ground body 0), default");
+    expectConcaveContactsAsBullets(ground, false, "gimpact tori on a BVH mesh (ground body 1), default");
+}
+
+TEST(BulletGImpact, ScaledMeshAndHeightfieldGroundsGetBulletsContactsPointForPoint) {
+    CULLIDE_BULLET_REQUIRE_GL();
+    ShapeStore shapes;
+    auto* bvh = static_cast<btBvhTriangleMeshShape*>(shapes.landscape(24, btScalar(0.5), btScalar(0.5)));
+    btScaledBvhTriangleMeshShape scaled(bvh, btVector3(btScalar(1.3), btScalar(0.7), btScalar(0.9)));
+    expectConcaveContactsAsBullets(&scaled, true, "gimpact tori on a scaled BVH mesh, default");
+    const int side = 33;
+    std::vector<float> heights(static_cast<std::size_t>(side * side));
+    for (int z = 0; z < side; ++z)
+        for (int x = 0; x < side; ++x)
+            heights[static_cast<std::size_t>(z * side + x)] =
+                0.4f * std::sin(0.5f * float(x)) * std::cos(0.4f * float(z));
+    btHeightfieldTerrainShape field(side, side, heights.data(), 1.0f, -0.4f, 0.4f, 1, PHY_FLOAT, false);
+    field.setLocalScaling(btVector3(btScalar(0.4), 1, btScalar(0.4)));
+    expectConcaveContactsAsBullets(&field, false, "gimpact tori on a heightfield, default");
 }
 
 TEST(BulletGImpact, WithoutRegisterAlgorithmMeshPairsStayEmptyLikeBullet) {

@@ -1,6 +1,7 @@
 // A mesh shared by many bodies is kept once (CullideBroadphase::getMemoryStats): N GImpact tori with one shape,
-// moving over a BVH landscape (GImpact-mesh pairs go through the culler), keep one local geometry for the tori and
-// one for the landscape, and per moving body only a small record, no world-space copy. The CPU reference culler is
+// moving over a BVH landscape (GImpact-mesh pairs through the culler: setGImpactMeshCulling), keep one local geometry
+// for the tori and one for the landscape, and per moving body only a small record, no world-space copy. The CPU
+// reference culler is
 // used (no GL needed).
 #include "SceneSupport.h"
 
@@ -28,6 +29,7 @@ Kept runSharedTori(int bodies) {
     btCollisionShape* landscape = shapes.landscape(24, btScalar(1.0), btScalar(0.3));
     btDefaultCollisionConfiguration config;
     CullideBroadphase broadphase(Settings{}, nullptr, referenceFactory());
+    broadphase.setGImpactMeshCulling(true);
     CullideCollisionDispatcher dispatcher(&config, &broadphase);
     btGImpactCollisionAlgorithm::registerAlgorithm(&dispatcher);
     btCollisionWorld world(&dispatcher, &broadphase, &config);

@@ -166,8 +166,8 @@ public:
     /// dispatcher's convex-concave algorithm reads only the mesh triangles CULLIDE kept near the hull; off, such
     /// pairs go from the object level straight to Bullet's algorithm, whose own BVH query of the mesh is already
     /// cheap: measured on 1,000 hulls over a 32K-triangle landscape (docs/benchmarks.md, cullide-swap-bench), the
-    /// culling costs more than the narrow phase it saves on the CPU path. GImpact-convex and GImpact-mesh pairs are
-    /// always culled (GImpact-GImpact: setGImpactPairCulling). Set it
+    /// culling costs more than the narrow phase it saves on the CPU path (GImpact pairs: setGImpactPairCulling,
+    /// setGImpactMeshCulling, setGImpactConvexCulling). Set it
     /// before the first step: CullideCollisionDispatcher picks the culled hull/compound-mesh algorithm when a pair's
     /// algorithm is created (pairs created while it is off keep Bullet's own algorithm, which stays correct).
     void setConvexMeshCulling(bool enable);
@@ -184,6 +184,27 @@ public:
     /// the default is off.
     void setGImpactPairCulling(bool enable);
     bool getGImpactPairCulling() const;
+
+    /// GImpact meshes against triangle meshes (btBvhTriangleMeshShape, btScaledBvhTriangleMeshShape) through the
+    /// culler's levels (default: off). Off, such a pair gets Bullet's contacts point for point:
+    /// CullideCollisionDispatcher runs Bullet's own gimpact_vs_concave (the mesh's triangles within the GImpact part's
+    /// box, in Bullet's order, each against the GImpact part's box-query candidates through the convex algorithm),
+    /// skipping the candidates too far from the mesh triangle for any point — Bullet runs GJK on each. The same holds
+    /// for GImpact against other concave shapes (heightfields; not planes: Bullet's own), never culled. On, the mesh's
+    /// triangles are the culler's near ones in sorted order instead of Bullet's query: the 4-point manifold can keep
+    /// other points, and the culling costs more than it saves on the CPU path (docs/drop-in.md, 'gimpact-landscape').
+    /// Set it before the first step.
+    void setGImpactMeshCulling(bool enable);
+    bool getGImpactMeshCulling() const;
+
+    /// GImpact meshes against convex shapes (boxes, spheres, hulls, compounds of convex children) decided by the
+    /// culler (default: off). On, a pair the culler proves farther apart than its margin makes no contact that step
+    /// and the others run the dispatcher's loop; off, every pair runs it: Bullet's per-triangle loop (its box query,
+    /// then GJK per candidate triangle, Bullet's contacts point for point) minus the candidates too far from the
+    /// convex shape for any point. Measured on the CPU path (docs/drop-in.md, session 17) the culling costs more than
+    /// the loop it saves. Set it before the first step.
+    void setGImpactConvexCulling(bool enable);
+    bool getGImpactConvexCulling() const;
 
     const CullideFrameStats& getLastFrameStats() const;
     /// What is kept between steps (computed on each call: a pass over the kept objects and shapes).

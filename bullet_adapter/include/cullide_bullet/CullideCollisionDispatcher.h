@@ -58,7 +58,10 @@ struct CullideDispatchStats {
                                         ///< in cullidePairs; see CullideBroadphase::setDeepPenetrationFallback)
     /// GImpact mesh vs convex shape pairs (Bullet's per-triangle loop, minus triangles out of reach)
     std::size_t convexPairs = 0;
-    std::size_t convexCandidates = 0;   ///< ... triangles of Bullet's box query
+    /// GImpact mesh vs concave shape (triangle mesh, heightfield, plane) pairs not culled: Bullet's per-triangle loop
+    /// for each concave triangle within reach, minus GImpact triangles out of reach of it
+    std::size_t concavePairs = 0;
+    std::size_t convexCandidates = 0;   ///< ... triangles of Bullet's box queries (both kinds of pair)
     std::size_t convexTriangles = 0;    ///< ... of which within reach of the convex shape: run through GJK
     /// GImpact mesh-mesh pairs whose contacts were computed ahead, on the narrow-phase threads
     /// (setNarrowPhaseThreads), and their search parts (a large pair's search is cut into several)
