@@ -17,6 +17,7 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <vector>
 
 namespace cullide::test {
@@ -231,6 +232,20 @@ TEST(BulletGImpact, ToriOnBoxesWithAKinematicTorus) {
     EXPECT_GT(kinematicPairSteps, 20u) << "the kinematic torus never swept into the pile: the scene tests nothing";
 }
 
+/// The dispatcher's GImpact per-triangle loop (GImpact-convex and GImpact-concave pairs), summed over a mirrored run.
+struct LoopCounts {
+    std::size_t convexPairs = 0, concavePairs = 0, candidates = 0, tested = 0;
+    std::function<void(int, TestWorld&, TestWorld&)> collector() {
+        return [this](int, TestWorld&, TestWorld& c) {
+            const CullideDispatchStats& d = c.cullideDispatcher()->getLastStepStats();
+            convexPairs += d.convexPairs;
+            concavePairs += d.concavePairs;
+            candidates += d.convexCandidates;
+            tested += d.convexTriangles;
+        };
+    }
+};
+
 /// GImpact tori on a large tilted ground box, with hulls and spheres among them. Bullet's query box for a torus is
 /// the ground's AABB in the torus's frame, which holds nearly all of the torus: CULLIDE's dispatcher runs Bullet's
 /// per-triangle loop on the triangles within reach of the convex shape only. Every contact point (position,
@@ -267,17 +282,13 @@ void expectConvexContactsFromTrianglesWithinReach(bool convexCulling) {
     options.tolerance = [&](const std::pair<int, int>& pair) {
         return isTorus(pair.first) && isTorus(pair.second) ? 2.0 * double(gContactBreakingThreshold) : 1e-6;
     };
-    std::size_t candidates = 0, tested = 0, convexPairs = 0;
-    options.each = [&](int, TestWorld&, TestWorld& c) {
-        const CullideDispatchStats& d = c.cullideDispatcher()->getLastStepStats();
-        candidates += d.convexCandidates;
-        tested += d.convexTriangles;
-        convexPairs += d.convexPairs;
-    };
+    LoopCounts counts;
+    options.each = counts.collector();
     const MirrorRun run = runMirrored(reference, cullide, options);
     printMirrorRun("gimpact tori, hulls and spheres on a tilted ground box", run);
-    std::printf("  GImpact-convex: %zu pair-steps, %zu of %zu candidate triangles within reach\n", convexPairs, tested,
-                candidates);
+    std::printf("  GImpact-convex: %zu pair-steps, %zu of %zu candidate triangles within reach\n", counts.convexPairs,
+                counts.tested, counts.candidates);
+    const std::size_t convexPairs = counts.convexPairs, tested = counts.tested, candidates = counts.candidates;
     expectAgreement(run, 600);
     EXPECT_GT(convexPairs, 300u) << "no GImpact-convex pair ran: the scene tests nothing";
     EXPECT_GT(tested, 0u);
@@ -322,17 +333,13 @@ void expectConcaveContactsAsBullets(btCollisionShape* ground, bool groundFirst, 
     populate(cullide);
     MirrorOptions options;
     options.steps = 150;  // exact tolerance: point by point
-    std::size_t concavePairs = 0, candidates = 0, tested = 0;
-    options.each = [&](int, TestWorld&, TestWorld& c) {
-        const CullideDispatchStats& d = c.cullideDispatcher()->getLastStepStats();
-        concavePairs += d.concavePairs;
-        candidates += d.convexCandidates;
-        tested += d.convexTriangles;
-    };
+    LoopCounts counts;
+    options.each = counts.collector();
     const MirrorRun run = runMirrored(reference, cullide, options);
     printMirrorRun(what, run);
-    std::printf("  GImpact-concave: %zu pair-steps, %zu of %zu candidate triangles within reach\n", concavePairs,
-                tested, candidates);
+    std::printf("  GImpact-concave: %zu pair-steps, %zu of %zu candidate triangles within reach\n",
+                counts.concavePairs, counts.tested, counts.candidates);
+    const std::size_t concavePairs = counts.concavePairs, tested = counts.tested, candidates = counts.candidates;
     expectAgreement(run, 200);
     EXPECT_GT(run.agreement.pointComparedPairs, 200u) << "contacts must be compared point by point";
     EXPECT_GT(concavePairs, 200u) << "no GImpact-concave pair ran the reproduction";
