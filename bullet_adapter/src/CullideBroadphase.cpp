@@ -113,6 +113,7 @@ struct CullideBroadphase::Impl {
     /// interpenetrating are recorded as such without culling.
     void collectCandidates(btDispatcher* dispatcher) {
         candidates.clear();
+        if (!culledKinds.any()) return;  // the defaults: no scan of the cache's pairs at all
         btOverlappingPairCache* pairs = objectLevel.cache();
         const int n = pairs->getNumOverlappingPairs();
         if (n == 0) return;

@@ -17,6 +17,9 @@ struct CulledKinds {
     bool gimpactVsGimpact = false;  ///< GImpact against GImpact
     bool gimpactVsMesh = false;     ///< GImpact against a triangle mesh
     bool gimpactVsConvex = false;   ///< GImpact against a convex shape: decided by the culler (prunedByCuller)
+
+    /// Whether any kind is culled: with none (the default) no pair goes through the culler.
+    bool any() const { return convexVsMesh || gimpactVsGimpact || gimpactVsMesh || gimpactVsConvex; }
 };
 
 /// Whether the pair's narrow phase reads the culler's surviving triangles (CullideCollisionDispatcher), so that the

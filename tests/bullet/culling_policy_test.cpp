@@ -32,6 +32,10 @@ TEST(CullingPolicy, OnlyPairsWhoseTrianglesAreReadAreCulled) {
                     << int(a) << " " << int(b) << " " << bits;
                 EXPECT_EQ(bullet::trianglesConsumed(a, b, kinds), bullet::trianglesConsumed(b, a, kinds));
             }
+    EXPECT_FALSE(bullet::CulledKinds{}.any());
+    bullet::CulledKinds one;
+    one.gimpactVsConvex = true;
+    EXPECT_TRUE(one.any());
     // The defaults: no kind of pair is culled for its triangles.
     for (GeometryKind a : all)
         for (GeometryKind b : all) EXPECT_FALSE(bullet::trianglesConsumed(a, b, bullet::CulledKinds{}));
