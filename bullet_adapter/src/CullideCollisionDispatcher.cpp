@@ -4,6 +4,7 @@
 #include "GImpactLeafPairs.h"
 #include "GImpactMeshContacts.h"
 #include "ShapeGeometry.h"
+#include "ThreadedPairs.h"
 #include "cullide/TaskPool.h"
 #include "cullide/Timer.h"
 
@@ -20,6 +21,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <thread>
 #include <typeinfo>
 #include <unordered_map>
@@ -693,25 +695,47 @@ const btGImpactMeshShape* asGImpactMesh(const btCollisionShape* shape) {
     return mesh;
 }
 
-/// Bullet's dispatch loop (btCollisionDispatcher's: the near callback for every pair), except for pairs provably
-/// apart (ApartPairs.h): their points are cleared and their algorithm is not called.
-class SkipApartPairs final : public btOverlapCallback {
+/// Bullet's dispatch loop (btCollisionDispatcher's: the near callback for every pair, in the pair cache's order),
+/// except for pairs provably apart (ApartPairs.h): their points are cleared and their algorithm is not called. Given
+/// a test for pairs that may run on the narrow-phase threads (ThreadedPairs.h) and a stream, it hands those pairs to
+/// the stream (the worker pool collides them meanwhile) and runs the others itself, in the cache's order, so that
+/// manifolds and algorithms are made and freed in Bullet's order. Without a stream it runs every pair itself.
+class DispatchLoop final : public btOverlapCallback {
 public:
-    SkipApartPairs(btCollisionDispatcher& dispatcher, const btDispatcherInfo& info)
-        : m_dispatcher(dispatcher), m_info(info) {}
+    /// The kind of a pair's algorithm if it may run on a narrow-phase thread, else AlgorithmKind::Other.
+    using Threadable = std::function<bullet::AlgorithmKind(btBroadphasePair&)>;
+    DispatchLoop(btCollisionDispatcher& dispatcher, const btDispatcherInfo& info, const Threadable* threadable,
+                 bullet::PairStream* stream)
+        : m_dispatcher(dispatcher), m_info(info), m_threadable(threadable), m_stream(stream) {}
     bool processOverlap(btBroadphasePair& pair) override {
-        if (bullet::clearIfApart(pair, m_dispatcher, m_scratch))
+        if (bullet::clearIfApart(pair, m_dispatcher, m_scratch)) {
             ++skipped;
-        else
+            return false;
+        }
+        const bullet::AlgorithmKind kind = m_threadable != nullptr ? (*m_threadable)(pair) : bullet::AlgorithmKind::Other;
+        if (!bullet::worthHandingOff(kind)) {
             btCollisionDispatcher::defaultNearCallback(pair, m_dispatcher, m_info);
+        } else {
+            threadableCost += bullet::typicalCost(kind);
+            if (m_stream == nullptr || !m_stream->push(&pair)) bullet::collidePair(pair, m_info);
+        }
         return false;  // the pair stays in the cache
     }
     std::size_t skipped = 0;
+    std::size_t threadableCost = 0;  ///< bullet::typicalCost of the pairs that could run on the threads
 
 private:
     btCollisionDispatcher& m_dispatcher;
     const btDispatcherInfo& m_info;
+    const Threadable* m_threadable;
+    bullet::PairStream* m_stream;
     btManifoldArray m_scratch;
+};
+
+/// Closes a stream when the producer is done, also when it throws (the consumers would wait for more).
+struct CloseWhenDone {
+    bullet::PairStream& stream;
+    ~CloseWhenDone() { stream.close(); }
 };
 
 template <typename T>
@@ -752,7 +776,7 @@ void CullideCollisionDispatcher::computeMeshContactsAhead(btOverlappingPairCache
                                                          const btDispatcherInfo& dispatchInfo) {
     detail::MeshContactBatch& batch = *m_meshContacts;
     batch.clear();
-    const unsigned threads = m_threads != 0 ? m_threads : machineThreads();
+    const unsigned threads = narrowPhaseThreads();
     // Only where the dispatch will run the GImpact algorithm's mesh-mesh path: discrete dispatch, Bullet's GImpact
     // algorithm registered (then replaced by ours in findAlgorithm), more than one thread to use.
     if (threads < 2 || dispatchInfo.m_dispatchFunc != btDispatcherInfo::DISPATCH_DISCRETE ||
@@ -778,13 +802,43 @@ void CullideCollisionDispatcher::computeMeshContactsAhead(btOverlappingPairCache
         batch.add(object0, object1, *shape0, *shape1, object0->getWorldTransform(), object1->getWorldTransform());
     }
     if (batch.size() == 0) return;
-    if (!m_pool || m_pool->size() != threads) m_pool = std::make_unique<TaskPool>(threads);
-    batch.run(m_pool.get());
+    batch.run(&pool(threads));
     m_current.threadedMeshPairs = batch.size();
     m_current.threadedTasks = batch.taskCount();
 }
 
 CullideCollisionDispatcher::~CullideCollisionDispatcher() = default;
+
+unsigned CullideCollisionDispatcher::narrowPhaseThreads() const {
+    return m_threads != 0 ? m_threads : machineThreads();
+}
+
+TaskPool& CullideCollisionDispatcher::pool(unsigned threads) {
+    if (!m_pool || m_pool->size() != threads) m_pool = std::make_unique<TaskPool>(threads);
+    return *m_pool;
+}
+
+bullet::AlgorithmKind CullideCollisionDispatcher::threadablePair(btBroadphasePair& pair) {
+    using bullet::AlgorithmKind;
+    // An algorithm not made yet is made by this dispatch, on the calling thread, in Bullet's order.
+    if (pair.m_algorithm == nullptr) return AlgorithmKind::Other;
+    const auto* object0 = static_cast<const btCollisionObject*>(pair.m_pProxy0->m_clientObject);
+    const auto* object1 = static_cast<const btCollisionObject*>(pair.m_pProxy1->m_clientObject);
+    if (!bullet::objectsMayThread(*object0, *object1) || !needsCollision(object0, object1)) return AlgorithmKind::Other;
+    const AlgorithmKind kind = bullet::algorithmKindOf(typeid(*pair.m_algorithm));
+    if (kind == AlgorithmKind::Other) return kind;
+    const btCollisionShape& shape0 = *object0->getCollisionShape();
+    const btCollisionShape& shape1 = *object1->getCollisionShape();
+    const int t0 = shape0.getShapeType(), t1 = shape1.getShapeType();
+    const int convexType = shape0.isConvex() ? t0 : t1;
+    if (!bullet::threadableAlgorithm(kind, shape0, shape1, m_doubleDispatchContactPoints[t0][t1],
+                                     m_doubleDispatchContactPoints[convexType][TRIANGLE_SHAPE_PROXYTYPE]))
+        return AlgorithmKind::Other;
+    if (kind != AlgorithmKind::ConvexConvex) return kind;
+    m_manifoldScratch.resize(0);  // btConvexConvexAlgorithm makes its manifold on its first run
+    pair.m_algorithm->getAllContactManifolds(m_manifoldScratch);
+    return m_manifoldScratch.size() > 0 ? kind : AlgorithmKind::Other;
+}
 
 btCollisionAlgorithm* CullideCollisionDispatcher::findAlgorithm(const btCollisionObjectWrapper* body0Wrap,
                                                                 const btCollisionObjectWrapper* body1Wrap,
@@ -837,9 +891,35 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
     computeMeshContactsAhead(pairCache, dispatchInfo);
     if (ownCache && dispatchInfo.m_dispatchFunc == btDispatcherInfo::DISPATCH_DISCRETE &&
         getNearCallback() == &btCollisionDispatcher::defaultNearCallback) {
-        SkipApartPairs loop(*this, dispatchInfo);
-        pairCache->processAllOverlappingPairs(&loop, dispatcher, dispatchInfo);
-        m_current.apartPairs = loop.skipped;
+        const unsigned threads = narrowPhaseThreads();
+        const DispatchLoop::Threadable threadable = [this](btBroadphasePair& pair) { return threadablePair(pair); };
+        // Pairs are sorted into threadable and not (~15 ns a pair) while threads might pay: a scene whose last
+        // count was far below kMinThreadedCost is counted again every kRecountDispatches dispatches only.
+        const bool mayThread = threads > 1 && bullet::dispatchMayThread(dispatchInfo) &&
+                               (4 * m_lastThreadableCost >= kMinThreadedCost ||
+                                ++m_dispatchesSinceCount >= kRecountDispatches);
+        if (mayThread) m_dispatchesSinceCount = 0;
+        // The workers are woken when the previous dispatch's threadable pairs were worth it: below kMinThreadedCost
+        // (bullet::typicalCost units, ~60 us of work) waking one (~25 us here) costs more than it saves.
+        if (mayThread && m_lastThreadableCost >= kMinThreadedCost) {
+            bullet::PairStream stream;
+            stream.reset(static_cast<std::size_t>(pairCache->getNumOverlappingPairs()));
+            DispatchLoop loop(*this, dispatchInfo, &threadable, &stream);
+            const auto produce = [&] {
+                const CloseWhenDone closer{stream};
+                pairCache->processAllOverlappingPairs(&loop, dispatcher, dispatchInfo);
+            };
+            const auto consume = [&](std::size_t, std::size_t) { stream.consume(dispatchInfo); };
+            pool(threads).parallelFor(threads, 1, consume, produce);
+            m_current.apartPairs = loop.skipped;
+            m_current.threadedPairs = stream.size();
+            m_lastThreadableCost = loop.threadableCost;
+        } else {
+            DispatchLoop loop(*this, dispatchInfo, mayThread ? &threadable : nullptr, nullptr);
+            pairCache->processAllOverlappingPairs(&loop, dispatcher, dispatchInfo);
+            m_current.apartPairs = loop.skipped;
+            if (mayThread) m_lastThreadableCost = loop.threadableCost;
+        }
     } else {
         btCollisionDispatcher::dispatchAllCollisionPairs(pairCache, dispatchInfo, dispatcher);
     }
@@ -859,6 +939,7 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
     m_total.threadedMeshPairs += m_current.threadedMeshPairs;
     m_total.threadedTasks += m_current.threadedTasks;
     m_total.apartPairs += m_current.apartPairs;
+    m_total.threadedPairs += m_current.threadedPairs;
     m_total.dispatchMs += m_current.dispatchMs;
     if (ownCache) m_lastStep = m_current;
     m_current = outer;
@@ -867,6 +948,9 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
 void* CullideCollisionDispatcher::allocateCollisionAlgorithm(int size) {
     // btPoolAllocator only asserts on the size: an algorithm larger than the pool element would silently corrupt
     // memory in release builds. Such algorithms come from the heap (freeCollisionAlgorithm handles both).
+    // Algorithms made on the narrow-phase threads (a convex-mesh pair's per-triangle ones) come from the heap too: the
+    // pool is the calling thread's.
+    if (bullet::onPairThread()) return btAlignedAlloc(static_cast<size_t>(size), 16);
     if (m_collisionAlgorithmPoolAllocator != nullptr && size > m_collisionAlgorithmPoolAllocator->getElementSize())
         return btAlignedAlloc(static_cast<size_t>(size), 16);
     return btCollisionDispatcher::allocateCollisionAlgorithm(size);

@@ -54,9 +54,15 @@ void TaskPool::workerLoop() {
 
 void TaskPool::parallelFor(std::size_t count, std::size_t chunk,
                            const std::function<void(std::size_t, std::size_t)>& fn) {
-    if (count == 0) return;
+    parallelFor(count, chunk, fn, {});
+}
+
+void TaskPool::parallelFor(std::size_t count, std::size_t chunk,
+                           const std::function<void(std::size_t, std::size_t)>& fn,
+                           const std::function<void()>& first) {
     if (m_workers.empty() || count <= chunk) {
-        fn(0, count);
+        if (first) first();
+        if (count > 0) fn(0, count);
         return;
     }
     std::unique_lock<std::mutex> lock(m_mutex);
@@ -67,6 +73,20 @@ void TaskPool::parallelFor(std::size_t count, std::size_t chunk,
     m_error = nullptr;
     ++m_generation;
     m_wake.notify_all();
+    if (first) {
+        lock.unlock();
+        std::exception_ptr error;
+        try {
+            first();
+        } catch (...) {
+            error = std::current_exception();
+        }
+        lock.lock();
+        if (error) {
+            if (!m_error) m_error = error;
+            m_next = m_count;  // the chunks not started yet are dropped
+        }
+    }
     drain(lock);
     m_done.wait(lock, [&] { return m_busy == 0 && m_next >= m_count; });
     m_fn = nullptr;

@@ -32,6 +32,7 @@
 #include "cullide_bullet/CullideBroadphase.h"
 #include "cullide_bullet/Precision.h"
 
+#include <BulletCollision/BroadphaseCollision/btCollisionAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btCollisionDispatcher.h>
 
 #include <cstddef>
@@ -46,6 +47,9 @@ class MeshContactBatch;
 struct AdapterAccess;
 }
 class TaskPool;
+namespace bullet {
+enum class AlgorithmKind : int;
+}
 
 struct CullideDispatchStats {
     std::size_t pairsDispatched = 0;    ///< pairs in the dispatched caches (all dispatchAllCollisionPairs calls)
@@ -70,6 +74,9 @@ struct CullideDispatchStats {
     /// Pairs whose broadphase boxes were farther apart than their contact breaking threshold: no algorithm call,
     /// their manifolds' points cleared (btDbvtBroadphase's fattened pairs that btAxisSweep3 would not hold)
     std::size_t apartPairs = 0;
+    /// Pairs whose Bullet algorithm ran on the narrow-phase threads (setNarrowPhaseThreads): convex pairs and convex
+    /// against a BVH mesh or heightfield, while no application hook is installed
+    std::size_t threadedPairs = 0;
     double dispatchMs = 0.0;            ///< wall time in dispatchAllCollisionPairs
     void reset() { *this = CullideDispatchStats{}; }
 };
@@ -117,6 +124,12 @@ private:
     detail::GImpactLeafIndex& gimpactLeafIndex() { return *m_leafIndex; }
     /// Used by the GImpact algorithm: the mesh-mesh contacts computed ahead for the current dispatch.
     const detail::MeshContactBatch& meshContacts() const { return *m_meshContacts; }
+    /// The thread count in use (setNarrowPhaseThreads; 0 read as the machine's) and the pool of that many.
+    unsigned narrowPhaseThreads() const;
+    TaskPool& pool(unsigned threads);
+    /// The kind of the pair's algorithm if it may run on a narrow-phase thread in this dispatch, else Other
+    /// (src/ThreadedPairs.h).
+    bullet::AlgorithmKind threadablePair(btBroadphasePair& pair);
     /// Lists the pair cache's GImpact mesh-mesh pairs that the dispatch will run through the GImpact algorithm and
     /// computes their contacts on the worker pool.
     void computeMeshContactsAhead(btOverlappingPairCache* pairCache, const btDispatcherInfo& dispatchInfo);
@@ -131,6 +144,13 @@ private:
     std::unique_ptr<detail::GImpactLeafIndex> m_leafIndex;
     std::unique_ptr<detail::MeshContactBatch> m_meshContacts;
     std::unique_ptr<TaskPool> m_pool;  // made on first use, for m_threads
+    btManifoldArray m_manifoldScratch;
+    /// The last dispatch's pairs that could run on the narrow-phase threads, in bullet::typicalCost units: this
+    /// dispatch wakes the workers from kMinThreadedCost on.
+    std::size_t m_lastThreadableCost = 0;
+    unsigned m_dispatchesSinceCount = 0;
+    static constexpr std::size_t kMinThreadedCost = 300;
+    static constexpr unsigned kRecountDispatches = 16;
     unsigned m_threads = 0;
 };
 

@@ -24,6 +24,11 @@ public:
     /// Calls fn(begin, end) on disjoint chunks covering [0, count); returns when all are done. Exceptions thrown
     /// by fn are rethrown on the calling thread (the first one).
     void parallelFor(std::size_t count, std::size_t chunk, const std::function<void(std::size_t, std::size_t)>& fn);
+    /// As parallelFor, but the calling thread first runs `first()` while the workers start on the chunks, then joins
+    /// them (work that must stay on the calling thread, overlapped with the rest). An exception from `first` is
+    /// rethrown once the chunks already started have finished.
+    void parallelFor(std::size_t count, std::size_t chunk, const std::function<void(std::size_t, std::size_t)>& fn,
+                     const std::function<void()>& first);
     unsigned size() const { return static_cast<unsigned>(m_workers.size()) + 1; }
 
 private:

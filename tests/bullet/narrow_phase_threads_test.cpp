@@ -1,0 +1,314 @@
+// The narrow-phase threads for Bullet's own algorithms (bullet_adapter/src/ThreadedPairs.h): pairs whose algorithm
+// touches only its own manifold run on the dispatcher's worker pool, the rest on the calling thread in Bullet's
+// order. Guarded here: a pile of boxes, spheres, capsules, cylinders, cones and hulls on a BVH landscape and a
+// heightfield moves bit for bit as in Bullet's default pipeline, step after step and for every thread count (the
+// solver reads the manifolds in the dispatcher's order, so a manifold made out of order, a point missed or a
+// point added twice changes the trajectories); the threads are used; the application's contact callbacks and a
+// drawing debug drawer keep every pair on the calling thread. The CPU reference culler is used (no GL needed).
+#include "ThreadedPairs.h"
+#include "SceneSupport.h"
+
+#include <BulletCollision/CollisionDispatch/btBoxBoxCollisionAlgorithm.h>
+#include <BulletCollision/CollisionDispatch/btCompoundCollisionAlgorithm.h>
+#include <BulletCollision/CollisionDispatch/btConvexConcaveCollisionAlgorithm.h>
+#include <BulletCollision/CollisionDispatch/btConvexConvexAlgorithm.h>
+#include <BulletCollision/CollisionDispatch/btEmptyCollisionAlgorithm.h>
+#include <BulletCollision/CollisionDispatch/btSphereTriangleCollisionAlgorithm.h>
+#include <BulletCollision/CollisionShapes/btHeightfieldTerrainShape.h>
+#include <BulletCollision/NarrowPhaseCollision/btMinkowskiPenetrationDepthSolver.h>
+#include <BulletCollision/NarrowPhaseCollision/btGjkEpaPenetrationDepthSolver.h>
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <memory>
+#include <mutex>
+#include <set>
+#include <thread>
+#include <vector>
+
+namespace cullide::test {
+namespace {
+
+btTransform at(double x, double y, double z, const btQuaternion& q = btQuaternion::getIdentity()) {
+    return btTransform(q, btVector3(btScalar(x), btScalar(y), btScalar(z)));
+}
+
+/// A heightfield of rolling hills (the shape keeps a pointer to the heights).
+struct Heightfield {
+    static constexpr int kSize = 33;
+    std::vector<float> heights;
+    std::unique_ptr<btHeightfieldTerrainShape> shape;
+    Heightfield() : heights(kSize * kSize) {
+        for (int j = 0; j < kSize; ++j)
+            for (int i = 0; i < kSize; ++i)
+                heights[static_cast<std::size_t>(j * kSize + i)] =
+                    float(0.8 * std::sin(0.45 * i) * std::cos(0.35 * j));
+        shape = std::make_unique<btHeightfieldTerrainShape>(kSize, kSize, heights.data(), btScalar(1), btScalar(-1),
+                                                             btScalar(1), 1, PHY_FLOAT, false);
+    }
+};
+
+/// A pile of mixed convex bodies dropped on a BVH landscape (left) and a heightfield (right): convex-convex pairs
+/// of every algorithm Bullet's default configuration makes, and convex-mesh pairs of both kinds of ground.
+struct PileScene {
+    ShapeStore shapes;
+    Heightfield field;
+    btCollisionShape* landscape = shapes.landscape(24, 1, btScalar(0.8));
+    std::unique_ptr<btCylinderShape> cylinder = std::make_unique<btCylinderShape>(btVector3(0.35f, 0.45f, 0.35f));
+    std::unique_ptr<btConeShape> cone = std::make_unique<btConeShape>(btScalar(0.4), btScalar(0.9));
+    std::vector<btCollisionShape*> kinds{shapes.box(btVector3(0.45f, 0.35f, 0.5f)), shapes.sphere(btScalar(0.4)),
+                                         shapes.capsule(btScalar(0.25), btScalar(0.6)),
+                                         shapes.hull(btVector3(0.6f, 0.45f, 0.5f), 40, 11), cylinder.get(), cone.get()};
+
+    void populate(TestWorld& w) const {
+        w.addBody(landscape, 0, at(-6, 0, 0));
+        w.addBody(field.shape.get(), 0, at(14, 0, 0));
+        int k = 0;
+        for (int side = 0; side < 2; ++side)
+            for (int layer = 0; layer < 3; ++layer)
+                for (int i = 0; i < 6; ++i)
+                    for (int j = 0; j < 6; ++j, ++k) {
+                        const btQuaternion turn(btVector3(0.3f, 1, 0.2f).normalized(), btScalar(0.37 * k));
+                        btRigidBody* body = w.addBody(
+                            kinds[static_cast<std::size_t>(k) % kinds.size()], 1,
+                            at((side == 0 ? -6.0 : 14.0) + 1.3 * (i - 2.5) + 0.1 * layer, 2.5 + 1.2 * layer,
+                               1.3 * (j - 2.5), turn));
+                        (void)body;
+                    }
+    }
+};
+
+/// Position, orientation and velocities of every body, then every manifold in the dispatcher's order (the order the
+/// solver reads them in) with its points: position, normal, distance, age and impulse. Compared as bits.
+std::vector<btScalar> stateOf(TestWorld& w) {
+    std::vector<btScalar> s;
+    btCollisionDispatcher& d = w.dispatcher();
+    for (int i = 0; i < d.getNumManifolds(); ++i) {
+        const btPersistentManifold* m = d.getManifoldByIndexInternal(i);
+        s.push_back(btScalar(static_cast<const btCollisionObject*>(m->getBody0())->getUserIndex()));
+        s.push_back(btScalar(static_cast<const btCollisionObject*>(m->getBody1())->getUserIndex()));
+        for (int c = 0; c < m->getNumContacts(); ++c) {
+            const btManifoldPoint& p = m->getContactPoint(c);
+            for (int k = 0; k < 3; ++k) s.insert(s.end(), {p.m_positionWorldOnB[k], p.m_normalWorldOnB[k]});
+            s.insert(s.end(), {p.getDistance(), btScalar(p.getLifeTime()), p.getAppliedImpulse()});
+        }
+    }
+    for (btCollisionObject* o : w.objects()) {
+        const btRigidBody* b = btRigidBody::upcast(o);
+        const btTransform& t = b->getWorldTransform();
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) s.push_back(t.getBasis()[r][c]);
+        for (int c = 0; c < 3; ++c)
+            s.insert(s.end(), {t.getOrigin()[c], b->getLinearVelocity()[c], b->getAngularVelocity()[c]});
+    }
+    return s;
+}
+
+std::size_t threadedPairs(TestWorld& w) { return w.cullideDispatcher()->getTotalStats().threadedPairs; }
+
+/// From step kSleepFrom every body may fall asleep (Bullet's 2 s below the raised thresholds): the piles' pairs are
+/// then sleeping pairs, which the dispatch must not collide, on any thread.
+constexpr int kSleepFrom = 150;
+
+/// Steps Bullet's pipeline and the swap side by side (not mirrored: each world runs on its own) and returns the
+/// first step whose states differ in any bit, or -1.
+int firstDivergingStep(TestWorld& reference, TestWorld& w, int steps) {
+    for (int step = 0; step < steps; ++step) {
+        if (step == kSleepFrom)
+            for (TestWorld* x : {&reference, &w})
+                for (btCollisionObject* o : x->objects())
+                    btRigidBody::upcast(o)->setSleepingThresholds(btScalar(100), btScalar(100));
+        reference.step();
+        w.step();
+        const std::vector<btScalar> a = stateOf(reference), b = stateOf(w);
+        if (a.size() != b.size() || std::memcmp(a.data(), b.data(), a.size() * sizeof(btScalar)) != 0) return step;
+    }
+    return -1;
+}
+
+TEST(NarrowPhaseThreads, PileMovesBitForBitAsInBulletForEveryThreadCount) {
+    PileScene scene;
+    for (const unsigned threads : {1u, 2u, 5u}) {
+        TestWorld reference(PipelineKind::Default);
+        TestWorld w(PipelineKind::Cullide, referenceFactory());
+        w.cullideDispatcher()->setNarrowPhaseThreads(threads);
+        scene.populate(reference);
+        scene.populate(w);
+        EXPECT_EQ(firstDivergingStep(reference, w, kSleepFrom + 150), -1) << threads << " threads";
+        const std::size_t contacts = contactsOf(w.world()).size();
+        int asleep = 0;
+        for (btCollisionObject* o : w.objects()) asleep += o->getActivationState() == ISLAND_SLEEPING ? 1 : 0;
+        std::printf("[ measure  ] %u threads: %zu pair-steps on the workers, %d manifolds, %zu pairs in contact, %d "
+                    "bodies asleep\n",
+                    threads, threadedPairs(w), w.dispatcher().getNumManifolds(), contacts, asleep);
+        EXPECT_GT(contacts, 150u) << "the pile must rest in contact";
+        EXPECT_GT(asleep, 20) << "bodies must fall asleep: their pairs are not collided, on any thread";
+        if (threads == 1)
+            EXPECT_EQ(threadedPairs(w), 0u);
+        else
+            EXPECT_GT(threadedPairs(w), 20000u) << "most pairs of a resting pile run on the narrow-phase threads";
+    }
+}
+
+/// Every thread that ran an application callback.
+struct CallbackThreads {
+    static std::mutex mutex;
+    static std::set<std::thread::id> ids;
+    static void record() {
+        std::lock_guard<std::mutex> lock(mutex);
+        ids.insert(std::this_thread::get_id());
+    }
+};
+std::mutex CallbackThreads::mutex;
+std::set<std::thread::id> CallbackThreads::ids;
+
+bool onContactAdded(btManifoldPoint&, const btCollisionObjectWrapper*, int, int, const btCollisionObjectWrapper*, int,
+                    int) {
+    CallbackThreads::record();
+    return false;
+}
+void onContactStarted(btPersistentManifold* const&) { CallbackThreads::record(); }
+bool onContactProcessed(btManifoldPoint&, void*, void*) {
+    CallbackThreads::record();
+    return false;
+}
+
+/// Runs the pile with the narrow-phase threads while an application hook is installed by `install` (and removed by
+/// `remove`); returns the pair-steps that ran on the workers. The hook must have run on the calling thread only.
+std::size_t runWithHook(const PileScene& scene, const std::function<void(TestWorld&)>& install,
+                        const std::function<void()>& remove, bool expectCalls) {
+    TestWorld reference(PipelineKind::Default);
+    TestWorld w(PipelineKind::Cullide, referenceFactory());
+    w.cullideDispatcher()->setNarrowPhaseThreads(4);
+    scene.populate(reference);
+    scene.populate(w);
+    install(w);
+    CallbackThreads::ids.clear();
+    const int diverged = firstDivergingStep(reference, w, 60);
+    remove();
+    EXPECT_EQ(diverged, -1);
+    if (expectCalls) {
+        EXPECT_EQ(CallbackThreads::ids, std::set<std::thread::id>{std::this_thread::get_id()})
+            << "the application's callbacks run on the calling thread only";
+    }
+    return threadedPairs(w);
+}
+
+TEST(NarrowPhaseThreads, ApplicationCallbacksRunOnTheCallingThread) {
+    PileScene scene;
+    // gContactAddedCallback runs only for objects flagged CF_CUSTOM_MATERIAL_CALLBACK: those pairs stay on the
+    // calling thread, the others may run on the workers.
+    const std::size_t flagged = runWithHook(
+        scene,
+        [](TestWorld& w) {
+            gContactAddedCallback = onContactAdded;
+            for (btCollisionObject* o : w.objects())
+                if (o->getUserIndex() % 3 == 0)
+                    o->setCollisionFlags(o->getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
+        },
+        [] { gContactAddedCallback = nullptr; }, true);
+    EXPECT_GT(flagged, 1000u) << "pairs of unflagged objects still run on the workers";
+    // The manifold callbacks run for every pair: no pair on the workers.
+    EXPECT_EQ(runWithHook(
+                  scene, [](TestWorld&) { gContactStartedCallback = onContactStarted; },
+                  [] { gContactStartedCallback = nullptr; }, true),
+              0u);
+    EXPECT_EQ(runWithHook(
+                  scene, [](TestWorld&) { gContactProcessedCallback = onContactProcessed; },
+                  [] { gContactProcessedCallback = nullptr; }, true),
+              0u);
+    // The friction combiner is the application's code too.
+    static CalculateCombinedCallback saved = nullptr;
+    EXPECT_EQ(runWithHook(
+                  scene,
+                  [](TestWorld&) {
+                      saved = gCalculateCombinedFrictionCallback;
+                      gCalculateCombinedFrictionCallback = [](const btCollisionObject* a, const btCollisionObject* b) {
+                          CallbackThreads::record();
+                          return btManifoldResult::calculateCombinedFriction(a, b);
+                      };
+                  },
+                  [] { gCalculateCombinedFrictionCallback = saved; }, true),
+              0u);
+}
+
+/// A debug drawer that draws. Bullet's algorithms may call it while colliding (Debian's 3.24 has the convex-mesh
+/// algorithm's triangle drawing compiled out, other builds may not): with one, every pair stays on the calling thread.
+class CountingDrawer final : public btIDebugDraw {
+public:
+    void drawLine(const btVector3&, const btVector3&, const btVector3&) override { CallbackThreads::record(); }
+    void drawContactPoint(const btVector3&, const btVector3&, btScalar, int, const btVector3&) override {}
+    void reportErrorWarning(const char*) override {}
+    void draw3dText(const btVector3&, const char*) override {}
+    void setDebugMode(int mode) override { m_mode = mode; }
+    int getDebugMode() const override { return m_mode; }
+
+private:
+    int m_mode = DBG_DrawWireframe;
+};
+
+TEST(NarrowPhaseThreads, DrawingDebugDrawerKeepsPairsOnTheCallingThread) {
+    PileScene scene;
+    CountingDrawer drawer;
+    EXPECT_EQ(runWithHook(
+                  scene, [&](TestWorld& w) { w.world().setDebugDrawer(&drawer); }, [] {}, false),
+              0u);
+    drawer.setDebugMode(btIDebugDraw::DBG_NoDebug);  // a drawer that draws nothing keeps the threads
+    EXPECT_GT(runWithHook(
+                  scene, [&](TestWorld& w) { w.world().setDebugDrawer(&drawer); }, [] {}, false),
+              1000u);
+}
+
+// The rules, one by one: which algorithms, shapes and registrations may run off the calling thread.
+TEST(NarrowPhaseThreads, OnlyBulletsOwnAlgorithmsOnBulletsOwnShapesRunOnTheWorkers) {
+    ShapeStore shapes;
+    btDefaultCollisionConfiguration config;
+    btDefaultCollisionConstructionInfo minkowskiInfo;
+    minkowskiInfo.m_useEpaPenetrationAlgorithm = false;
+    btDefaultCollisionConfiguration minkowski(minkowskiInfo);
+    btBoxShape box(btVector3(1, 1, 1));
+    btCompoundShape compound;
+    compound.addChildShape(btTransform::getIdentity(), &box);
+    btCollisionShape* hull = shapes.hull(btVector3(1, 1, 1), 20, 3);
+    btCollisionShape* landscape = shapes.landscape(4, 1, 1);
+    Heightfield field;
+    struct MySphere : btSphereShape {
+        MySphere() : btSphereShape(1) {}
+    } mySphere;  // an application's shape class: its support function may not be safe to call from two threads
+    const auto cf = [](btDefaultCollisionConfiguration& c, const btCollisionShape* a, const btCollisionShape* b) {
+        return c.getCollisionAlgorithmCreateFunc(a->getShapeType(), b->getShapeType());
+    };
+    const auto tri = [](btDefaultCollisionConfiguration& c, const btCollisionShape* a) {
+        return c.getCollisionAlgorithmCreateFunc(a->getShapeType(), TRIANGLE_SHAPE_PROXYTYPE);
+    };
+    using bullet::threadableAlgorithm;
+    using K = bullet::AlgorithmKind;
+    EXPECT_EQ(bullet::algorithmKindOf(typeid(btConvexConvexAlgorithm)), K::ConvexConvex);
+    EXPECT_EQ(bullet::algorithmKindOf(typeid(btBoxBoxCollisionAlgorithm)), K::Convex);
+    EXPECT_EQ(bullet::algorithmKindOf(typeid(btConvexConcaveCollisionAlgorithm)), K::ConvexConcave);
+    EXPECT_EQ(bullet::algorithmKindOf(typeid(btCompoundCollisionAlgorithm)), K::Other);
+    // Convex pairs: Bullet's shapes, Bullet's convex algorithm with GJK-EPA.
+    EXPECT_TRUE(threadableAlgorithm(K::ConvexConvex, *hull, box, cf(config, hull, &box), nullptr));
+    EXPECT_FALSE(threadableAlgorithm(K::ConvexConvex, *hull, box, cf(minkowski, hull, &box), nullptr))
+        << "btMinkowskiPenetrationDepthSolver writes a static table";
+    EXPECT_FALSE(threadableAlgorithm(K::ConvexConvex, *hull, mySphere, cf(config, hull, &mySphere), nullptr));
+    EXPECT_TRUE(threadableAlgorithm(K::Convex, box, box, cf(config, &box, &box), nullptr));
+    EXPECT_FALSE(threadableAlgorithm(K::Other, box, compound, cf(config, &box, &compound), nullptr));
+    // Convex against a BVH mesh or a heightfield, either order: each triangle's algorithm is made and freed on the
+    // worker, so it must be Bullet's too.
+    EXPECT_TRUE(threadableAlgorithm(K::ConvexConcave, *hull, *landscape, cf(config, hull, landscape),
+                                    tri(config, hull)));
+    EXPECT_TRUE(threadableAlgorithm(K::ConvexConcave, *field.shape, box, cf(config, field.shape.get(), &box),
+                                    tri(config, &box)));
+    EXPECT_FALSE(threadableAlgorithm(K::ConvexConcave, *hull, *landscape, cf(config, hull, landscape),
+                                     tri(minkowski, hull)));
+    EXPECT_FALSE(threadableAlgorithm(K::ConvexConcave, compound, *landscape, cf(config, &compound, landscape),
+                                     tri(config, &compound)));
+    btEmptyAlgorithm::CreateFunc custom;  // an application's registration for convex-triangle pairs
+    EXPECT_FALSE(threadableAlgorithm(K::ConvexConcave, *hull, *landscape, cf(config, hull, landscape), &custom));
+}
+
+}  // namespace
+}  // namespace cullide::test

@@ -1,0 +1,77 @@
+// TaskPool: every index once, on any thread count; the caller-first variant runs its own work on the calling thread
+// while the workers start, and hands back exceptions from either side.
+#include "cullide/TaskPool.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <stdexcept>
+#include <thread>
+#include <vector>
+
+namespace cullide {
+namespace {
+
+TEST(TaskPool, EveryIndexOnceForEveryThreadCount) {
+    for (const unsigned threads : {1u, 2u, 5u}) {
+        TaskPool pool(threads);
+        for (const std::size_t chunk : {std::size_t{1}, std::size_t{7}, std::size_t{1000}}) {
+            std::vector<std::atomic<int>> hits(997);
+            pool.parallelFor(hits.size(), chunk, [&](std::size_t begin, std::size_t end) {
+                for (std::size_t i = begin; i < end; ++i) hits[i].fetch_add(1);
+            });
+            for (const auto& h : hits) ASSERT_EQ(h.load(), 1) << threads << " threads, chunk " << chunk;
+        }
+    }
+}
+
+TEST(TaskPool, FirstRunsOnTheCallingThreadWhileWorkersTakeTheChunks) {
+    for (const unsigned threads : {1u, 2u, 5u}) {
+        TaskPool pool(threads);
+        const std::thread::id caller = std::this_thread::get_id();
+        std::atomic<std::thread::id> firstOn{};
+        std::atomic<bool> release{false};
+        std::atomic<int> done{0};
+        std::atomic<int> onWorkers{0};
+        // With workers, `first` waits until a worker has finished a chunk: it must not run before them.
+        pool.parallelFor(
+            64, 1,
+            [&](std::size_t begin, std::size_t end) {
+                if (std::this_thread::get_id() != caller) onWorkers.fetch_add(1);
+                done.fetch_add(static_cast<int>(end - begin));
+                release.store(true);
+            },
+            [&] {
+                firstOn.store(std::this_thread::get_id());
+                while (threads > 1 && !release.load()) std::this_thread::yield();
+            });
+        EXPECT_EQ(firstOn.load(), caller);
+        EXPECT_EQ(done.load(), 64);
+        if (threads > 1) {
+            EXPECT_GT(onWorkers.load(), 0);
+        }
+    }
+}
+
+TEST(TaskPool, ExceptionsFromEitherSideReachTheCaller) {
+    TaskPool pool(3);
+    std::atomic<int> chunks{0};
+    EXPECT_THROW(pool.parallelFor(
+                     100, 1, [&](std::size_t, std::size_t) { chunks.fetch_add(1); },
+                     [] { throw std::runtime_error("first"); }),
+                 std::runtime_error);
+    EXPECT_THROW(pool.parallelFor(
+                     100, 1,
+                     [](std::size_t begin, std::size_t) {
+                         if (begin == 50) throw std::logic_error("chunk");
+                     },
+                     [] {}),
+                 std::logic_error);
+    // The pool is usable afterwards.
+    std::atomic<int> n{0};
+    pool.parallelFor(10, 1, [&](std::size_t, std::size_t) { n.fetch_add(1); }, [] {});
+    EXPECT_EQ(n.load(), 10);
+}
+
+}  // namespace
+}  // namespace cullide
