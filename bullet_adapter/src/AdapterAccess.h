@@ -16,7 +16,7 @@ struct AdapterAccess {
     }
     static CullideDispatchStats& currentStats(CullideCollisionDispatcher& d) { return d.currentStats(); }
     static GImpactLeafIndex& gimpactLeafIndex(CullideCollisionDispatcher& d) { return d.gimpactLeafIndex(); }
-    static const MeshContactBatch& meshContacts(const CullideCollisionDispatcher& d) { return d.meshContacts(); }
+    static MeshContactBatch& meshContacts(CullideCollisionDispatcher& d) { return d.meshContacts(); }
 };
 
 }  // namespace cullide::detail

@@ -772,8 +772,8 @@ unsigned machineThreads() {
 
 }  // namespace
 
-void CullideCollisionDispatcher::computeMeshContactsAhead(btOverlappingPairCache* pairCache,
-                                                         const btDispatcherInfo& dispatchInfo) {
+bool CullideCollisionDispatcher::listMeshPairs(btOverlappingPairCache* pairCache,
+                                               const btDispatcherInfo& dispatchInfo) {
     detail::MeshContactBatch& batch = *m_meshContacts;
     batch.clear();
     const unsigned threads = narrowPhaseThreads();
@@ -782,7 +782,7 @@ void CullideCollisionDispatcher::computeMeshContactsAhead(btOverlappingPairCache
     if (threads < 2 || dispatchInfo.m_dispatchFunc != btDispatcherInfo::DISPATCH_DISCRETE ||
         !registeredIs<btGImpactCollisionAlgorithm::CreateFunc>(
             m_doubleDispatchContactPoints[GIMPACT_SHAPE_PROXYTYPE][GIMPACT_SHAPE_PROXYTYPE]))
-        return;
+        return false;
     const int count = pairCache->getNumOverlappingPairs();
     const btBroadphasePair* pairs = count > 0 ? pairCache->getOverlappingPairArrayPtr() : nullptr;
     for (int i = 0; i < count; ++i) {
@@ -801,10 +801,7 @@ void CullideCollisionDispatcher::computeMeshContactsAhead(btOverlappingPairCache
         }
         batch.add(object0, object1, *shape0, *shape1, object0->getWorldTransform(), object1->getWorldTransform());
     }
-    if (batch.size() == 0) return;
-    batch.run(&pool(threads));
-    m_current.threadedMeshPairs = batch.size();
-    m_current.threadedTasks = batch.taskCount();
+    return batch.size() > 0;
 }
 
 CullideCollisionDispatcher::~CullideCollisionDispatcher() = default;
@@ -880,6 +877,39 @@ btCollisionAlgorithm* CullideCollisionDispatcher::findAlgorithm(const btCollisio
     return btCollisionDispatcher::findAlgorithm(body0Wrap, body1Wrap, sharedManifold, queryType);
 }
 
+void CullideCollisionDispatcher::dispatchOwnPairs(btOverlappingPairCache* pairCache, const btDispatcherInfo& dispatchInfo,
+                                                  btDispatcher* dispatcher, bool mayStream) {
+    const unsigned threads = narrowPhaseThreads();
+    const DispatchLoop::Threadable threadable = [this](btBroadphasePair& pair) { return threadablePair(pair); };
+    // Pairs are sorted into threadable and not (~15 ns a pair) while threads might pay: a scene whose last
+    // count was far below kMinThreadedCost is counted again every kRecountDispatches dispatches only.
+    const bool mayThread = threads > 1 && bullet::dispatchMayThread(dispatchInfo) &&
+                           (4 * m_lastThreadableCost >= kMinThreadedCost ||
+                            ++m_dispatchesSinceCount >= kRecountDispatches);
+    if (mayThread) m_dispatchesSinceCount = 0;
+    // The workers are woken when the previous dispatch's threadable pairs were worth it: below kMinThreadedCost
+    // (bullet::typicalCost units, ~60 us of work) waking one (~25 us here) costs more than it saves.
+    if (mayStream && mayThread && m_lastThreadableCost >= kMinThreadedCost) {
+        bullet::PairStream stream;
+        stream.reset(static_cast<std::size_t>(pairCache->getNumOverlappingPairs()));
+        DispatchLoop loop(*this, dispatchInfo, &threadable, &stream);
+        const auto produce = [&] {
+            const CloseWhenDone closer{stream};
+            pairCache->processAllOverlappingPairs(&loop, dispatcher, dispatchInfo);
+        };
+        const auto consume = [&](std::size_t, std::size_t) { stream.consume(dispatchInfo); };
+        pool(threads).parallelFor(threads, 1, consume, produce);
+        m_current.apartPairs = loop.skipped;
+        m_current.threadedPairs = stream.size();
+        m_lastThreadableCost = loop.threadableCost;
+    } else {
+        DispatchLoop loop(*this, dispatchInfo, mayThread ? &threadable : nullptr, nullptr);
+        pairCache->processAllOverlappingPairs(&loop, dispatcher, dispatchInfo);
+        m_current.apartPairs = loop.skipped;
+        if (mayThread) m_lastThreadableCost = loop.threadableCost;
+    }
+}
+
 void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCache* pairCache,
                                                            const btDispatcherInfo& dispatchInfo,
                                                            btDispatcher* dispatcher) {
@@ -888,42 +918,24 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
     const bool ownCache = m_broadphase != nullptr && pairCache == m_broadphase->getOverlappingPairCache();
     if (ownCache) m_leafIndex->beginDispatch();  // once per step, not for a character controller's private cache
     cullide::Timer watch;
-    computeMeshContactsAhead(pairCache, dispatchInfo);
-    if (ownCache && dispatchInfo.m_dispatchFunc == btDispatcherInfo::DISPATCH_DISCRETE &&
-        getNearCallback() == &btCollisionDispatcher::defaultNearCallback) {
-        const unsigned threads = narrowPhaseThreads();
-        const DispatchLoop::Threadable threadable = [this](btBroadphasePair& pair) { return threadablePair(pair); };
-        // Pairs are sorted into threadable and not (~15 ns a pair) while threads might pay: a scene whose last
-        // count was far below kMinThreadedCost is counted again every kRecountDispatches dispatches only.
-        const bool mayThread = threads > 1 && bullet::dispatchMayThread(dispatchInfo) &&
-                               (4 * m_lastThreadableCost >= kMinThreadedCost ||
-                                ++m_dispatchesSinceCount >= kRecountDispatches);
-        if (mayThread) m_dispatchesSinceCount = 0;
-        // The workers are woken when the previous dispatch's threadable pairs were worth it: below kMinThreadedCost
-        // (bullet::typicalCost units, ~60 us of work) waking one (~25 us here) costs more than it saves.
-        if (mayThread && m_lastThreadableCost >= kMinThreadedCost) {
-            bullet::PairStream stream;
-            stream.reset(static_cast<std::size_t>(pairCache->getNumOverlappingPairs()));
-            DispatchLoop loop(*this, dispatchInfo, &threadable, &stream);
-            const auto produce = [&] {
-                const CloseWhenDone closer{stream};
-                pairCache->processAllOverlappingPairs(&loop, dispatcher, dispatchInfo);
-            };
-            const auto consume = [&](std::size_t, std::size_t) { stream.consume(dispatchInfo); };
-            pool(threads).parallelFor(threads, 1, consume, produce);
-            m_current.apartPairs = loop.skipped;
-            m_current.threadedPairs = stream.size();
-            m_lastThreadableCost = loop.threadableCost;
-        } else {
-            DispatchLoop loop(*this, dispatchInfo, mayThread ? &threadable : nullptr, nullptr);
-            pairCache->processAllOverlappingPairs(&loop, dispatcher, dispatchInfo);
-            m_current.apartPairs = loop.skipped;
-            if (mayThread) m_lastThreadableCost = loop.threadableCost;
-        }
+    const auto dispatchPairs = [&](bool mayStream) {
+        if (ownCache && dispatchInfo.m_dispatchFunc == btDispatcherInfo::DISPATCH_DISCRETE &&
+            getNearCallback() == &btCollisionDispatcher::defaultNearCallback)
+            dispatchOwnPairs(pairCache, dispatchInfo, dispatcher, mayStream);
+        else
+            btCollisionDispatcher::dispatchAllCollisionPairs(pairCache, dispatchInfo, dispatcher);
+    };
+    // GImpact mesh-mesh pairs: the workers compute their contacts while this thread dispatches (a nested dispatch,
+    // from within a pair, leaves the running batch alone).
+    detail::MeshContactBatch& batch = *m_meshContacts;
+    if (!batch.running() && listMeshPairs(pairCache, dispatchInfo)) {
+        batch.run(&pool(narrowPhaseThreads()), [&] { dispatchPairs(false); });
+        m_current.threadedMeshPairs = batch.size();
+        m_current.threadedTasks = batch.taskCount();
+        batch.clear();
     } else {
-        btCollisionDispatcher::dispatchAllCollisionPairs(pairCache, dispatchInfo, dispatcher);
+        dispatchPairs(true);
     }
-    m_meshContacts->clear();
     m_current.dispatchMs = watch.ms();
     m_current.pairsDispatched = static_cast<std::size_t>(pairCache->getNumOverlappingPairs());
     m_total.pairsDispatched += m_current.pairsDispatched;

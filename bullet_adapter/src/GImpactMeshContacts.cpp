@@ -113,7 +113,6 @@ void MeshContactBatch::clear() {
     m_index.clear();
     m_searches.clear();
     m_tasks.clear();
-    m_ready = false;
 }
 
 void MeshContactBatch::add(const btCollisionObject* object0, const btCollisionObject* object1,
@@ -129,6 +128,7 @@ void MeshContactBatch::add(const btCollisionObject* object0, const btCollisionOb
     p.trans1 = trans1;
     p.firstTask = p.endTask = 0;
     p.contacts.clear();
+    p.points = Pair::Points::Pending;
     m_index[{object0, object1}] = m_pairCount;  // a pair listed twice: the last one (the same inputs)
     ++m_pairCount;
 }
@@ -155,39 +155,76 @@ void MeshContactBatch::makeTasks(std::size_t target, MeshContactScratch& scratch
     }
 }
 
-void MeshContactBatch::run(TaskPool* pool) {
-    m_ready = false;
+void MeshContactBatch::run(TaskPool* pool, const std::function<void()>& meanwhile) {
     m_searches.clear();
     m_tasks.clear();
-    if (m_pairCount == 0) return;
-    struct Unlock {
-        const MeshContactBatch& batch;
-        ~Unlock() { batch.lockParts(false); }
+    if (m_pairCount == 0) {
+        meanwhile();
+        return;
+    }
+    struct Done {
+        MeshContactBatch& batch;
+        ~Done() {
+            batch.m_running = false;
+            batch.lockParts(false);
+        }
     };
     lockParts(true);
-    const Unlock unlock{*this};
+    m_running = true;
+    const Done done{*this};
+    const std::size_t threads = pool != nullptr ? pool->size() : 1;
+    bool made = true;
     try {
-        const std::size_t threads = pool != nullptr ? pool->size() : 1;
         makeTasks(threads > 1 ? 16 * threads : 1, threadScratch());
         if (m_taskContacts.size() < m_tasks.size()) m_taskContacts.resize(m_tasks.size());
-        const auto body = [this](std::size_t begin, std::size_t end) {
-            MeshContactScratch& scratch = threadScratch();
-            for (std::size_t t = begin; t < end; ++t) runTask(t, scratch);
-        };
-        // Chunks of several tasks where there are many (hundreds of small pairs): fewer turns of the pool's lock.
-        if (pool != nullptr)
-            pool->parallelFor(m_tasks.size(), std::max<std::size_t>(1, m_tasks.size() / (16 * threads)), body);
-        else
-            body(0, m_tasks.size());
-        for (std::size_t i = 0; i < m_pairCount; ++i) {
-            Pair& p = m_pairs[i];
-            for (std::size_t t = p.firstTask; t < p.endTask; ++t)
-                p.contacts.insert(p.contacts.end(), m_taskContacts[t].begin(), m_taskContacts[t].end());
+        if (m_taskStateSize < m_tasks.size()) {
+            m_taskState = std::make_unique<std::atomic<int>[]>(m_tasks.size());
+            m_taskStateSize = m_tasks.size();
         }
-        m_ready = true;
     } catch (const std::exception&) {
-        m_ready = false;  // out of memory in a task: every pair is computed by its algorithm instead
+        made = false;  // out of memory: every pair is computed by its algorithm instead
+        m_tasks.clear();
+        for (std::size_t i = 0; i < m_pairCount; ++i) m_pairs[i].points = Pair::Points::Failed;
     }
+    for (std::size_t t = 0; t < m_tasks.size(); ++t) m_taskState[t].store(0, std::memory_order_relaxed);
+    m_nextTask.store(0, std::memory_order_relaxed);
+    if (pool == nullptr || threads < 2 || !made || m_tasks.empty()) {
+        meanwhile();  // the algorithms run their pairs' tasks as they ask for them
+        return;
+    }
+    // One slot per thread; each takes tasks until none is left (the calling thread once `meanwhile` returns).
+    pool->parallelFor(threads, 1, [this](std::size_t, std::size_t) { work(); }, meanwhile);
+}
+
+bool MeshContactBatch::runNextTask() {
+    const std::size_t t = m_nextTask.fetch_add(1, std::memory_order_relaxed);
+    if (t >= m_tasks.size()) return false;
+    int state = 1;
+    try {
+        runTask(t, threadScratch());
+    } catch (const std::exception&) {
+        state = 2;
+    }
+    m_taskState[t].store(state);
+    m_taskDone.notify();
+    return true;
+}
+
+void MeshContactBatch::work() {
+    while (runNextTask()) {
+    }
+}
+
+bool MeshContactBatch::waitForTasks(const Pair& pair) {
+    bool ok = true;
+    for (std::size_t t = pair.firstTask; t < pair.endTask; ++t) {
+        // Not done: run tasks nobody took yet (later pairs'); when none is left, a worker has this one: wait for it.
+        while (m_taskState[t].load() == 0 && runNextTask()) {
+        }
+        m_taskDone.wait([&] { return m_taskState[t].load() != 0; });
+        ok = ok && m_taskState[t].load() == 1;
+    }
+    return ok;
 }
 
 void MeshContactBatch::runTask(std::size_t task, MeshContactScratch& scratch) {
@@ -209,15 +246,21 @@ void MeshContactBatch::lockParts(bool lock) const {
 const std::vector<MeshContact>* MeshContactBatch::find(const btCollisionObject* object0,
                                                        const btCollisionObject* object1,
                                                        const btCollisionShape* shape0, const btCollisionShape* shape1,
-                                                       const btTransform& trans0, const btTransform& trans1) const {
-    if (!m_ready) return nullptr;
+                                                       const btTransform& trans0, const btTransform& trans1) {
+    if (!m_running) return nullptr;
     const auto it = m_index.find({object0, object1});
     if (it == m_index.end()) return nullptr;
-    const Pair& p = m_pairs[it->second];
+    Pair& p = m_pairs[it->second];
     if (p.shape0 != shape0 || p.shape1 != shape1 || !sameTransform(p.trans0, trans0) ||
         !sameTransform(p.trans1, trans1))
         return nullptr;
-    return &p.contacts;
+    if (p.points == Pair::Points::Pending) {
+        p.points = waitForTasks(p) ? Pair::Points::Ready : Pair::Points::Failed;
+        if (p.points == Pair::Points::Ready)
+            for (std::size_t t = p.firstTask; t < p.endTask; ++t)
+                p.contacts.insert(p.contacts.end(), m_taskContacts[t].begin(), m_taskContacts[t].end());
+    }
+    return p.points == Pair::Points::Ready ? &p.contacts : nullptr;
 }
 
 }  // namespace detail

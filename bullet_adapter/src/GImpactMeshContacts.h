@@ -10,12 +10,16 @@
 #pragma once
 
 #include "GImpactLeafPairs.h"
+#include "Waiter.h"
 
 #include <BulletCollision/Gimpact/btGImpactShape.h>
 #include <BulletCollision/Gimpact/btTriangleShapeEx.h>
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <unordered_map>
 #include <vector>
 
@@ -80,10 +84,13 @@ void triangleContacts(const PartPair& parts, const std::vector<int>& interleaved
 void meshPairContacts(const btGImpactMeshShape& shape0, const btTransform& trans0, const btGImpactMeshShape& shape1,
                       const btTransform& trans1, MeshContactScratch& scratch, std::vector<MeshContact>& out);
 
-/// The mesh-mesh pairs of one dispatch, their contacts computed together on a worker pool before the dispatch
-/// makes the manifolds. A large pair's search is split into parts (LeafPairSearch::split) so that even one pair
-/// keeps every worker busy; each part's points go to its own list, and a pair's points are its parts' lists in
-/// order: the same points in the same order as meshPairContacts, whatever the thread count or scheduling.
+/// The mesh-mesh pairs of one dispatch, their contacts computed on a worker pool while the dispatch runs. A large
+/// pair's search is split into parts (LeafPairSearch::split) so that even one pair keeps every worker busy; each
+/// part's points go to its own list, and a pair's points are its parts' lists in order: the same points in the same
+/// order as meshPairContacts, whatever the thread count or scheduling. The workers take the tasks in the pairs'
+/// order; the dispatching thread meanwhile goes through the pair cache, and a pair's algorithm asks for its points
+/// (find), running pending tasks itself until its own are done: the manifolds are still made on the calling thread,
+/// in Bullet's dispatch order, while the workers compute the pairs after it.
 class MeshContactBatch {
 public:
     MeshContactBatch() = default;
@@ -97,14 +104,19 @@ public:
     void add(const btCollisionObject* object0, const btCollisionObject* object1, const btGImpactMeshShape& shape0,
              const btGImpactMeshShape& shape1, const btTransform& trans0, const btTransform& trans1);
     std::size_t size() const { return m_pairCount; }
-    /// Computes every pair's points on `pool` (nullptr: on this thread). The parts are locked on this thread for
-    /// the duration. On an exception inside, the batch is left empty (the algorithm then computes its pairs itself).
-    void run(TaskPool* pool);
-    /// The points of (object0, object1) when the batch computed them for exactly these shapes and transforms;
-    /// nullptr otherwise (the caller computes them itself).
+    /// Computes the pairs' points on `pool`'s workers (nullptr: none) while this thread runs `meanwhile` (the
+    /// dispatch, whose algorithms call find); then the tasks nobody took. The parts are locked on this thread for
+    /// the duration. A task that fails (out of memory) leaves its pair to its algorithm; an exception from
+    /// `meanwhile` is rethrown once the workers are done.
+    void run(TaskPool* pool, const std::function<void()>& meanwhile);
+    /// Whether run() is under way (a nested dispatch leaves the batch alone).
+    bool running() const { return m_running; }
+    /// During run(), on the thread that called it: the points of (object0, object1) when the batch computes them for
+    /// exactly these shapes and transforms, once its tasks are done (running pending tasks meanwhile); nullptr
+    /// otherwise (the caller computes them itself).
     const std::vector<MeshContact>* find(const btCollisionObject* object0, const btCollisionObject* object1,
                                          const btCollisionShape* shape0, const btCollisionShape* shape1,
-                                         const btTransform& trans0, const btTransform& trans1) const;
+                                         const btTransform& trans0, const btTransform& trans1);
 
     /// Search parts (tasks) of the last run.
     std::size_t taskCount() const { return m_tasks.size(); }
@@ -118,6 +130,7 @@ private:
         btTransform trans0, trans1;
         std::size_t firstTask, endTask;
         std::vector<MeshContact> contacts;
+        enum class Points { Pending, Ready, Failed } points;  // contacts gathered from the tasks' lists
     };
     struct Task {
         std::size_t pair;
@@ -133,6 +146,12 @@ private:
 
     void makeTasks(std::size_t target, MeshContactScratch& scratch);
     void runTask(std::size_t task, MeshContactScratch& scratch);
+    /// Takes the next task nobody took and runs it; false when none is left.
+    bool runNextTask();
+    /// Runs tasks until none is left.
+    void work();
+    /// Whether every task of the pair succeeded, waiting for (and meanwhile running) tasks until they are done.
+    bool waitForTasks(const Pair& pair);
     void lockParts(bool lock) const;
 
     std::vector<Pair> m_pairs;  // the first m_pairCount are this dispatch's
@@ -143,7 +162,12 @@ private:
     std::vector<NodePair> m_split;
     std::unordered_map<std::pair<const btCollisionObject*, const btCollisionObject*>, std::size_t, PairKeyHash>
         m_index;
-    bool m_ready = false;
+    /// Per task: 0 pending, 1 done, 2 failed (out of memory).
+    std::unique_ptr<std::atomic<int>[]> m_taskState;
+    std::size_t m_taskStateSize = 0;
+    std::atomic<std::size_t> m_nextTask{0};
+    bullet::Waiter m_taskDone;  // the dispatching thread waits here for a worker's task
+    bool m_running = false;
 };
 
 }  // namespace detail

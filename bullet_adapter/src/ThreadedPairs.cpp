@@ -31,8 +31,6 @@
 #include <LinearMath/btIDebugDraw.h>
 #include <LinearMath/btQuickprof.h>
 
-#include <thread>
-
 
 namespace cullide::bullet {
 namespace {
@@ -206,21 +204,23 @@ bool PairStream::push(btBroadphasePair* pair) {
     const std::size_t n = m_published.load(std::memory_order_relaxed);
     if (n >= m_pairs.size()) return false;
     m_pairs[n] = pair;
-    m_published.store(n + 1, std::memory_order_release);
+    m_published.store(n + 1);
+    m_waiter.notify();
     return true;
 }
 
-void PairStream::close() { m_closed.store(true, std::memory_order_release); }
+void PairStream::close() {
+    m_closed.store(true);
+    m_waiter.notify();
+}
 
 void PairStream::consume(const btDispatcherInfo& info) {
     const PairThreadScope scope;
     for (;;) {
         const std::size_t i = m_next.fetch_add(1, std::memory_order_relaxed);
-        while (i >= m_published.load(std::memory_order_acquire)) {
-            // Closed after its last push: once closed, what is published is all there is.
-            if (m_closed.load(std::memory_order_acquire) && i >= m_published.load(std::memory_order_acquire)) return;
-            std::this_thread::yield();
-        }
+        // Closed after its last push: once closed, what is published is all there is.
+        m_waiter.wait([&] { return i < m_published.load() || m_closed.load(); });
+        if (i >= m_published.load()) return;
         collidePair(*m_pairs[i], info);
     }
 }

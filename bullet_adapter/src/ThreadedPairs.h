@@ -27,6 +27,8 @@
 // multithreading requires; a Bullet built with its profiler (BT_ENABLE_PROFILE) counts its threads unsafely.
 #pragma once
 
+#include "Waiter.h"
+
 #include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
 #include <BulletCollision/BroadphaseCollision/btDispatcher.h>
 
@@ -99,6 +101,7 @@ private:
     std::atomic<std::size_t> m_published{0};
     std::atomic<std::size_t> m_next{0};
     std::atomic<bool> m_closed{false};
+    Waiter m_waiter;  // consumers ahead of the producer sleep here
 };
 
 /// Marks the current thread, while it lives, as running pairs of a threaded dispatch: algorithms made on it come from

@@ -312,22 +312,26 @@ TEST(GImpactMeshContacts, AheadResultsMatchTheirInputsExactly) {
     for (TaskPool* p : {static_cast<TaskPool*>(nullptr), &pool}) {
         batch.clear();
         batch.add(&a, &b, *torus, *torus, t0, t1);
-        batch.run(p);
-        const std::vector<detail::MeshContact>* found = batch.find(&a, &b, torus, torus, t0, t1);
-        ASSERT_NE(found, nullptr);
-        ASSERT_EQ(found->size(), sequential.size());
-        for (std::size_t i = 0; i < sequential.size(); ++i) {
-            const detail::MeshContact& x = (*found)[i];
-            const detail::MeshContact& y = sequential[i];
-            EXPECT_TRUE(x.point == y.point && x.normal == y.normal && x.distance == y.distance &&
-                        x.part0 == y.part0 && x.face0 == y.face0 && x.part1 == y.part1 && x.face1 == y.face1)
-                << "point " << i;
-        }
-        btTransform nudged = t1;
-        nudged.getOrigin().setX(std::nextafter(t1.getOrigin().x(), btScalar(1e30)));
-        EXPECT_EQ(batch.find(&a, &b, torus, torus, t0, nudged), nullptr);
-        EXPECT_EQ(batch.find(&a, &b, torus, other, t0, t1), nullptr);
-        EXPECT_EQ(batch.find(&b, &a, torus, torus, t1, t0), nullptr);
+        // find() is asked while the batch runs (as the dispatch loop asks): it waits for, or runs, the pair's tasks.
+        batch.run(p, [&] {
+            btTransform nudged = t1;
+            nudged.getOrigin().setX(std::nextafter(t1.getOrigin().x(), btScalar(1e30)));
+            EXPECT_EQ(batch.find(&a, &b, torus, torus, t0, nudged), nullptr);
+            EXPECT_EQ(batch.find(&a, &b, torus, other, t0, t1), nullptr);
+            EXPECT_EQ(batch.find(&b, &a, torus, torus, t1, t0), nullptr);
+            const std::vector<detail::MeshContact>* found = batch.find(&a, &b, torus, torus, t0, t1);
+            ASSERT_NE(found, nullptr);
+            ASSERT_EQ(found->size(), sequential.size());
+            for (std::size_t i = 0; i < sequential.size(); ++i) {
+                const detail::MeshContact& x = (*found)[i];
+                const detail::MeshContact& y = sequential[i];
+                EXPECT_TRUE(x.point == y.point && x.normal == y.normal && x.distance == y.distance &&
+                            x.part0 == y.part0 && x.face0 == y.face0 && x.part1 == y.part1 && x.face1 == y.face1)
+                    << "point " << i;
+            }
+            EXPECT_EQ(batch.find(&a, &b, torus, torus, t0, t1), found) << "asked again: the same list";
+        });
+        EXPECT_EQ(batch.find(&a, &b, torus, torus, t0, t1), nullptr) << "only while the batch runs";
     }
     batch.clear();
     EXPECT_EQ(batch.find(&a, &b, torus, torus, t0, t1), nullptr);

@@ -122,17 +122,22 @@ private:
     CullideDispatchStats& currentStats() { return m_current; }
     /// Used by the GImpact algorithm: primitive -> leaf node of GImpact box sets (Bullet's candidate criterion).
     detail::GImpactLeafIndex& gimpactLeafIndex() { return *m_leafIndex; }
-    /// Used by the GImpact algorithm: the mesh-mesh contacts computed ahead for the current dispatch.
-    const detail::MeshContactBatch& meshContacts() const { return *m_meshContacts; }
+    /// Used by the GImpact algorithm: the mesh-mesh contacts computed on the narrow-phase threads during the current
+    /// dispatch.
+    detail::MeshContactBatch& meshContacts() { return *m_meshContacts; }
     /// The thread count in use (setNarrowPhaseThreads; 0 read as the machine's) and the pool of that many.
     unsigned narrowPhaseThreads() const;
     TaskPool& pool(unsigned threads);
     /// The kind of the pair's algorithm if it may run on a narrow-phase thread in this dispatch, else Other
     /// (src/ThreadedPairs.h).
     bullet::AlgorithmKind threadablePair(btBroadphasePair& pair);
-    /// Lists the pair cache's GImpact mesh-mesh pairs that the dispatch will run through the GImpact algorithm and
-    /// computes their contacts on the worker pool.
-    void computeMeshContactsAhead(btOverlappingPairCache* pairCache, const btDispatcherInfo& dispatchInfo);
+    /// Lists the pair cache's GImpact mesh-mesh pairs that the dispatch will run through the GImpact algorithm, for
+    /// the worker pool to compute their contacts while the dispatch runs; false when there are none.
+    bool listMeshPairs(btOverlappingPairCache* pairCache, const btDispatcherInfo& dispatchInfo);
+    /// The dispatch loop over the broadphase's own pair cache (discrete dispatch, Bullet's near callback): pairs
+    /// apart skipped, threadable pairs handed to the workers when `mayStream` (the pool is free) and it pays.
+    void dispatchOwnPairs(btOverlappingPairCache* pairCache, const btDispatcherInfo& dispatchInfo,
+                          btDispatcher* dispatcher, bool mayStream);
 
     CullideCollisionDispatcher(detail::PrecisionChecked, btCollisionConfiguration* collisionConfiguration,
                                CullideBroadphase* broadphase);
