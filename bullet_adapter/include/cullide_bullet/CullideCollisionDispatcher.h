@@ -18,9 +18,14 @@
 // - Everything else (primitives, compound-compound and compound-convex per child, planes, soft bodies) goes to
 //   Bullet's algorithms unchanged; so does any pair for which the broadphase has no fresh triangle
 //   data (a character controller's private pair cache after the ghost moved, contactTest, another broadphase).
-// - GImpact mesh-mesh pairs computed with Bullet's contacts (the default) have their points computed before the
-//   dispatch loop, on the narrow-phase threads (setNarrowPhaseThreads); each pair's algorithm then adds them to its
+// - GImpact mesh-mesh pairs computed with Bullet's contacts (the default) have their points computed on the
+//   narrow-phase threads (setNarrowPhaseThreads) while the dispatch loop runs; each pair's algorithm adds them to its
 //   manifold on the calling thread, in Bullet's order: the same manifolds for every thread count.
+// - Pairs whose algorithm is Bullet's own and touches only its own manifold (GJK for convex shapes, convex against a
+//   BVH mesh or heightfield; src/ThreadedPairs.h) run on the narrow-phase threads while the calling thread runs the
+//   others in the pair cache's order: manifolds are made in Bullet's order, the simulation is Bullet's bit for bit.
+//   Pairs that would call the application (contact callbacks, combiners, a drawing debug drawer) stay on the
+//   calling thread.
 // - A pair whose broadphase boxes are farther apart than its manifold's contact breaking threshold can make no
 //   contact point: its algorithm is skipped and its manifolds' points are cleared, as btAxisSweep3 would drop the
 //   pair (rigid and plain collision objects without GImpact shapes, discrete dispatch, Bullet's near callback;
@@ -74,8 +79,8 @@ struct CullideDispatchStats {
     /// Pairs whose broadphase boxes were farther apart than their contact breaking threshold: no algorithm call,
     /// their manifolds' points cleared (btDbvtBroadphase's fattened pairs that btAxisSweep3 would not hold)
     std::size_t apartPairs = 0;
-    /// Pairs whose Bullet algorithm ran on the narrow-phase threads (setNarrowPhaseThreads): convex pairs and convex
-    /// against a BVH mesh or heightfield, while no application hook is installed
+    /// Pairs handed to the narrow-phase threads (setNarrowPhaseThreads) to run their Bullet algorithm: convex (GJK)
+    /// pairs and convex against a BVH mesh or heightfield, while no application hook is installed and it pays
     std::size_t threadedPairs = 0;
     double dispatchMs = 0.0;            ///< wall time in dispatchAllCollisionPairs
     void reset() { *this = CullideDispatchStats{}; }
@@ -106,13 +111,14 @@ public:
     const CullideDispatchStats& getTotalStats() const { return m_total; }
     void resetStats() { m_total.reset(); }
 
-    /// Threads for the GImpact mesh-mesh narrow phase (0, the default: the machine's hardware threads, at most 8,
-    /// read once per process; 1: none besides the calling one). With more than one, every dispatch first computes the
-    /// contacts of its btGImpactMeshShape pairs together — many pairs, and the parts of a large pair's box-tree
-    /// search, on a worker pool — and each pair's algorithm then adds its points to the manifold on the calling
-    /// thread, in Bullet's dispatch order. The points and manifolds are the same bit for bit for every thread count:
-    /// the workers only read the shapes (locked by the calling thread) and compute values; manifolds, allocators and
-    /// the application's contact callbacks are used on the calling thread only.
+    /// Threads for the narrow phase (0, the default: the machine's hardware threads, at most 8, read once per
+    /// process; 1: none besides the calling one). With more than one, the contacts of the dispatch's
+    /// btGImpactMeshShape pairs are computed on a worker pool — many pairs, and the parts of a large pair's box-tree
+    /// search — while the calling thread runs the dispatch loop, where each pair's algorithm adds its points to the
+    /// manifold in Bullet's order; and pairs whose Bullet algorithm touches only its own manifold (convex GJK pairs,
+    /// convex against a BVH mesh or heightfield) run on the pool while the calling thread runs the others in the
+    /// cache's order. The manifolds are the same bit for bit for every thread count: manifolds are made and freed,
+    /// Bullet's pools used and the application's callbacks called on the calling thread only.
     void setNarrowPhaseThreads(unsigned threads);
     unsigned getNarrowPhaseThreads() const { return m_threads; }
 
