@@ -889,7 +889,12 @@ void CullideCollisionDispatcher::dispatchOwnPairs(btOverlappingPairCache* pairCa
     if (mayThread) m_dispatchesSinceCount = 0;
     // The workers are woken when the previous dispatch's threadable pairs were worth it: below kMinThreadedCost
     // (bullet::typicalCost units, ~60 us of work) waking one (~25 us here) costs more than it saves.
-    if (mayStream && mayThread && m_lastThreadableCost >= kMinThreadedCost) {
+    if (mayStream && !m_poolBusy && mayThread && m_lastThreadableCost >= kMinThreadedCost) {
+        m_poolBusy = true;  // a dispatch nested in a pair's algorithm (rare) runs without the pool
+        const struct Release {
+            bool& busy;
+            ~Release() { busy = false; }
+        } release{m_poolBusy};
         bullet::PairStream stream;
         stream.reset(static_cast<std::size_t>(pairCache->getNumOverlappingPairs()));
         DispatchLoop loop(*this, dispatchInfo, &threadable, &stream);
@@ -925,10 +930,14 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
         else
             btCollisionDispatcher::dispatchAllCollisionPairs(pairCache, dispatchInfo, dispatcher);
     };
-    // GImpact mesh-mesh pairs: the workers compute their contacts while this thread dispatches (a nested dispatch,
-    // from within a pair, leaves the running batch alone).
+    // GImpact mesh-mesh pairs: the workers compute their contacts while this thread dispatches.
     detail::MeshContactBatch& batch = *m_meshContacts;
-    if (!batch.running() && listMeshPairs(pairCache, dispatchInfo)) {
+    if (!m_poolBusy && listMeshPairs(pairCache, dispatchInfo)) {
+        m_poolBusy = true;  // a dispatch nested in a pair's algorithm (rare) leaves the batch and the pool alone
+        const struct Release {
+            bool& busy;
+            ~Release() { busy = false; }
+        } release{m_poolBusy};
         batch.run(&pool(narrowPhaseThreads()), [&] { dispatchPairs(false); });
         m_current.threadedMeshPairs = batch.size();
         m_current.threadedTasks = batch.taskCount();

@@ -160,6 +160,7 @@ private:
     /// dispatch wakes the workers from kMinThreadedCost on.
     std::size_t m_lastThreadableCost = 0;
     unsigned m_dispatchesSinceCount = 0;
+    bool m_poolBusy = false;  // the worker pool serves a dispatch under way
     static constexpr std::size_t kMinThreadedCost = 300;
     static constexpr unsigned kRecountDispatches = 16;
     unsigned m_threads = 0;
