@@ -732,6 +732,18 @@ private:
     btManifoldArray m_scratch;
 };
 
+/// Marks the worker pool as serving the dispatch under way, until the scope ends (also on an exception).
+class PoolClaim {
+public:
+    explicit PoolClaim(bool& busy) : m_busy(busy) { m_busy = true; }
+    ~PoolClaim() { m_busy = false; }
+    PoolClaim(const PoolClaim&) = delete;
+    PoolClaim& operator=(const PoolClaim&) = delete;
+
+private:
+    bool& m_busy;
+};
+
 /// Closes a stream when the producer is done, also when it throws (the consumers would wait for more).
 struct CloseWhenDone {
     bullet::PairStream& stream;
@@ -890,11 +902,7 @@ void CullideCollisionDispatcher::dispatchOwnPairs(btOverlappingPairCache* pairCa
     // The workers are woken when the previous dispatch's threadable pairs were worth it: below kMinThreadedCost
     // (bullet::typicalCost units, ~60 us of work) waking one (~25 us here) costs more than it saves.
     if (mayStream && !m_poolBusy && mayThread && m_lastThreadableCost >= kMinThreadedCost) {
-        m_poolBusy = true;  // a dispatch nested in a pair's algorithm (rare) runs without the pool
-        const struct Release {
-            bool& busy;
-            ~Release() { busy = false; }
-        } release{m_poolBusy};
+        const PoolClaim claim{m_poolBusy};  // a dispatch nested in a pair's algorithm (rare) runs without the pool
         bullet::PairStream stream;
         stream.reset(static_cast<std::size_t>(pairCache->getNumOverlappingPairs()));
         DispatchLoop loop(*this, dispatchInfo, &threadable, &stream);
@@ -933,11 +941,7 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
     // GImpact mesh-mesh pairs: the workers compute their contacts while this thread dispatches.
     detail::MeshContactBatch& batch = *m_meshContacts;
     if (!m_poolBusy && listMeshPairs(pairCache, dispatchInfo)) {
-        m_poolBusy = true;  // a dispatch nested in a pair's algorithm (rare) leaves the batch and the pool alone
-        const struct Release {
-            bool& busy;
-            ~Release() { busy = false; }
-        } release{m_poolBusy};
+        const PoolClaim claim{m_poolBusy};  // a dispatch nested in a pair's algorithm leaves the batch and pool alone
         batch.run(&pool(narrowPhaseThreads()), [&] { dispatchPairs(false); });
         m_current.threadedMeshPairs = batch.size();
         m_current.threadedTasks = batch.taskCount();
@@ -968,11 +972,10 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
 
 void* CullideCollisionDispatcher::allocateCollisionAlgorithm(int size) {
     // btPoolAllocator only asserts on the size: an algorithm larger than the pool element would silently corrupt
-    // memory in release builds. Such algorithms come from the heap (freeCollisionAlgorithm handles both).
-    // Algorithms made on the narrow-phase threads (a convex-mesh pair's per-triangle ones) come from the heap too: the
-    // pool is the calling thread's.
-    if (bullet::onPairThread()) return btAlignedAlloc(static_cast<size_t>(size), 16);
-    if (m_collisionAlgorithmPoolAllocator != nullptr && size > m_collisionAlgorithmPoolAllocator->getElementSize())
+    // memory in release builds. Such algorithms come from the heap (freeCollisionAlgorithm handles both), and so do
+    // those made on the narrow-phase threads (a convex-mesh pair's per-triangle ones): the pool is the calling thread's.
+    if (bullet::onPairThread() ||
+        (m_collisionAlgorithmPoolAllocator != nullptr && size > m_collisionAlgorithmPoolAllocator->getElementSize()))
         return btAlignedAlloc(static_cast<size_t>(size), 16);
     return btCollisionDispatcher::allocateCollisionAlgorithm(size);
 }

@@ -109,8 +109,6 @@ public:
     /// the duration. A task that fails (out of memory) leaves its pair to its algorithm; an exception from
     /// `meanwhile` is rethrown once the workers are done.
     void run(TaskPool* pool, const std::function<void()>& meanwhile);
-    /// Whether run() is under way (a nested dispatch leaves the batch alone).
-    bool running() const { return m_running; }
     /// During run(), on the thread that called it: the points of (object0, object1) when the batch computes them for
     /// exactly these shapes and transforms, once its tasks are done (running pending tasks meanwhile); nullptr
     /// otherwise (the caller computes them itself).
