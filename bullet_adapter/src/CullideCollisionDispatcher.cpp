@@ -295,8 +295,8 @@ public:
                 const detail::PartPair parts{part0, part1, m_part0, m_part1, &body0Wrap->getWorldTransform(),
                                              &body1Wrap->getWorldTransform()};
                 detail::MeshContactScratch& scratch = detail::threadScratch();
-                scratch.world0.begin(part0->getNumChildShapes());
-                scratch.world1.begin(part1->getNumChildShapes());
+                scratch.world0.begin(*part0, body0Wrap->getWorldTransform());
+                scratch.world1.begin(*part1, body1Wrap->getWorldTransform());
                 contacts.clear();
                 part0->lockChildShapes();
                 part1->lockChildShapes();

@@ -2,46 +2,116 @@
 
 #include "cullide/TaskPool.h"
 
+#include <BulletCollision/Gimpact/btClipPolygon.h>
+
 #include <algorithm>
 
 namespace cullide {
 namespace detail {
 
-void WorldTriangles::begin(int count) {
-    const std::size_t n = static_cast<std::size_t>(std::max(count, 0));
-    if (++m_epoch == 0) {  // wrapped: no stamp may look current
-        std::fill(m_stamp.begin(), m_stamp.end(), 0u);
+namespace {
+constexpr std::uint32_t kBusy = 0x80000000u;
+}  // namespace
+
+void TriangleStore::begin(const btGImpactMeshShapePart& part, const btTransform& t) {
+    m_part = &part;
+    m_transform = t;
+    m_count = static_cast<std::size_t>(std::max(part.getNumChildShapes(), 0));
+    if (m_capacity < m_count) {
+        m_triangles.resize(m_count);
+        m_stamp = std::make_unique<std::atomic<std::uint32_t>[]>(m_count);  // zero: no epoch
+        m_capacity = m_count;
+    }
+    if (++m_epoch == kBusy) {  // wrapped: no stamp may look current
+        for (std::size_t i = 0; i < m_capacity; ++i) m_stamp[i].store(0, std::memory_order_relaxed);
         m_epoch = 1;
     }
-    if (m_stamp.size() < n) {
-        m_stamp.resize(n, 0u);
-        m_triangles.resize(static_cast<int>(n));
-    }
-    m_count = n;
 }
 
-btPrimitiveTriangle* WorldTriangles::get(const btGImpactMeshShapePart& part, int prim, const btTransform& t) {
+void TriangleStore::prepare(int prim, PreparedTriangle& out) const {
+    m_part->getPrimitiveTriangle(prim, out.triangle);
+    out.triangle.applyTransform(m_transform);
+    out.triangle.buildTriPlane();
+    for (int e = 0; e < 3; ++e) out.triangle.get_edge_plane(e, out.edges[e]);
+}
+
+const PreparedTriangle* TriangleStore::get(int prim, PreparedTriangle& spare) {
     if (prim < 0 || static_cast<std::size_t>(prim) >= m_count) return nullptr;
-    btPrimitiveTriangle& tri = m_triangles[prim];
-    if (m_stamp[static_cast<std::size_t>(prim)] != m_epoch) {
-        part.getPrimitiveTriangle(prim, tri);
-        tri.applyTransform(t);
-        tri.buildTriPlane();
-        m_stamp[static_cast<std::size_t>(prim)] = m_epoch;
+    const std::size_t i = static_cast<std::size_t>(prim);
+    std::atomic<std::uint32_t>& stamp = m_stamp[i];
+    std::uint32_t seen = stamp.load(std::memory_order_acquire);
+    if (seen == m_epoch) return &m_triangles[i];
+    if (seen != (m_epoch | kBusy) &&
+        stamp.compare_exchange_strong(seen, m_epoch | kBusy, std::memory_order_acquire)) {
+        prepare(prim, m_triangles[i]);
+        stamp.store(m_epoch, std::memory_order_release);
+        return &m_triangles[i];
     }
-    return &tri;
+    if (seen == m_epoch) return &m_triangles[i];  // prepared by another thread just now
+    prepare(prim, spare);  // another thread is preparing the shared copy: the same values, computed here
+    return &spare;
 }
 
-void triangleContacts(const PartPair& parts, const std::vector<int>& interleaved, WorldTriangles& world0,
-                      WorldTriangles& world1, std::vector<MeshContact>& out) {
+namespace {
+
+/// btPrimitiveTriangle::clip_triangle: `other` clipped by the edge planes, in Bullet's order.
+int clipByEdges(const btVector4* edges, const btPrimitiveTriangle& other, btVector3* clipped) {
+    btVector3 first[MAX_TRI_CLIPPING];
+    int count = bt_plane_clip_triangle(edges[0], other.m_vertices[0], other.m_vertices[1], other.m_vertices[2], first);
+    if (count == 0) return 0;
+    btVector3 second[MAX_TRI_CLIPPING];
+    count = bt_plane_clip_polygon(edges[1], first, count, second);
+    if (count == 0) return 0;
+    return bt_plane_clip_polygon(edges[2], second, count, clipped);
+}
+
+/// One side of the clip method: `other` clipped by `self`'s edges, the points merged against `self`'s plane.
+bool clipSide(const PreparedTriangle& self, const PreparedTriangle& other, btScalar margin,
+              GIM_TRIANGLE_CONTACT& side) {
+    btVector3 clipped[MAX_TRI_CLIPPING];
+    side.m_separating_normal = self.triangle.m_plane;
+    const int count = clipByEdges(self.edges, other.triangle, clipped);
+    if (count == 0) return false;
+    side.merge_points(side.m_separating_normal, margin, clipped, count);
+    return side.m_point_count != 0;
+}
+
+/// Whether every vertex lies beyond `plane` by more than `margin` (the distances as Bullet computes them).
+bool allBeyond(const btVector4& plane, const btVector3* vertices, btScalar margin) {
+    return bt_distance_point_plane(plane, vertices[0]) - margin > 0.0f &&
+           bt_distance_point_plane(plane, vertices[1]) - margin > 0.0f &&
+           bt_distance_point_plane(plane, vertices[2]) - margin > 0.0f;
+}
+
+}  // namespace
+
+bool planesMayMeet(const btPrimitiveTriangle& a, const btPrimitiveTriangle& b) {
+    const btScalar margin = a.m_margin + b.m_margin;
+    return !allBeyond(a.m_plane, b.m_vertices, margin) && !allBeyond(b.m_plane, a.m_vertices, margin);
+}
+
+bool clipMethodContact(const PreparedTriangle& a, const PreparedTriangle& b, GIM_TRIANGLE_CONTACT& contact) {
+    const btScalar margin = a.triangle.m_margin + b.triangle.m_margin;
+    GIM_TRIANGLE_CONTACT first;
+    if (!clipSide(a, b, margin, first)) return false;
+    first.m_separating_normal *= -1.f;  // pointing to `a`, as Bullet turns it
+    GIM_TRIANGLE_CONTACT second;
+    if (!clipSide(b, a, margin, second)) return false;
+    contact.copy_from(second.m_penetration_depth < first.m_penetration_depth ? second : first);
+    return true;
+}
+
+void triangleContacts(const PartPair& parts, const std::vector<int>& interleaved, TriangleStore& world0,
+                      TriangleStore& world1, std::vector<MeshContact>& out) {
     GIM_TRIANGLE_CONTACT contact;
+    PreparedTriangle spare0, spare1;
     for (std::size_t k = 0; k + 1 < interleaved.size(); k += 2) {
         const int face0 = interleaved[k];
         const int face1 = interleaved[k + 1];
-        btPrimitiveTriangle* tri0 = world0.get(*parts.part0, face0, *parts.trans0);
-        btPrimitiveTriangle* tri1 = world1.get(*parts.part1, face1, *parts.trans1);
+        const PreparedTriangle* tri0 = world0.get(face0, spare0);
+        const PreparedTriangle* tri1 = world1.get(face1, spare1);
         if (tri0 == nullptr || tri1 == nullptr) continue;  // not a primitive of the part (a stale box set)
-        if (!tri0->overlap_test_conservative(*tri1) || !tri0->find_triangle_collision_clip_method(*tri1, contact))
+        if (!planesMayMeet(tri0->triangle, tri1->triangle) || !clipMethodContact(*tri0, *tri1, contact))
             continue;
         // Bullet adds a triangle pair's points last to first, each with the separating normal and -depth.
         for (int j = contact.m_point_count; j-- > 0;)
@@ -52,15 +122,15 @@ void triangleContacts(const PartPair& parts, const std::vector<int>& interleaved
 
 namespace {
 
-/// One part pair's search from `start`, then the triangle routine on its pairs.
+/// One part pair's search from `start`, then the triangle routine on its pairs with the parts' triangles from
+/// `world0` and `world1` (begun for these parts and transforms).
 void searchAndTest(const LeafPairSearch& search, const NodePair& start, const PartPair& parts,
-                   MeshContactScratch& scratch, std::vector<MeshContact>& out) {
+                   MeshContactScratch& scratch, TriangleStore& world0, TriangleStore& world1,
+                   std::vector<MeshContact>& out) {
     scratch.interleaved.clear();
     search.descend(start, scratch.leaves, scratch.interleaved);
     if (scratch.interleaved.empty()) return;
-    scratch.world0.begin(parts.part0->getNumChildShapes());
-    scratch.world1.begin(parts.part1->getNumChildShapes());
-    triangleContacts(parts, scratch.interleaved, scratch.world0, scratch.world1, out);
+    triangleContacts(parts, scratch.interleaved, world0, world1, out);
 }
 
 PartPair partPair(const btGImpactMeshShape& shape0, int index0, const btTransform& trans0,
@@ -101,7 +171,9 @@ void meshPairContacts(const btGImpactMeshShape& shape0, const btTransform& trans
         for (int p1 = shape1.getMeshPartCount(); p1-- > 0;) {
             const PartPair parts = partPair(shape0, p0, trans0, shape1, p1, trans1);
             const LeafPairSearch search(*parts.part0->getBoxSet(), trans0, *parts.part1->getBoxSet(), trans1);
-            searchAndTest(search, {0, 0, true}, parts, scratch, out);
+            scratch.world0.begin(*parts.part0, trans0);
+            scratch.world1.begin(*parts.part1, trans1);
+            searchAndTest(search, {0, 0, true}, parts, scratch, scratch.world0, scratch.world1, out);
         }
     }
     lockAll(shape1, false);
@@ -113,6 +185,25 @@ void MeshContactBatch::clear() {
     m_index.clear();
     m_searches.clear();
     m_tasks.clear();
+    m_storeCount = 0;
+    m_storeIndex.clear();
+}
+
+std::size_t MeshContactBatch::storeFor(const btGImpactMeshShapePart& part, const btTransform& t) {
+    const auto found = m_storeIndex.find(&part);
+    if (found != m_storeIndex.end())
+        for (std::size_t i : found->second)
+            if (sameTransform(m_stores[i]->transform(), t)) return i;
+    // A new store, within the budget on what the stores hold (their memory is kept for the next dispatches).
+    const std::size_t count = static_cast<std::size_t>(std::max(part.getNumChildShapes(), 0));
+    const std::size_t held = m_storeCount < m_stores.size() ? m_stores[m_storeCount]->capacity() : 0;
+    const std::size_t grow = count > held ? count - held : 0;
+    if ((m_storeTriangles + grow) * sizeof(PreparedTriangle) > m_storeBudget) return kNoStore;
+    m_storeTriangles += grow;
+    if (m_stores.size() == m_storeCount) m_stores.push_back(std::make_unique<TriangleStore>());
+    m_stores[m_storeCount]->begin(part, t);
+    m_storeIndex[&part].push_back(m_storeCount);
+    return m_storeCount++;
 }
 
 void MeshContactBatch::add(const btCollisionObject* object0, const btCollisionObject* object1,
@@ -143,12 +234,17 @@ void MeshContactBatch::makeTasks(std::size_t target, MeshContactScratch& scratch
                 const btGImpactBoxSet& set1 = *p.shape1->getMeshPart(p1)->getBoxSet();
                 m_searches.emplace_back(set0, p.trans0, set1, p.trans1);
                 if (!m_searches.back().rootsOverlap()) continue;
+                std::size_t store0 = kNoStore, store1 = kNoStore;
                 if (target > 1 && set0.getNodeCount() >= kSplitNodes && set1.getNodeCount() >= kSplitNodes) {
                     m_searches.back().split(target, scratch.leaves, m_split);
+                    // The parts' tasks share their triangles rather than each preparing those it meets.
+                    store0 = storeFor(*p.shape0->getMeshPart(p0), p.trans0);
+                    store1 = storeFor(*p.shape1->getMeshPart(p1), p.trans1);
                 } else {
                     m_split.assign(1, NodePair{0, 0, true});
                 }
-                for (const NodePair& start : m_split) m_tasks.push_back({i, m_searches.size() - 1, p0, p1, start});
+                for (const NodePair& start : m_split)
+                    m_tasks.push_back({i, m_searches.size() - 1, p0, p1, start, store0, store1});
             }
         }
         p.endTask = m_tasks.size();
@@ -233,7 +329,16 @@ void MeshContactBatch::runTask(std::size_t task, MeshContactScratch& scratch) {
     const PartPair parts = partPair(*p.shape0, t.part0, p.trans0, *p.shape1, t.part1, p.trans1);
     std::vector<MeshContact>& out = m_taskContacts[task];
     out.clear();
-    searchAndTest(m_searches[t.search], t.start, parts, scratch, out);
+    // A part without a shared store (small, or beyond the budget): the task prepares its triangles in its own.
+    const auto store = [&](std::size_t index, TriangleStore& own, const btGImpactMeshShapePart& part,
+                           const btTransform& trans) -> TriangleStore& {
+        if (index != kNoStore) return *m_stores[index];
+        own.begin(part, trans);
+        return own;
+    };
+    searchAndTest(m_searches[t.search], t.start, parts, scratch,
+                  store(t.store0, scratch.world0, *parts.part0, *parts.trans0),
+                  store(t.store1, scratch.world1, *parts.part1, *parts.trans1), out);
 }
 
 void MeshContactBatch::lockParts(bool lock) const {

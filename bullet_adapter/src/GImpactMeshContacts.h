@@ -38,25 +38,58 @@ struct MeshContact {
     int part0, face0, part1, face1;
 };
 
-/// A GImpact part's triangles as Bullet's collide_sat_triangles prepares them (mapped to world space by the body's
-/// transform, plane built), each computed on first use within one begin() .. begin() span. The part must be locked.
-class WorldTriangles {
+/// A world-space triangle as Bullet's collide_sat_triangles prepares it (btPrimitiveTriangle: vertices mapped by the
+/// body's transform, plane built), with the three edge planes its clip method builds for every pair it tests, built
+/// here once (the same calls on the same values: the same planes).
+struct PreparedTriangle {
+    btPrimitiveTriangle triangle;
+    btVector4 edges[3];
+};
+
+/// btPrimitiveTriangle::overlap_test_conservative (which Bullet declares non-const): false when either triangle lies
+/// entirely beyond the other's plane by more than both margins.
+bool planesMayMeet(const btPrimitiveTriangle& a, const btPrimitiveTriangle& b);
+
+/// btPrimitiveTriangle::find_triangle_collision_clip_method on prepared triangles: each triangle clipped by the
+/// other's edge planes (Bullet's bt_plane_clip_triangle / bt_plane_clip_polygon), the points merged against its plane
+/// (GIM_TRIANGLE_CONTACT::merge_points), the deeper side kept — Bullet's steps in Bullet's order, so the same contact
+/// bit for bit.
+bool clipMethodContact(const PreparedTriangle& a, const PreparedTriangle& b, GIM_TRIANGLE_CONTACT& contact);
+
+/// A GImpact part's triangles under one transform as PreparedTriangles, each prepared by the first thread that asks
+/// for it within one begin() .. begin() span and then shared by every thread. The part must stay locked meanwhile.
+class TriangleStore {
 public:
-    void begin(int count);
-    /// Triangle `prim` of `part` in world space, or nullptr when the part has no such primitive.
-    btPrimitiveTriangle* get(const btGImpactMeshShapePart& part, int prim, const btTransform& t);
+    TriangleStore() = default;
+    TriangleStore(const TriangleStore&) = delete;
+    TriangleStore& operator=(const TriangleStore&) = delete;
+
+    /// Starts a span for `part` under `t` (copied): no triangle is prepared. Not concurrent with get().
+    void begin(const btGImpactMeshShapePart& part, const btTransform& t);
+    /// Triangle `prim` in world space, or nullptr when the part has no such primitive. Any number of threads at once:
+    /// while another thread prepares the store's copy, the triangle is prepared into `spare` and that is returned.
+    const PreparedTriangle* get(int prim, PreparedTriangle& spare);
+    /// Triangles the store has room for (its memory, kept between spans).
+    std::size_t capacity() const { return m_capacity; }
+    const btGImpactMeshShapePart* part() const { return m_part; }
+    const btTransform& transform() const { return m_transform; }
 
 private:
-    btAlignedObjectArray<btPrimitiveTriangle> m_triangles;
-    std::vector<std::uint32_t> m_stamp;
-    std::uint32_t m_epoch = 0;
+    void prepare(int prim, PreparedTriangle& out) const;
+
+    const btGImpactMeshShapePart* m_part = nullptr;
+    btTransform m_transform;
+    std::vector<PreparedTriangle> m_triangles;
+    std::unique_ptr<std::atomic<std::uint32_t>[]> m_stamp;  // m_epoch: prepared; m_epoch | kBusy: being prepared
+    std::size_t m_capacity = 0;
     std::size_t m_count = 0;
+    std::uint32_t m_epoch = 0;
 };
 
 /// Working memory of one thread's contact computations.
 struct MeshContactScratch {
     LeafPairScratch leaves;
-    WorldTriangles world0, world1;
+    TriangleStore world0, world1;
     std::vector<int> interleaved;
 };
 
@@ -74,9 +107,9 @@ struct PartPair {
 
 /// Bullet's triangle routine (the conservative plane test, then the clip method) over the triangle pairs
 /// `interleaved` (prim0, prim1, ...) of one part pair, in that order; the points appended to `out`. Both parts
-/// locked; world0 / world1 begun for these parts by the caller.
-void triangleContacts(const PartPair& parts, const std::vector<int>& interleaved, WorldTriangles& world0,
-                      WorldTriangles& world1, std::vector<MeshContact>& out);
+/// locked; world0 / world1 begun for these parts and transforms by the caller.
+void triangleContacts(const PartPair& parts, const std::vector<int>& interleaved, TriangleStore& world0,
+                      TriangleStore& world1, std::vector<MeshContact>& out);
 
 /// Bullet's whole mesh-mesh contact search for two btGImpactMeshShapes whose parts all have box sets: part pairs
 /// in Bullet's order (part 0 descending, then part 1 descending), Bullet's box-set pairs of each in Bullet's order,
@@ -118,6 +151,10 @@ public:
 
     /// Search parts (tasks) of the last run.
     std::size_t taskCount() const { return m_tasks.size(); }
+    /// Shared triangle stores of the last run (one per part and transform of a pair cut into parts, within budget).
+    std::size_t sharedStores() const { return m_storeCount; }
+    /// What the shared stores may hold, in bytes (kSharedTriangleBytes unless set; a test sets it lower).
+    void setSharedTriangleBudget(std::size_t bytes) { m_storeBudget = bytes; }
 
 private:
     struct Pair {
@@ -135,6 +172,7 @@ private:
         std::size_t search;
         int part0, part1;
         NodePair start;
+        std::size_t store0, store1;  ///< the parts' shared triangles (m_stores), or kNoStore
     };
     struct PairKeyHash {
         std::size_t operator()(const std::pair<const btCollisionObject*, const btCollisionObject*>& k) const {
@@ -143,6 +181,12 @@ private:
     };
 
     void makeTasks(std::size_t target, MeshContactScratch& scratch);
+    /// The store of `part`'s triangles under `t` for this dispatch (one per part and transform, shared by its
+    /// tasks), or kNoStore when a new one would take the stores beyond kSharedTriangleBytes.
+    std::size_t storeFor(const btGImpactMeshShapePart& part, const btTransform& t);
+    static constexpr std::size_t kNoStore = ~std::size_t{0};
+    /// What the shared stores may hold (~230K prepared triangles); tasks of parts beyond it prepare their own.
+    static constexpr std::size_t kSharedTriangleBytes = std::size_t{32} << 20;
     void runTask(std::size_t task, MeshContactScratch& scratch);
     /// Takes the next task nobody took and runs it; false when none is left.
     bool runNextTask();
@@ -158,6 +202,11 @@ private:
     std::vector<Task> m_tasks;
     std::vector<std::vector<MeshContact>> m_taskContacts;
     std::vector<NodePair> m_split;
+    std::vector<std::unique_ptr<TriangleStore>> m_stores;  // the first m_storeCount are this dispatch's
+    std::size_t m_storeCount = 0;
+    std::size_t m_storeTriangles = 0;  // the stores' capacities, summed
+    std::size_t m_storeBudget = kSharedTriangleBytes;
+    std::unordered_map<const btGImpactMeshShapePart*, std::vector<std::size_t>> m_storeIndex;
     std::unordered_map<std::pair<const btCollisionObject*, const btCollisionObject*>, std::size_t, PairKeyHash>
         m_index;
     /// Per task: 0 pending, 1 done, 2 failed (out of memory).

@@ -337,5 +337,49 @@ TEST(GImpactMeshContacts, AheadResultsMatchTheirInputsExactly) {
     EXPECT_EQ(batch.find(&a, &b, torus, torus, t0, t1), nullptr);
 }
 
+// Large pairs' search parts share each body's prepared triangles (one store per part and transform, a shape shared by
+// two bodies getting two) within a memory budget; beyond it a part's tasks prepare their own. Both ways, and with a
+// budget for one store only, the points are the sequential computation's, bit for bit, whatever the threads.
+TEST(GImpactMeshContacts, SharedTrianglesWithinTheBudgetOrEachTaskItsOwn) {
+    ShapeStore shapes;
+    auto* fine = static_cast<btGImpactMeshShape*>(shapes.gimpactTorus(2, btScalar(0.5), 128, 32, btScalar(0.01)));
+    btCollisionObject a, b, c;
+    const std::size_t oneStore = std::size_t(fine->getMeshPart(0)->getNumChildShapes()) * sizeof(detail::PreparedTriangle);
+    const auto same = [](const std::vector<detail::MeshContact>& x, const std::vector<detail::MeshContact>& y) {
+        if (x.size() != y.size()) return false;
+        for (std::size_t i = 0; i < x.size(); ++i)
+            if (!(x[i].point == y[i].point && x[i].normal == y[i].normal && x[i].distance == y[i].distance &&
+                  x[i].face0 == y[i].face0 && x[i].face1 == y[i].face1))
+                return false;
+        return true;
+    };
+    TaskPool pool(3);
+    std::mt19937 rng(23);
+    for (std::size_t budget : {std::size_t{0}, oneStore, std::size_t{64} << 20}) {
+        detail::MeshContactBatch batch;
+        batch.setSharedTriangleBudget(budget);
+        for (int round = 0; round < 3; ++round) {  // new poses each dispatch: the reused stores must not keep triangles
+            const btTransform t0 = randomPose(rng, 0.3f), t1 = randomPose(rng, 0.3f), t2 = randomPose(rng, 0.3f);
+            std::vector<detail::MeshContact> sequential01, sequential12;
+            detail::meshPairContacts(*fine, t0, *fine, t1, detail::threadScratch(), sequential01);
+            detail::meshPairContacts(*fine, t1, *fine, t2, detail::threadScratch(), sequential12);
+            ASSERT_GT(sequential01.size() + sequential12.size(), 4u);
+            batch.clear();
+            batch.add(&a, &b, *fine, *fine, t0, t1);
+            batch.add(&b, &c, *fine, *fine, t1, t2);  // body b's store serves both pairs
+            batch.run(&pool, [&] {
+                const std::vector<detail::MeshContact>* found01 = batch.find(&a, &b, fine, fine, t0, t1);
+                const std::vector<detail::MeshContact>* found12 = batch.find(&b, &c, fine, fine, t1, t2);
+                ASSERT_NE(found01, nullptr);
+                ASSERT_NE(found12, nullptr);
+                EXPECT_TRUE(same(*found01, sequential01)) << "budget " << budget << ", round " << round;
+                EXPECT_TRUE(same(*found12, sequential12)) << "budget " << budget << ", round " << round;
+            });
+            EXPECT_GT(batch.taskCount(), 2u);  // the pairs were cut into parts
+            EXPECT_EQ(batch.sharedStores(), budget == 0 ? 0u : budget == oneStore ? 1u : 3u);
+        }
+    }
+}
+
 }  // namespace
 }  // namespace cullide::test
