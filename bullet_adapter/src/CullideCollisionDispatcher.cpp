@@ -316,8 +316,8 @@ public:
     /// Bullet's GImpact-GImpact algorithm, contact for contact, at a fraction of its cost: per part pair in Bullet's
     /// order, Bullet's box-set pairs in Bullet's order (LeafPairSearch: Bullet's descent with each node box mapped
     /// into the other tree's frame once per call), through Bullet's own triangle routine (the conservative plane test,
-    /// then the clip method), with each triangle mapped to world space and given its plane once per call instead of
-    /// once per pair it is in. Same inputs to the same routines in the same order: the same manifold. The points
+    /// then the clip method), with each triangle mapped to world space and given its plane and edge planes once per
+    /// call instead of once per pair it is in (detail::PreparedTriangle). Same inputs to the same routines in the same order: the same manifold. The points
     /// come from the dispatch's batch when it computed them ahead (on the narrow-phase threads) for these inputs.
     void processAsBullet(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
                          const btGImpactMeshShape& shape0, const btGImpactMeshShape& shape1,
