@@ -3,8 +3,9 @@
 // the points in the order Bullet adds them to the manifold, with the shape identifiers it sets for each. The
 // dispatcher's algorithm then adds them to the manifold itself, so the manifold is Bullet's bit for bit.
 //
-// Computing them touches nothing but the shapes' data (read-only, the parts locked by the caller) and per-thread
-// scratch: no manifold, no callback, no allocator of Bullet's. So many pairs, and the parts of one large pair's
+// Computing them touches nothing but the shapes' data (read-only, the parts locked by the caller), per-thread
+// scratch and the dispatch's shared prepared triangles (TriangleStore, filled first come first served): no manifold,
+// no callback, no allocator of Bullet's. So many pairs, and the parts of one large pair's
 // descent, run on worker threads (MeshContactBatch) while the manifolds are still made on the calling thread, in
 // Bullet's dispatch order.
 #pragma once
