@@ -72,7 +72,6 @@ public:
     const PreparedTriangle* get(int prim, PreparedTriangle& spare);
     /// Triangles the store has room for (its memory, kept between spans).
     std::size_t capacity() const { return m_capacity; }
-    const btGImpactMeshShapePart* part() const { return m_part; }
     const btTransform& transform() const { return m_transform; }
 
 private:

@@ -295,6 +295,12 @@ TEST(GImpactPairs, EveryThreadCountGetsBulletsContactsBitForBit) {
     }
 }
 
+/// Two computed points alike in every bit and identifier.
+bool sameContact(const detail::MeshContact& x, const detail::MeshContact& y) {
+    return x.point == y.point && x.normal == y.normal && x.distance == y.distance && x.part0 == y.part0 &&
+           x.face0 == y.face0 && x.part1 == y.part1 && x.face1 == y.face1;
+}
+
 // The contacts computed ahead are used only for the inputs they were computed for: another transform (by one bit),
 // another shape or the objects the other way round find nothing, and the algorithm computes the pair itself.
 TEST(GImpactMeshContacts, AheadResultsMatchTheirInputsExactly) {
@@ -322,13 +328,8 @@ TEST(GImpactMeshContacts, AheadResultsMatchTheirInputsExactly) {
             const std::vector<detail::MeshContact>* found = batch.find(&a, &b, torus, torus, t0, t1);
             ASSERT_NE(found, nullptr);
             ASSERT_EQ(found->size(), sequential.size());
-            for (std::size_t i = 0; i < sequential.size(); ++i) {
-                const detail::MeshContact& x = (*found)[i];
-                const detail::MeshContact& y = sequential[i];
-                EXPECT_TRUE(x.point == y.point && x.normal == y.normal && x.distance == y.distance &&
-                            x.part0 == y.part0 && x.face0 == y.face0 && x.part1 == y.part1 && x.face1 == y.face1)
-                    << "point " << i;
-            }
+            for (std::size_t i = 0; i < sequential.size(); ++i)
+                EXPECT_TRUE(sameContact((*found)[i], sequential[i])) << "point " << i;
             EXPECT_EQ(batch.find(&a, &b, torus, torus, t0, t1), found) << "asked again: the same list";
         });
         EXPECT_EQ(batch.find(&a, &b, torus, torus, t0, t1), nullptr) << "only while the batch runs";
@@ -346,12 +347,7 @@ TEST(GImpactMeshContacts, SharedTrianglesWithinTheBudgetOrEachTaskItsOwn) {
     btCollisionObject a, b, c;
     const std::size_t oneStore = std::size_t(fine->getMeshPart(0)->getNumChildShapes()) * sizeof(detail::PreparedTriangle);
     const auto same = [](const std::vector<detail::MeshContact>& x, const std::vector<detail::MeshContact>& y) {
-        if (x.size() != y.size()) return false;
-        for (std::size_t i = 0; i < x.size(); ++i)
-            if (!(x[i].point == y[i].point && x[i].normal == y[i].normal && x[i].distance == y[i].distance &&
-                  x[i].face0 == y[i].face0 && x[i].face1 == y[i].face1))
-                return false;
-        return true;
+        return std::equal(x.begin(), x.end(), y.begin(), y.end(), sameContact);
     };
     TaskPool pool(3);
     std::mt19937 rng(23);
