@@ -13,67 +13,109 @@ btScalar largestCoordinate(const btVector3& v) {
     return a[a.maxAxis()];
 }
 
-/// The box around `box` mapped by `cache` into the other frame (centre by the rotation and translation, extents by
-/// the absolute rotation, as Bullet's box test maps them), grown by `slack` on every side.
-btAABB mappedBox(const btAABB& box, const BT_BOX_BOX_TRANSFORM_CACHE& cache, btScalar slack) {
-    btVector3 centre, extent;
-    box.get_center_extend(centre, extent);
-    btVector3 c, e;
-    for (int i = 0; i < 3; ++i) {
-        c[i] = cache.m_R1to0[i].dot(centre) + cache.m_T1to0[i];
-        e[i] = cache.m_AR[i].dot(extent) + slack;
-    }
-    btAABB out;
-    out.m_min = c - e;
-    out.m_max = c + e;
-    return out;
-}
+constexpr std::uint32_t kOutside = 0x80000000u;  // GridBox::stamp: the box lies outside the other set's grid
+constexpr btScalar kTop = btScalar(65535);        // the largest grid coordinate
 
-/// One box set's node boxes for one call, computed on first use.
-class NodeBoxView {
-public:
-    NodeBoxView(const btGImpactBoxSet& set, const BT_BOX_BOX_TRANSFORM_CACHE& toOther, btScalar slack,
-                LeafPairScratch::NodeBoxes& boxes, std::uint32_t epoch)
-        : m_set(set), m_toOther(toOther), m_slack(slack), m_boxes(boxes), m_epoch(epoch) {
-        const std::size_t n = static_cast<std::size_t>(set.getNodeCount());
-        if (m_boxes.stamp.size() < n) {
-            m_boxes.stamp.resize(n, 0u);
-            m_boxes.own.resize(n);
-            m_boxes.mapped.resize(n);
-        }
+/// `node`'s box on the other set's grid by `map`, rounded outwards; false when it lies beyond that grid on some axis
+/// (it meets none of that set's node boxes). A NaN coordinate spans the grid.
+bool mapNode(const BT_QUANTIZED_BVH_NODE& node, const GridMap& map, GridBox& out) {
+    const btVector3 lo(node.m_quantizedAabbMin[0], node.m_quantizedAabbMin[1], node.m_quantizedAabbMin[2]);
+    const btVector3 hi(node.m_quantizedAabbMax[0], node.m_quantizedAabbMax[1], node.m_quantizedAabbMax[2]);
+    const btVector3 centre = (lo + hi) * btScalar(0.5);
+    const btVector3 extent = (hi - lo) * btScalar(0.5);
+    for (int k = 0; k < 3; ++k) {
+        const btScalar c = map.a[k].dot(centre) + map.b[k];
+        const btScalar e = map.absA[k].dot(extent) + map.allowance[k];
+        const btScalar min = c - e, max = c + e;
+        if (min > kTop || max < 0) return false;
+        out.min[k] = min > 0 ? static_cast<std::uint16_t>(min) : std::uint16_t(0);  // truncation: the floor
+        out.max[k] = max < kTop ? static_cast<std::uint16_t>(static_cast<std::uint16_t>(max) + 1)
+                                : static_cast<std::uint16_t>(kTop);
     }
-    /// Makes the boxes of `node` current; returns its index into own / mapped.
-    std::size_t at(int node) {
-        const std::size_t i = static_cast<std::size_t>(node);
-        if (m_boxes.stamp[i] != m_epoch) {
-            m_set.getNodeBound(node, m_boxes.own[i]);
-            m_boxes.mapped[i] = mappedBox(m_boxes.own[i], m_toOther, m_slack);
-            m_boxes.stamp[i] = m_epoch;
-        }
-        return i;
-    }
-    const btAABB& own(std::size_t i) const { return m_boxes.own[i]; }
-    const btAABB& mapped(std::size_t i) const { return m_boxes.mapped[i]; }
-
-private:
-    const btGImpactBoxSet& m_set;
-    const BT_BOX_BOX_TRANSFORM_CACHE& m_toOther;
-    btScalar m_slack;
-    LeafPairScratch::NodeBoxes& m_boxes;
-    std::uint32_t m_epoch;
-};
-
-/// True when `a` and `b` overlap with `depth` to spare on every axis (`b` shrunk by `depth` still meets `a`).
-bool overlapsBy(const btAABB& a, const btAABB& b, btScalar depth) {
-    for (int k = 0; k < 3; ++k)
-        if (a.m_min[k] > b.m_max[k] - depth || a.m_max[k] < b.m_min[k] + depth) return false;
     return true;
 }
 
+/// Whether `node`'s stored box meets `box` with `depth` steps to spare on every axis.
+bool overlapsBy(const BT_QUANTIZED_BVH_NODE& node, const GridBox& box, const std::array<int, 3>& depth) {
+    for (int k = 0; k < 3; ++k)
+        if (int(node.m_quantizedAabbMax[k]) - int(box.min[k]) < depth[static_cast<std::size_t>(k)] ||
+            int(box.max[k]) - int(node.m_quantizedAabbMin[k]) < depth[static_cast<std::size_t>(k)])
+            return false;
+    return true;
+}
+
+bool overlaps(const BT_QUANTIZED_BVH_NODE& node, const GridBox& box) {
+    return node.m_quantizedAabbMin[0] <= box.max[0] && node.m_quantizedAabbMax[0] >= box.min[0] &&
+           node.m_quantizedAabbMin[1] <= box.max[1] && node.m_quantizedAabbMax[1] >= box.min[1] &&
+           node.m_quantizedAabbMin[2] <= box.max[2] && node.m_quantizedAabbMax[2] >= box.min[2];
+}
+
+/// One box set's node boxes on the other set's grid for one call, computed on first use.
+class NodeGridView {
+public:
+    NodeGridView(const BT_QUANTIZED_BVH_NODE* nodes, int nodeCount, const GridMap& map, std::vector<GridBox>& boxes,
+                 std::uint32_t epoch)
+        : m_nodes(nodes), m_map(map), m_boxes(boxes), m_epoch(epoch) {
+        const std::size_t n = static_cast<std::size_t>(nodeCount);
+        if (m_boxes.size() < n) m_boxes.resize(n, GridBox{{0, 0, 0}, {0, 0, 0}, 0u});
+    }
+    /// `node`'s box on the other set's grid; null when it lies outside that grid.
+    const GridBox* at(int node) {
+        GridBox& box = m_boxes[static_cast<std::size_t>(node)];
+        if ((box.stamp & ~kOutside) != m_epoch)
+            box.stamp = m_epoch | (mapNode(m_nodes[node], m_map, box) ? 0u : kOutside);
+        return (box.stamp & kOutside) != 0 ? nullptr : &box;
+    }
+
+private:
+    const BT_QUANTIZED_BVH_NODE* m_nodes;
+    const GridMap& m_map;
+    std::vector<GridBox>& m_boxes;
+    std::uint32_t m_epoch;
+};
+
+/// A box set's quantization grid as Bullet quantizes its node boxes: grid = (point - offset) * scale. Bullet keeps
+/// it in protected members, read here through the classes' own pointer-to-member rules.
+struct QuantizationGrid {
+    btVector3 offset;
+    btVector3 scale;
+};
+struct TreeAccess : btQuantizedBvhTree {
+    static QuantizationGrid grid(const btQuantizedBvhTree& tree) {
+        return {(tree.*(&TreeAccess::m_global_bound)).m_min, tree.*(&TreeAccess::m_bvhQuantization)};
+    }
+};
+struct BoxSetAccess : btGImpactQuantizedBvh {
+    static QuantizationGrid grid(const btGImpactQuantizedBvh& set) {
+        return TreeAccess::grid(set.*(&BoxSetAccess::m_box_tree));
+    }
+};
+
+/// The map from grid `from` (frame F) onto grid `to` (frame T) for points mapped by x_T = rotation * x_F +
+/// translation; `slack` (in frame units) covers Bullet's own rounding.
+GridMap gridMap(const QuantizationGrid& from, const btMatrix3x3& rotation, const btVector3& translation,
+                const QuantizationGrid& to, btScalar slack) {
+    // Bullet unquantizes q as q / scale + offset: on `to`'s grid the point is
+    // to.scale * (rotation * (q / from.scale + from.offset) + translation - to.offset).
+    GridMap map;
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) map.a[i][j] = to.scale[i] * rotation[i][j] / from.scale[j];
+    map.absA = map.a.absolute();
+    map.b = to.scale * (rotation * from.offset + translation - to.offset);
+    for (int i = 0; i < 3; ++i) {
+        // This map's rounding: a few units in the last place of the largest term (grid coordinates up to kTop).
+        const btScalar terms = (map.absA[i][0] + map.absA[i][1] + map.absA[i][2]) * kTop + btFabs(map.b[i]);
+        map.allowance[i] = slack * to.scale[i] + 32 * SIMD_EPSILON * terms + 1;
+        const btScalar sure = std::ceil(3 * map.allowance[i]) + 1;
+        map.sure[static_cast<std::size_t>(i)] = sure < btScalar(1 << 20) ? static_cast<int>(sure) : (1 << 20);
+    }
+    return map;
+}
+
 std::uint32_t nextEpoch(LeafPairScratch& scratch) {
-    if (++scratch.epoch == 0) {  // wrapped: no stamp may look current
-        std::fill(scratch.nodes0.stamp.begin(), scratch.nodes0.stamp.end(), 0u);
-        std::fill(scratch.nodes1.stamp.begin(), scratch.nodes1.stamp.end(), 0u);
+    if (++scratch.epoch == kOutside) {  // wrapped: no stamp may look current
+        for (GridBox& box : scratch.nodes0) box.stamp = 0;
+        for (GridBox& box : scratch.nodes1) box.stamp = 0;
         scratch.epoch = 1;
     }
     return scratch.epoch;
@@ -94,15 +136,17 @@ LeafPairSearch::LeafPairSearch(const btGImpactBoxSet& set0, const btTransform& t
 
     // Frame 0 -> frame 1, inverted from Bullet's map itself: computed again from the two world transforms it would
     // differ from Bullet's by rounding relative to their translations (far from the origin, more than the boxes).
-    m_inverse.m_R1to0 = m_cache.m_R1to0.transpose();
-    m_inverse.m_T1to0 = -(m_inverse.m_R1to0 * m_cache.m_T1to0);
-    m_inverse.calc_absolute_matrix();
+    const btMatrix3x3 inverse = m_cache.m_R1to0.transpose();
+    const btVector3 inverseT = -(inverse * m_cache.m_T1to0);
     // Every node box lies within its root; mapped coordinates stay within a few times the largest coordinate.
     const btScalar magnitude =
         btMax(btMax(btMax(largestCoordinate(root0.m_min), largestCoordinate(root0.m_max)),
                     btMax(largestCoordinate(root1.m_min), largestCoordinate(root1.m_max))),
-              btMax(largestCoordinate(m_cache.m_T1to0), largestCoordinate(m_inverse.m_T1to0)));
-    m_slack = btScalar(1024) * SIMD_EPSILON * magnitude;
+              btMax(largestCoordinate(m_cache.m_T1to0), largestCoordinate(inverseT)));
+    const btScalar slack = btScalar(1024) * SIMD_EPSILON * magnitude;
+    const QuantizationGrid grid0 = BoxSetAccess::grid(set0), grid1 = BoxSetAccess::grid(set1);
+    m_zeroToOne = gridMap(grid0, inverse, inverseT, grid1, slack);
+    m_oneToZero = gridMap(grid1, m_cache.m_R1to0, m_cache.m_T1to0, grid0, slack);
 }
 
 namespace {
@@ -117,36 +161,60 @@ struct Step {
     int childCount = 0;
 };
 
-Step step(const btGImpactBoxSet& set0, const btGImpactBoxSet& set1, NodeBoxView& view0, NodeBoxView& view1,
-          const BT_BOX_BOX_TRANSFORM_CACHE& cache, btScalar slack, const NodePair& p) {
+/// What one descent reads: the two sets, their node arrays, and their node boxes on each other's grid.
+struct Descent {
+    const btGImpactBoxSet& set0;
+    const btGImpactBoxSet& set1;
+    const BT_QUANTIZED_BVH_NODE* nodes0;
+    const BT_QUANTIZED_BVH_NODE* nodes1;
+    NodeGridView view0;  // set 0's nodes on set 1's grid
+    NodeGridView view1;  // set 1's nodes on set 0's grid
+    const BT_BOX_BOX_TRANSFORM_CACHE& cache;
+    const std::array<int, 3>& sure0;  // on set 0's grid
+    const std::array<int, 3>& sure1;  // on set 1's grid
+};
+
+/// Bullet's test of a node pair below the roots, on the two nodes' stored boxes.
+bool bulletTest(const Descent& d, const NodePair& p) {
+    btAABB box0, box1;
+    d.set0.getNodeBound(p.node0, box0);
+    d.set1.getNodeBound(p.node1, box1);
+    return box0.overlapping_trans_cache(box1, d.cache, false);
+}
+
+Step step(Descent& d, const NodePair& p) {
     Step s;
-    const std::size_t i0 = view0.at(p.node0);
-    const std::size_t i1 = view1.at(p.node1);
-    if (!p.root &&
-        (!view0.own(i0).has_collision(view1.mapped(i1)) || !view1.own(i1).has_collision(view0.mapped(i0))))
-        return s;
-    const bool leaf0 = set0.isLeafNode(p.node0);
-    const bool leaf1 = set1.isLeafNode(p.node1);
+    const BT_QUANTIZED_BVH_NODE& node0 = d.nodes0[p.node0];
+    const BT_QUANTIZED_BVH_NODE& node1 = d.nodes1[p.node1];
+    if (!p.root) {
+        // Bullet's test on the pair (the 6 face axes of btAABB::overlapping_trans_cache on its rounded boxes): it
+        // fails where the grid boxes are apart, and passes where they overlap with room to spare for its rounding;
+        // only pairs near its boundary need it. Node 0's box on set 1's grid is made only when the first overlap
+        // holds.
+        const GridBox* on0 = d.view1.at(p.node1);  // node 1 on set 0's grid
+        if (on0 == nullptr || !overlaps(node0, *on0)) return s;
+        const GridBox* on1 = d.view0.at(p.node0);  // node 0 on set 1's grid
+        if (on1 == nullptr || !overlaps(node1, *on1)) return s;
+        const bool surely = overlapsBy(node0, *on0, d.sure0) && overlapsBy(node1, *on1, d.sure1);
+        if (!surely && !bulletTest(d, p)) return s;
+    }
+    s.keep = true;
+    const bool leaf0 = node0.isLeafNode();
+    const bool leaf1 = node1.isLeafNode();
     if (leaf0 && leaf1) {
-        // Bullet's leaf test is the same two overlaps up to rounding far below the slack: where both hold with
-        // twice the slack to spare it passes for sure; only pairs near its boundary need it.
-        const bool surely = overlapsBy(view0.own(i0), view1.mapped(i1), 2 * slack) &&
-                            overlapsBy(view1.own(i1), view0.mapped(i0), 2 * slack);
-        s.keep = p.root || surely || view0.own(i0).overlapping_trans_cache(view1.own(i1), cache, false);
         s.leaves = true;
         return s;
     }
-    s.keep = true;
     const auto add = [&s](int n0, int n1) { s.children[static_cast<std::size_t>(s.childCount++)] = {n0, n1, false}; };
     if (leaf0) {
-        add(p.node0, set1.getLeftNode(p.node1));
-        add(p.node0, set1.getRightNode(p.node1));
+        add(p.node0, d.set1.getLeftNode(p.node1));
+        add(p.node0, d.set1.getRightNode(p.node1));
     } else if (leaf1) {
-        add(set0.getLeftNode(p.node0), p.node1);
-        add(set0.getRightNode(p.node0), p.node1);
+        add(d.set0.getLeftNode(p.node0), p.node1);
+        add(d.set0.getRightNode(p.node0), p.node1);
     } else {
-        const int left0 = set0.getLeftNode(p.node0), right0 = set0.getRightNode(p.node0);
-        const int left1 = set1.getLeftNode(p.node1), right1 = set1.getRightNode(p.node1);
+        const int left0 = d.set0.getLeftNode(p.node0), right0 = d.set0.getRightNode(p.node0);
+        const int left1 = d.set1.getLeftNode(p.node1), right1 = d.set1.getRightNode(p.node1);
         add(left0, left1);
         add(left0, right1);
         add(right0, left1);
@@ -155,15 +223,30 @@ Step step(const btGImpactBoxSet& set0, const btGImpactBoxSet& set1, NodeBoxView&
     return s;
 }
 
+/// The descent of one call over the two sets, with new node boxes.
+Descent descentOf(const btGImpactBoxSet& set0, const btGImpactBoxSet& set1, const BT_BOX_BOX_TRANSFORM_CACHE& cache,
+                  const GridMap& zeroToOne, const GridMap& oneToZero, LeafPairScratch& scratch) {
+    const std::uint32_t epoch = nextEpoch(scratch);
+    const BT_QUANTIZED_BVH_NODE* nodes0 = set0.get_node_pointer();
+    const BT_QUANTIZED_BVH_NODE* nodes1 = set1.get_node_pointer();
+    return {set0,
+            set1,
+            nodes0,
+            nodes1,
+            NodeGridView(nodes0, set0.getNodeCount(), zeroToOne, scratch.nodes0, epoch),
+            NodeGridView(nodes1, set1.getNodeCount(), oneToZero, scratch.nodes1, epoch),
+            cache,
+            oneToZero.sure,
+            zeroToOne.sure};
+}
+
 }  // namespace
 
 void LeafPairSearch::split(std::size_t target, LeafPairScratch& scratch, std::vector<NodePair>& out) const {
     out.clear();
     if (!m_rootsOverlap) return;
     out.push_back({0, 0, true});
-    const std::uint32_t epoch = nextEpoch(scratch);
-    NodeBoxView view0(m_set0, m_inverse, m_slack, scratch.nodes0, epoch);
-    NodeBoxView view1(m_set1, m_cache, m_slack, scratch.nodes1, epoch);
+    Descent d = descentOf(m_set0, m_set1, m_cache, m_zeroToOne, m_oneToZero, scratch);
     std::vector<NodePair>& next = scratch.front;
     bool expanded = true;
     while (out.size() < target && expanded) {
@@ -176,7 +259,7 @@ void LeafPairSearch::split(std::size_t target, LeafPairScratch& scratch, std::ve
                 next.push_back(p);
                 continue;
             }
-            const Step s = step(m_set0, m_set1, view0, view1, m_cache, m_slack, p);
+            const Step s = step(d, p);
             if (!s.keep) continue;
             next.insert(next.end(), s.children.begin(), s.children.begin() + s.childCount);
             expanded = true;
@@ -187,9 +270,7 @@ void LeafPairSearch::split(std::size_t target, LeafPairScratch& scratch, std::ve
 
 void LeafPairSearch::descend(const NodePair& start, LeafPairScratch& scratch, std::vector<int>& interleaved) const {
     if (!m_rootsOverlap) return;
-    const std::uint32_t epoch = nextEpoch(scratch);
-    NodeBoxView view0(m_set0, m_inverse, m_slack, scratch.nodes0, epoch);
-    NodeBoxView view1(m_set1, m_cache, m_slack, scratch.nodes1, epoch);
+    Descent d = descentOf(m_set0, m_set1, m_cache, m_zeroToOne, m_oneToZero, scratch);
     // Bullet's recursion, with an explicit stack: children pushed in reverse so that they are visited in its order.
     std::vector<NodePair>& stack = scratch.stack;
     stack.clear();
@@ -197,11 +278,11 @@ void LeafPairSearch::descend(const NodePair& start, LeafPairScratch& scratch, st
     while (!stack.empty()) {
         const NodePair p = stack.back();
         stack.pop_back();
-        const Step s = step(m_set0, m_set1, view0, view1, m_cache, m_slack, p);
+        const Step s = step(d, p);
         if (!s.keep) continue;
         if (s.leaves) {
-            interleaved.push_back(m_set0.getNodeData(p.node0));
-            interleaved.push_back(m_set1.getNodeData(p.node1));
+            interleaved.push_back(d.nodes0[p.node0].getDataIndex());
+            interleaved.push_back(d.nodes1[p.node1].getDataIndex());
             continue;
         }
         for (int c = s.childCount; c-- > 0;) stack.push_back(s.children[static_cast<std::size_t>(c)]);

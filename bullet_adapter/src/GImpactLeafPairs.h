@@ -1,5 +1,6 @@
 // Bullet's GImpact box-set pair search (btGImpactQuantizedBvh::find_collision), reproduced: the same primitive pairs
-// in the same order, found from the leaves that can take part instead of by descending both trees pair by pair.
+// in the same order, with Bullet's float box test at each node pair replaced, wherever rounding cannot matter, by
+// integer comparisons on Bullet's own quantization grids.
 #pragma once
 
 #include <BulletCollision/Gimpact/btGImpactShape.h>
@@ -19,29 +20,45 @@ struct NodePair {
     bool root = false;
 };
 
+/// A node's box mapped into the other box set's frame and quantized on that set's grid (Bullet's own quantization,
+/// rounded outwards): compared as integers with the other set's stored node boxes. `stamp` says for which call it
+/// is current (its top bit: the box lies outside the other set's grid, so it meets none of that set's nodes).
+struct GridBox {
+    std::uint16_t min[3];
+    std::uint16_t max[3];
+    std::uint32_t stamp;
+};
+
 /// Working memory of one thread's pair searches, kept between calls so that a step allocates nothing once warm.
 class LeafPairScratch {
 public:
-    /// Node boxes of one box set for one call: its own (dequantized) and mapped into the other set's frame, computed on
-    /// first use.
-    struct NodeBoxes {
-        std::vector<btAABB> own, mapped;
-        std::vector<std::uint32_t> stamp;
-    };
-    NodeBoxes nodes0, nodes1;
+    /// Each box set's node boxes on the other set's grid, computed on first use in a call.
+    std::vector<GridBox> nodes0, nodes1;
     std::vector<NodePair> stack, front;
     std::uint32_t epoch = 0;
+};
+
+/// One box set's grid coordinates mapped onto the other set's grid (through the frames of the two sets): a node box
+/// with grid corners lo, hi lies, on the other grid, within centre a * (lo + hi) / 2 + b, half-extent
+/// absA * (hi - lo) / 2 + allowance. The allowance covers Bullet's rounding (the search's slack), this map's own
+/// rounding, and one grid step; `sure` is the overlap depth, on the other grid, beyond which a pair of leaves passes
+/// Bullet's test whatever the rounding.
+struct GridMap {
+    btMatrix3x3 a, absA;
+    btVector3 b, allowance;
+    std::array<int, 3> sure{};
 };
 
 /// Bullet's pair search of two box sets (btGImpactQuantizedBvh::find_collision) for one call, reproduced.
 ///
 /// How: Bullet's descent — the root pair tested on all 15 axes, then the same recursion over node pairs, in the same
-/// order — with Bullet's box test (the 6 face axes, each box mapped into the other's frame per node pair) replaced
-/// by two plain box overlaps against boxes mapped once per node and call (set 1's node boxes in set 0's frame, set
-/// 0's in set 1's, slightly grown so that rounding never prunes a pair Bullet keeps). A leaf pair is then decided by
-/// Bullet's own test (btAABB::overlapping_trans_cache on the two leaf boxes). Bullet's descent also prunes by its own
-/// test on the ancestor pairs on the way down; that test passes whenever the leaves' does (the boxes contain the
-/// leaves'), up to float rounding between boxes that contain each other, which is not replicated.
+/// order, each pair tested on the 6 face axes (each box mapped into the other's frame) — with that test decided in
+/// most cases by two integer box overlaps: each set's stored (quantized) node box against the other set's node box
+/// mapped onto its grid once per node and call (GridMap), rounded outwards by more than any rounding of Bullet's or
+/// the map's. Where either overlap fails, Bullet's test fails; where both hold with the sure depth to spare, it
+/// passes; in between (a few percent of the pairs) Bullet's own test (btAABB::overlapping_trans_cache on the two
+/// stored boxes) decides. So every node pair is kept or pruned as Bullet's descent keeps or prunes it, rounding
+/// included (meshes far from the origin, where Bullet's rounded boxes of a parent and a child can disagree).
 ///
 /// The descent can be cut into parts (split) that run independently, on any threads (the search is read-only;
 /// each thread brings its own scratch): their pairs, concatenated in split order, are the whole descent's.
@@ -62,9 +79,9 @@ public:
 private:
     const btGImpactBoxSet& m_set0;
     const btGImpactBoxSet& m_set1;
-    BT_BOX_BOX_TRANSFORM_CACHE m_cache;    // frame 1 -> frame 0, as Bullet computes it
-    BT_BOX_BOX_TRANSFORM_CACHE m_inverse;  // frame 0 -> frame 1, inverted from m_cache
-    btScalar m_slack = 0;
+    BT_BOX_BOX_TRANSFORM_CACHE m_cache;  // frame 1 -> frame 0, as Bullet computes it
+    GridMap m_zeroToOne;  // set 0's grid onto set 1's
+    GridMap m_oneToZero;  // set 1's grid onto set 0's
     bool m_rootsOverlap = false;
 };
 

@@ -141,7 +141,8 @@ btCollisionShape* ShapeStore::landscape(int cells, btScalar cellSize, btScalar a
     return m_shapes.back().get();
 }
 
-btCollisionShape* ShapeStore::gimpactTorus(btScalar R, btScalar r, int segments, int sides, btScalar margin) {
+btCollisionShape* ShapeStore::gimpactTorus(btScalar R, btScalar r, int segments, int sides, btScalar margin,
+                                           const btVector3& centre) {
     auto mesh = std::make_unique<Mesh>();
     const double twoPi = 6.283185307179586;
     for (int s = 0; s < segments; ++s)
@@ -150,7 +151,8 @@ btCollisionShape* ShapeStore::gimpactTorus(btScalar R, btScalar r, int segments,
             const double x = (R + r * std::cos(v)) * std::cos(u);
             const double y = r * std::sin(v);
             const double z = (R + r * std::cos(v)) * std::sin(u);
-            mesh->vertices.insert(mesh->vertices.end(), {btScalar(x), btScalar(y), btScalar(z)});
+            mesh->vertices.insert(mesh->vertices.end(),
+                                  {btScalar(x) + centre.x(), btScalar(y) + centre.y(), btScalar(z) + centre.z()});
         }
     for (int s = 0; s < segments; ++s)
         for (int t = 0; t < sides; ++t) {

@@ -36,8 +36,9 @@ public:
     btCollisionShape* hull(const btVector3& radii, int points, std::uint32_t seed);
     /// Static landscape: cells x cells grid of `cellSize`, rolling hills, as a btBvhTriangleMeshShape.
     btCollisionShape* landscape(int cells, btScalar cellSize, btScalar amplitude);
-    /// btGImpactMeshShape torus (updateBound() called), major radius R, minor r.
-    btCollisionShape* gimpactTorus(btScalar R, btScalar r, int segments, int sides, btScalar margin);
+    /// btGImpactMeshShape torus (updateBound() called), major radius R, minor r, its vertices around `centre`.
+    btCollisionShape* gimpactTorus(btScalar R, btScalar r, int segments, int sides, btScalar margin,
+                                   const btVector3& centre = btVector3(0, 0, 0));
     btCollisionShape* plane(const btVector3& normal, btScalar constant);
 
 private:

@@ -97,6 +97,28 @@ TEST(GImpactLeafPairs, FarAwayFromTheOriginAndScaled) {
     }
 }
 
+// Meshes whose vertices lie far from the origin (as world-space meshes deformed in place are): Bullet's boxes there
+// are rounded by many steps of its quantization grid, and the search's boxes on the other grid must keep every pair
+// Bullet's rounded test keeps. Poses turn the second mesh about the meshes' centre, from apart to coincident.
+TEST(GImpactLeafPairs, VerticesFarFromTheOrigin) {
+    ShapeStore shapes;
+    const btVector3 centre(btScalar(3e3), btScalar(-2e3), btScalar(5e3));
+    const btGImpactBoxSet& a = boxSetOf(shapes.gimpactTorus(1.0f, 0.35f, 24, 12, 0.0f, centre));
+    const btGImpactBoxSet& b = boxSetOf(shapes.gimpactTorus(0.8f, 0.3f, 20, 10, 0.01f, centre));
+    std::mt19937 rng(17);
+    std::size_t pairs = 0;
+    for (int trial = 0; trial < 200; ++trial) {
+        const btTransform turn = randomPose(rng, trial < 100 ? btScalar(0.4) : btScalar(1.5));
+        // `turn` about the centre: x -> R (x - centre) + centre + d.
+        const btTransform t1(turn.getBasis(), centre - turn.getBasis() * centre + turn.getOrigin());
+        const btTransform t0 = trial % 11 == 0 ? t1 : btTransform::getIdentity();
+        const std::vector<int> expected = bulletPairs(a, t0, b, t1);
+        ASSERT_EQ(ourPairs(a, t0, b, t1), expected) << "trial " << trial;
+        pairs += expected.size() / 2;
+    }
+    EXPECT_GT(pairs, 10000u);
+}
+
 // The search cut into parts (for the narrow-phase threads): the parts' pairs, concatenated in split order, are
 // Bullet's pairs in Bullet's order, for every part count, small trees and large, apart to coincident.
 TEST(GImpactLeafPairs, SplitPartsConcatenateToBulletsPairs) {
