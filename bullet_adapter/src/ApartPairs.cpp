@@ -41,11 +41,14 @@ bool clearIfApart(btBroadphasePair& pair, btCollisionDispatcher& dispatcher, btM
     if (pair.m_algorithm == nullptr) return false;  // first dispatch of the pair: made as Bullet makes it
     const btBroadphaseProxy& proxy0 = *pair.m_pProxy0;
     const btBroadphaseProxy& proxy1 = *pair.m_pProxy1;
-    const btScalar gap2 = boxDistanceSquared(proxy0.m_aabbMin, proxy0.m_aabbMax, proxy1.m_aabbMin, proxy1.m_aabbMax);
-    if (!(gap2 > 0)) return false;  // overlapping (or NaN) boxes: the algorithm decides
     const auto* object0 = static_cast<const btCollisionObject*>(proxy0.m_clientObject);
     const auto* object1 = static_cast<const btCollisionObject*>(proxy1.m_clientObject);
-    if (object0 == nullptr || object1 == nullptr || !rigidOrPlain(*object0) || !rigidOrPlain(*object1) ||
+    // Two objects at rest: the dispatch does not collide them (needsCollision), so their pair is Bullet's to skip,
+    // at the cost Bullet's own loop pays for it.
+    if (object0 == nullptr || object1 == nullptr || (!object0->isActive() && !object1->isActive())) return false;
+    const btScalar gap2 = boxDistanceSquared(proxy0.m_aabbMin, proxy0.m_aabbMax, proxy1.m_aabbMin, proxy1.m_aabbMax);
+    if (!(gap2 > 0)) return false;  // overlapping (or NaN) boxes: the algorithm decides
+    if (!rigidOrPlain(*object0) || !rigidOrPlain(*object1) ||
         gimpact(*object0) || gimpact(*object1) || !dispatcher.needsCollision(object0, object1))
         return false;
     const btScalar t = manifoldBreakingThreshold(dispatcher, *object0, *object1);
