@@ -83,26 +83,15 @@ bool allBeyond(const btVector4& plane, const btVector3* vertices, btScalar margi
            bt_distance_point_plane(plane, vertices[2]) - margin > 0.0f;
 }
 
-/// Whether Bullet's clipping of `other` by `self`'s edge planes (clipByEdges) surely leaves no point: all three
-/// vertices beyond one edge plane. Bullet keeps the points within SIMD_EPSILON of a plane's inner side; the first
-/// plane sees the vertices themselves (the same distances, computed as Bullet computes them), the later ones points
-/// blended between vertices and earlier cuts, whose distances can be rounded below the vertices' by a few units in
-/// the last place of the coordinates: those planes need that much more to spare.
-bool clippedAway(const PreparedTriangle& self, const btPrimitiveTriangle& other) {
+/// Whether Bullet's clipping of `other` by `self`'s edge planes (clipByEdges) leaves no point at its first plane: all
+/// three vertices more than SIMD_EPSILON beyond it (the distances computed as Bullet computes them). The later planes
+/// clip points blended between vertices, which Bullet can extrapolate beyond the triangle (the blend aims at distance
+/// 0, the classification at SIMD_EPSILON), so no such test is exact for them.
+bool clippedAwayAtFirstPlane(const PreparedTriangle& self, const btPrimitiveTriangle& other) {
+    const btVector4& plane = self.edges[0];
     const btVector3* v = other.m_vertices;
-    btVector3 extreme = v[0].absolute();
-    extreme.setMax(v[1].absolute());
-    extreme.setMax(v[2].absolute());
-    const btScalar size = btMax(extreme.x(), btMax(extreme.y(), extreme.z()));
-    for (int e = 0; e < 3; ++e) {
-        const btVector4& plane = self.edges[e];
-        const btScalar beyond =
-            e == 0 ? SIMD_EPSILON : SIMD_EPSILON + 16 * SIMD_EPSILON * (size + btFabs(plane[3]));
-        if (bt_distance_point_plane(plane, v[0]) > beyond && bt_distance_point_plane(plane, v[1]) > beyond &&
-            bt_distance_point_plane(plane, v[2]) > beyond)
-            return true;
-    }
-    return false;
+    return bt_distance_point_plane(plane, v[0]) > SIMD_EPSILON && bt_distance_point_plane(plane, v[1]) > SIMD_EPSILON &&
+           bt_distance_point_plane(plane, v[2]) > SIMD_EPSILON;
 }
 
 }  // namespace
@@ -113,7 +102,7 @@ bool planesMayMeet(const btPrimitiveTriangle& a, const btPrimitiveTriangle& b) {
 }
 
 bool clipMethodContact(const PreparedTriangle& a, const PreparedTriangle& b, GIM_TRIANGLE_CONTACT& contact) {
-    if (clippedAway(b, a.triangle)) return false;  // the second side empty: the first need not be clipped
+    if (clippedAwayAtFirstPlane(b, a.triangle)) return false;  // the second side empty: the first need not be clipped
     const btScalar margin = a.triangle.m_margin + b.triangle.m_margin;
     GIM_TRIANGLE_CONTACT first;
     if (!clipSide(a, b, margin, first)) return false;

@@ -54,7 +54,8 @@ bool planesMayMeet(const btPrimitiveTriangle& a, const btPrimitiveTriangle& b);
 /// btPrimitiveTriangle::find_triangle_collision_clip_method on prepared triangles: each triangle clipped by the
 /// other's edge planes (Bullet's bt_plane_clip_triangle / bt_plane_clip_polygon), the points merged against its plane
 /// (GIM_TRIANGLE_CONTACT::merge_points), the deeper side kept — Bullet's steps in Bullet's order, so the same contact
-/// bit for bit.
+/// bit for bit. A pair whose second side would surely be clipped away (no contact from Bullet either) returns false
+/// before the first side is clipped.
 bool clipMethodContact(const PreparedTriangle& a, const PreparedTriangle& b, GIM_TRIANGLE_CONTACT& contact);
 
 /// A GImpact part's triangles under one transform as PreparedTriangles, each prepared by the first thread that asks

@@ -116,6 +116,29 @@ TEST(BreakableScene, BulletPipelinesRunTheSameScene) {
     EXPECT_EQ(fractureFrame(CollisionPipeline::Cullide), bulletDbvt);
 }
 
+// The two-line swap must not change the simulation: with its defaults (GImpact pairs get Bullet's contacts) the
+// breakable scene moves as under Bullet's default pipeline, bit for bit, through the first contacts and the fracture.
+TEST(BreakableScene, CullidePipelineMovesAsBulletsDefaultPipeline) {
+    CULLIDE_GPU_CULLER_OR_SKIP(probe, Settings{});
+    BreakableOptions options;
+    options.pipeline = CollisionPipeline::BulletDbvt;
+    BreakableScene bullet(options);
+    options.pipeline = CollisionPipeline::Cullide;
+    BreakableScene swapped(options);
+    std::size_t contacts = 0;
+    for (int frame = 0; frame < 45; ++frame) {
+        bullet.step();
+        swapped.step();
+        ASSERT_EQ(swapped.lastFrame().contacts, bullet.lastFrame().contacts) << "frame " << frame;
+        const auto a = bullet.worldMeshes(), b = swapped.worldMeshes();
+        ASSERT_EQ(a.size(), b.size()) << "frame " << frame;
+        for (std::size_t i = 0; i < a.size(); ++i) ASSERT_EQ(b[i].vertices, a[i].vertices) << "frame " << frame;
+        contacts += bullet.lastFrame().contacts;
+    }
+    EXPECT_GT(bullet.fractures(), 0);
+    EXPECT_GT(contacts, 100u);  // the run reaches the contacts (not a test of free fall)
+}
+
 TEST(BreakableScene, UnreadableMeshIsAClearError) {
     BreakableOptions options;
     options.fallingMesh = "/nonexistent/bunny.off";
