@@ -2,7 +2,7 @@
 
 #include <BulletCollision/Gimpact/btBoxCollision.h>
 
-#include <algorithm>
+#include <cmath>
 
 namespace cullide {
 namespace detail {
