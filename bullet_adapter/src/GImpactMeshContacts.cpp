@@ -88,10 +88,7 @@ bool allBeyond(const btVector4& plane, const btVector3* vertices, btScalar margi
 /// clip points blended between vertices, which Bullet can extrapolate beyond the triangle (the blend aims at distance
 /// 0, the classification at SIMD_EPSILON), so no such test is exact for them.
 bool clippedAwayAtFirstPlane(const PreparedTriangle& self, const btPrimitiveTriangle& other) {
-    const btVector4& plane = self.edges[0];
-    const btVector3* v = other.m_vertices;
-    return bt_distance_point_plane(plane, v[0]) > SIMD_EPSILON && bt_distance_point_plane(plane, v[1]) > SIMD_EPSILON &&
-           bt_distance_point_plane(plane, v[2]) > SIMD_EPSILON;
+    return allBeyond(self.edges[0], other.m_vertices, SIMD_EPSILON);  // d - e > 0 exactly when d > e
 }
 
 }  // namespace
