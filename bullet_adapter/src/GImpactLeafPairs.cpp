@@ -2,7 +2,18 @@
 
 #include <BulletCollision/Gimpact/btBoxCollision.h>
 
+#include <algorithm>
 #include <cmath>
+
+// The descent's per-pair steps are inlined into its loop whatever the compiler's estimate (Bullet's
+// SIMD_FORCE_INLINE is plain `inline` on Linux): a call per node pair costs a quarter of the search.
+#if defined(__GNUC__) || defined(__clang__)
+#define CULLIDE_ALWAYS_INLINE inline __attribute__((always_inline))
+#elif defined(_MSC_VER)
+#define CULLIDE_ALWAYS_INLINE __forceinline
+#else
+#define CULLIDE_ALWAYS_INLINE inline
+#endif
 
 namespace cullide {
 namespace detail {
@@ -36,7 +47,7 @@ bool mapNode(const BT_QUANTIZED_BVH_NODE& node, const GridMap& map, GridBox& out
 }
 
 /// Whether `node`'s stored box meets `box` with `depth` steps to spare on every axis.
-bool overlapsBy(const BT_QUANTIZED_BVH_NODE& node, const GridBox& box, const std::array<int, 3>& depth) {
+CULLIDE_ALWAYS_INLINE bool overlapsBy(const BT_QUANTIZED_BVH_NODE& node, const GridBox& box, const std::array<int, 3>& depth) {
     for (int k = 0; k < 3; ++k)
         if (int(node.m_quantizedAabbMax[k]) - int(box.min[k]) < depth[static_cast<std::size_t>(k)] ||
             int(box.max[k]) - int(node.m_quantizedAabbMin[k]) < depth[static_cast<std::size_t>(k)])
@@ -44,10 +55,13 @@ bool overlapsBy(const BT_QUANTIZED_BVH_NODE& node, const GridBox& box, const std
     return true;
 }
 
-bool overlaps(const BT_QUANTIZED_BVH_NODE& node, const GridBox& box) {
-    return node.m_quantizedAabbMin[0] <= box.max[0] && node.m_quantizedAabbMax[0] >= box.min[0] &&
-           node.m_quantizedAabbMin[1] <= box.max[1] && node.m_quantizedAabbMax[1] >= box.min[1] &&
-           node.m_quantizedAabbMin[2] <= box.max[2] && node.m_quantizedAabbMax[2] >= box.min[2];
+/// Whether `node`'s stored box meets `box` (false when `box` lies outside the grid). Evaluated without branches: the
+/// outcome is data, not a pattern a branch predictor could learn.
+CULLIDE_ALWAYS_INLINE bool overlaps(const BT_QUANTIZED_BVH_NODE& node, const GridBox& box) {
+    return ((box.stamp & kOutside) == 0) & (node.m_quantizedAabbMin[0] <= box.max[0]) &
+           (node.m_quantizedAabbMax[0] >= box.min[0]) & (node.m_quantizedAabbMin[1] <= box.max[1]) &
+           (node.m_quantizedAabbMax[1] >= box.min[1]) & (node.m_quantizedAabbMin[2] <= box.max[2]) &
+           (node.m_quantizedAabbMax[2] >= box.min[2]);
 }
 
 /// One box set's node boxes on the other set's grid for one call, computed on first use.
@@ -59,12 +73,13 @@ public:
         const std::size_t n = static_cast<std::size_t>(nodeCount);
         if (m_boxes.size() < n) m_boxes.resize(n, GridBox{{0, 0, 0}, {0, 0, 0}, 0u});
     }
-    /// `node`'s box on the other set's grid; null when it lies outside that grid.
-    const GridBox* at(int node) {
+    /// `node`'s box on the other set's grid, mapped on first use in the call (the stamp's top bit: it lies outside
+    /// that grid).
+    CULLIDE_ALWAYS_INLINE const GridBox& at(int node) {
         GridBox& box = m_boxes[static_cast<std::size_t>(node)];
         if ((box.stamp & ~kOutside) != m_epoch)
             box.stamp = m_epoch | (mapNode(m_nodes[node], m_map, box) ? 0u : kOutside);
-        return (box.stamp & kOutside) != 0 ? nullptr : &box;
+        return box;
     }
 
 private:
@@ -151,16 +166,6 @@ LeafPairSearch::LeafPairSearch(const btGImpactBoxSet& set0, const btTransform& t
 
 namespace {
 
-/// Bullet's recursion step on one node pair: false when the descent stops there (the boxes apart, or a leaf pair
-/// Bullet's test rejects); otherwise a leaf pair is a primitive pair (`leaves` true) or `children` gets the node
-/// pairs below in Bullet's order.
-struct Step {
-    bool keep = false;
-    bool leaves = false;
-    std::array<NodePair, 4> children{};
-    int childCount = 0;
-};
-
 /// What one descent reads: the two sets, their node arrays, and their node boxes on each other's grid.
 struct Descent {
     const btGImpactBoxSet& set0;
@@ -175,52 +180,56 @@ struct Descent {
 };
 
 /// Bullet's test of a node pair below the roots, on the two nodes' stored boxes.
-bool bulletTest(const Descent& d, const NodePair& p) {
+bool bulletTest(const Descent& d, int node0, int node1) {
     btAABB box0, box1;
-    d.set0.getNodeBound(p.node0, box0);
-    d.set1.getNodeBound(p.node1, box1);
+    d.set0.getNodeBound(node0, box0);
+    d.set1.getNodeBound(node1, box1);
     return box0.overlapping_trans_cache(box1, d.cache, false);
 }
 
-Step step(Descent& d, const NodePair& p) {
-    Step s;
-    const BT_QUANTIZED_BVH_NODE& node0 = d.nodes0[p.node0];
-    const BT_QUANTIZED_BVH_NODE& node1 = d.nodes1[p.node1];
-    if (!p.root) {
-        // Bullet's test on the pair (the 6 face axes of btAABB::overlapping_trans_cache on its rounded boxes): it
-        // fails where the grid boxes are apart, and passes where they overlap with room to spare for its rounding;
-        // only pairs near its boundary need it. Node 0's box on set 1's grid is made only when the first overlap
-        // holds.
-        const GridBox* on0 = d.view1.at(p.node1);  // node 1 on set 0's grid
-        if (on0 == nullptr || !overlaps(node0, *on0)) return s;
-        const GridBox* on1 = d.view0.at(p.node0);  // node 0 on set 1's grid
-        if (on1 == nullptr || !overlaps(node1, *on1)) return s;
-        const bool surely = overlapsBy(node0, *on0, d.sure0) && overlapsBy(node1, *on1, d.sure1);
-        if (!surely && !bulletTest(d, p)) return s;
-    }
-    s.keep = true;
-    const bool leaf0 = node0.isLeafNode();
-    const bool leaf1 = node1.isLeafNode();
-    if (leaf0 && leaf1) {
-        s.leaves = true;
-        return s;
-    }
-    const auto add = [&s](int n0, int n1) { s.children[static_cast<std::size_t>(s.childCount++)] = {n0, n1, false}; };
+/// Whether Bullet's descent keeps the node pair (node0, node1) below the roots: Bullet's test on it (the 6 face axes
+/// of btAABB::overlapping_trans_cache on its rounded boxes) fails where the grid boxes are apart, and passes where
+/// they overlap with room to spare for its rounding; only pairs near its boundary need it.
+CULLIDE_ALWAYS_INLINE bool kept(Descent& d, int node0, int node1) {
+    const BT_QUANTIZED_BVH_NODE& n0 = d.nodes0[node0];
+    const BT_QUANTIZED_BVH_NODE& n1 = d.nodes1[node1];
+    const GridBox& on0 = d.view1.at(node1);  // node 1 on set 0's grid
+    const GridBox& on1 = d.view0.at(node0);  // node 0 on set 1's grid
+    if (!(overlaps(n0, on0) & overlaps(n1, on1))) return false;
+    if (overlapsBy(n0, on0, d.sure0) && overlapsBy(n1, on1, d.sure1)) return true;
+    return bulletTest(d, node0, node1);
+}
+
+/// Puts (node0, node1) on top of `stack` and keeps it there when the descent keeps the pair (no branch on it).
+CULLIDE_ALWAYS_INLINE void pushIfKept(Descent& d, int node0, int node1, NodePair* stack, std::size_t& top) {
+    stack[top] = {node0, node1};
+    top += kept(d, node0, node1) ? 1 : 0;
+}
+
+/// The kept pairs below the kept pair `p`, pushed so that they pop in Bullet's order: (left0, left1), (left0, right1),
+/// (right0, left1), (right0, right1), a leaf standing for itself. `stack` has room for four more; `p` is not a leaf
+/// pair.
+CULLIDE_ALWAYS_INLINE void pushKeptChildren(Descent& d, const NodePair& p, NodePair* stack, std::size_t& top) {
+    const bool leaf0 = d.nodes0[p.node0].isLeafNode();
+    const bool leaf1 = d.nodes1[p.node1].isLeafNode();
     if (leaf0) {
-        add(p.node0, d.set1.getLeftNode(p.node1));
-        add(p.node0, d.set1.getRightNode(p.node1));
+        pushIfKept(d, p.node0, d.set1.getRightNode(p.node1), stack, top);
+        pushIfKept(d, p.node0, d.set1.getLeftNode(p.node1), stack, top);
     } else if (leaf1) {
-        add(d.set0.getLeftNode(p.node0), p.node1);
-        add(d.set0.getRightNode(p.node0), p.node1);
+        pushIfKept(d, d.set0.getRightNode(p.node0), p.node1, stack, top);
+        pushIfKept(d, d.set0.getLeftNode(p.node0), p.node1, stack, top);
     } else {
         const int left0 = d.set0.getLeftNode(p.node0), right0 = d.set0.getRightNode(p.node0);
         const int left1 = d.set1.getLeftNode(p.node1), right1 = d.set1.getRightNode(p.node1);
-        add(left0, left1);
-        add(left0, right1);
-        add(right0, left1);
-        add(right0, right1);
+        pushIfKept(d, right0, right1, stack, top);
+        pushIfKept(d, right0, left1, stack, top);
+        pushIfKept(d, left0, right1, stack, top);
+        pushIfKept(d, left0, left1, stack, top);
     }
-    return s;
+}
+
+bool isLeafPair(const Descent& d, const NodePair& p) {
+    return d.nodes0[p.node0].isLeafNode() && d.nodes1[p.node1].isLeafNode();
 }
 
 /// The descent of one call over the two sets, with new node boxes.
@@ -245,23 +254,26 @@ Descent descentOf(const btGImpactBoxSet& set0, const btGImpactBoxSet& set1, cons
 void LeafPairSearch::split(std::size_t target, LeafPairScratch& scratch, std::vector<NodePair>& out) const {
     out.clear();
     if (!m_rootsOverlap) return;
-    out.push_back({0, 0, true});
+    out.push_back({0, 0});
     Descent d = descentOf(m_set0, m_set1, m_cache, m_zeroToOne, m_oneToZero, scratch);
     std::vector<NodePair>& next = scratch.front;
     bool expanded = true;
     while (out.size() < target && expanded) {
-        // One level: every internal pair the descent keeps is replaced by its children, in place (Bullet's order
-        // is preserved); leaf pairs stay (their descent is their own test).
+        // One level: every kept internal pair is replaced by its kept children, in Bullet's order (pushed last to
+        // first, then reversed in place); leaf pairs stay.
         next.clear();
         expanded = false;
         for (const NodePair& p : out) {
-            if (m_set0.isLeafNode(p.node0) && m_set1.isLeafNode(p.node1)) {
+            if (isLeafPair(d, p)) {
                 next.push_back(p);
                 continue;
             }
-            const Step s = step(d, p);
-            if (!s.keep) continue;
-            next.insert(next.end(), s.children.begin(), s.children.begin() + s.childCount);
+            const std::size_t first = next.size();
+            next.resize(first + 4);
+            std::size_t top = first;
+            pushKeptChildren(d, p, next.data(), top);
+            next.resize(top);
+            std::reverse(next.begin() + static_cast<std::ptrdiff_t>(first), next.end());
             expanded = true;
         }
         out.swap(next);
@@ -271,21 +283,21 @@ void LeafPairSearch::split(std::size_t target, LeafPairScratch& scratch, std::ve
 void LeafPairSearch::descend(const NodePair& start, LeafPairScratch& scratch, std::vector<int>& interleaved) const {
     if (!m_rootsOverlap) return;
     Descent d = descentOf(m_set0, m_set1, m_cache, m_zeroToOne, m_oneToZero, scratch);
-    // Bullet's recursion, with an explicit stack: children pushed in reverse so that they are visited in its order.
+    // Bullet's recursion with an explicit stack of kept pairs: each popped internal pair's children are all tested
+    // at once and the kept ones pushed last to first, so that they pop in Bullet's order.
     std::vector<NodePair>& stack = scratch.stack;
-    stack.clear();
-    stack.push_back(start);
-    while (!stack.empty()) {
-        const NodePair p = stack.back();
-        stack.pop_back();
-        const Step s = step(d, p);
-        if (!s.keep) continue;
-        if (s.leaves) {
+    if (stack.size() < 64) stack.resize(64);
+    std::size_t top = 0;
+    stack[top++] = start;
+    while (top != 0) {
+        const NodePair p = stack[--top];
+        if (isLeafPair(d, p)) {
             interleaved.push_back(d.nodes0[p.node0].getDataIndex());
             interleaved.push_back(d.nodes1[p.node1].getDataIndex());
             continue;
         }
-        for (int c = s.childCount; c-- > 0;) stack.push_back(s.children[static_cast<std::size_t>(c)]);
+        if (stack.size() - top < 4) stack.resize(2 * stack.size());
+        pushKeptChildren(d, p, stack.data(), top);
     }
 }
 

@@ -12,12 +12,11 @@
 namespace cullide {
 namespace detail {
 
-/// A node pair of the two box sets where Bullet's descent continues; `root`: the pair of roots, which Bullet has
-/// already tested on all 15 axes (a root pair of two leaves is a primitive pair without further test).
+/// A node pair of the two box sets that Bullet's descent keeps (its test passed; the pair of roots, {0, 0}, when the
+/// roots overlap on all 15 axes): the descent continues below it, or, for two leaves, it is a primitive pair.
 struct NodePair {
     int node0 = 0;
     int node1 = 0;
-    bool root = false;
 };
 
 /// A node's box mapped into the other box set's frame and quantized on that set's grid (Bullet's own quantization,
@@ -52,7 +51,8 @@ struct GridMap {
 /// Bullet's pair search of two box sets (btGImpactQuantizedBvh::find_collision) for one call, reproduced.
 ///
 /// How: Bullet's descent — the root pair tested on all 15 axes, then the same recursion over node pairs, in the same
-/// order, each pair tested on the 6 face axes (each box mapped into the other's frame) — with that test decided in
+/// order, each pair tested on the 6 face axes (each box mapped into the other's frame); here a popped pair's
+/// children are tested together, without branching on the outcomes — with that test decided in
 /// most cases by two integer box overlaps: each set's stored (quantized) node box against the other set's node box
 /// mapped onto its grid once per node and call (GridMap), rounded outwards by more than any rounding of Bullet's or
 /// the map's. Where either overlap fails, Bullet's test fails; where both hold with the sure depth to spare, it
@@ -68,12 +68,14 @@ public:
                    const btTransform& trans1);
     /// False when Bullet finds no pair at all (an empty set, or the roots apart).
     bool rootsOverlap() const { return m_rootsOverlap; }
-    /// The node pairs whose descents, in this order, make the whole descent: the root pair alone, or (expanded
-    /// level by level in Bullet's order while fewer than `target`) up to about 4 * target pairs below it.
+    /// Kept node pairs whose descents, in this order, make the whole descent: the root pair alone, or (expanded
+    /// level by level in Bullet's order while fewer than `target`) up to about 4 * target pairs below it. None when
+    /// the roots are apart.
     void split(std::size_t target, LeafPairScratch& scratch, std::vector<NodePair>& out) const;
-    /// The primitive pairs of the descent from `start`, appended to `interleaved` as prim0, prim1, ... in Bullet's
-    /// order. From the root pair ({0, 0, true}): the pairs btGImpactQuantizedBvh::find_collision(&set0, trans0,
-    /// &set1, trans1, pairSet) finds, so that Bullet's triangle routine run over them builds the same manifold.
+    /// The primitive pairs of the descent below the kept pair `start` (the root pair {0, 0}, or one from split),
+    /// appended to `interleaved` as prim0, prim1, ... in Bullet's order. From the root pair: the pairs
+    /// btGImpactQuantizedBvh::find_collision(&set0, trans0, &set1, trans1, pairSet) finds, so that Bullet's triangle
+    /// routine run over them builds the same manifold.
     void descend(const NodePair& start, LeafPairScratch& scratch, std::vector<int>& interleaved) const;
 
 private:

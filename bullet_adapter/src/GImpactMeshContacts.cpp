@@ -182,7 +182,7 @@ void meshPairContacts(const btGImpactMeshShape& shape0, const btTransform& trans
             const LeafPairSearch search(*parts.part0->getBoxSet(), trans0, *parts.part1->getBoxSet(), trans1);
             scratch.world0.begin(*parts.part0, trans0);
             scratch.world1.begin(*parts.part1, trans1);
-            searchAndTest(search, {0, 0, true}, parts, scratch, scratch.world0, scratch.world1, out);
+            searchAndTest(search, {0, 0}, parts, scratch, scratch.world0, scratch.world1, out);
         }
     }
     lockAll(shape1, false);
@@ -250,7 +250,7 @@ void MeshContactBatch::makeTasks(std::size_t target, MeshContactScratch& scratch
                     store0 = storeFor(*p.shape0->getMeshPart(p0), p.trans0);
                     store1 = storeFor(*p.shape1->getMeshPart(p1), p.trans1);
                 } else {
-                    m_split.assign(1, NodePair{0, 0, true});
+                    m_split.assign(1, NodePair{0, 0});
                 }
                 for (const NodePair& start : m_split)
                     m_tasks.push_back({i, m_searches.size() - 1, p0, p1, start, store0, store1});

@@ -36,7 +36,7 @@ std::vector<int> ourPairs(const btGImpactBoxSet& set0, const btTransform& t0, co
                           const btTransform& t1) {
     detail::LeafPairScratch scratch;
     std::vector<int> out;
-    detail::LeafPairSearch(set0, t0, set1, t1).descend({0, 0, true}, scratch, out);
+    detail::LeafPairSearch(set0, t0, set1, t1).descend({0, 0}, scratch, out);
     return out;
 }
 
