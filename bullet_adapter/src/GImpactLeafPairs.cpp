@@ -3,6 +3,7 @@
 #include <BulletCollision/Gimpact/btBoxCollision.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 // The descent's per-pair steps are inlined into its loop whatever the compiler's estimate (Bullet's
@@ -127,7 +128,11 @@ GridMap gridMap(const QuantizationGrid& from, const btMatrix3x3& rotation, const
     return map;
 }
 
-std::uint32_t nextEpoch(LeafPairScratch& scratch) {
+/// The epoch of `scratch`'s node boxes for the search `searchId`: the current one when they were mapped for that
+/// search (the thread's previous part of the same search), a new one otherwise.
+std::uint32_t epochFor(std::uint64_t searchId, LeafPairScratch& scratch) {
+    if (scratch.search == searchId) return scratch.epoch;
+    scratch.search = searchId;
     if (++scratch.epoch == kOutside) {  // wrapped: no stamp may look current
         for (GridBox& box : scratch.nodes0) box.stamp = 0;
         for (GridBox& box : scratch.nodes1) box.stamp = 0;
@@ -136,11 +141,17 @@ std::uint32_t nextEpoch(LeafPairScratch& scratch) {
     return scratch.epoch;
 }
 
+/// Identifies a search for the scratches' node boxes (never 0: a new scratch serves none).
+std::uint64_t newSearchId() {
+    static std::atomic<std::uint64_t> last{0};
+    return last.fetch_add(1, std::memory_order_relaxed) + 1;
+}
+
 }  // namespace
 
 LeafPairSearch::LeafPairSearch(const btGImpactBoxSet& set0, const btTransform& trans0, const btGImpactBoxSet& set1,
                                const btTransform& trans1)
-    : m_set0(set0), m_set1(set1) {
+    : m_set0(set0), m_set1(set1), m_id(newSearchId()) {
     if (set0.getNodeCount() == 0 || set1.getNodeCount() == 0) return;
     m_cache.calc_from_homogenic(trans0, trans1);
     btAABB root0, root1;
@@ -233,9 +244,10 @@ bool isLeafPair(const Descent& d, const NodePair& p) {
 }
 
 /// The descent of one call over the two sets, with new node boxes.
-Descent descentOf(const btGImpactBoxSet& set0, const btGImpactBoxSet& set1, const BT_BOX_BOX_TRANSFORM_CACHE& cache,
-                  const GridMap& zeroToOne, const GridMap& oneToZero, LeafPairScratch& scratch) {
-    const std::uint32_t epoch = nextEpoch(scratch);
+Descent descentOf(std::uint64_t searchId, const btGImpactBoxSet& set0, const btGImpactBoxSet& set1,
+                  const BT_BOX_BOX_TRANSFORM_CACHE& cache, const GridMap& zeroToOne, const GridMap& oneToZero,
+                  LeafPairScratch& scratch) {
+    const std::uint32_t epoch = epochFor(searchId, scratch);
     const BT_QUANTIZED_BVH_NODE* nodes0 = set0.get_node_pointer();
     const BT_QUANTIZED_BVH_NODE* nodes1 = set1.get_node_pointer();
     return {set0,
@@ -255,7 +267,7 @@ void LeafPairSearch::split(std::size_t target, LeafPairScratch& scratch, std::ve
     out.clear();
     if (!m_rootsOverlap) return;
     out.push_back({0, 0});
-    Descent d = descentOf(m_set0, m_set1, m_cache, m_zeroToOne, m_oneToZero, scratch);
+    Descent d = descentOf(m_id, m_set0, m_set1, m_cache, m_zeroToOne, m_oneToZero, scratch);
     std::vector<NodePair>& next = scratch.front;
     bool expanded = true;
     while (out.size() < target && expanded) {
@@ -282,7 +294,7 @@ void LeafPairSearch::split(std::size_t target, LeafPairScratch& scratch, std::ve
 
 void LeafPairSearch::descend(const NodePair& start, LeafPairScratch& scratch, std::vector<int>& interleaved) const {
     if (!m_rootsOverlap) return;
-    Descent d = descentOf(m_set0, m_set1, m_cache, m_zeroToOne, m_oneToZero, scratch);
+    Descent d = descentOf(m_id, m_set0, m_set1, m_cache, m_zeroToOne, m_oneToZero, scratch);
     // Bullet's recursion with an explicit stack of kept pairs: each popped internal pair's children are all tested
     // at once and the kept ones pushed last to first, so that they pop in Bullet's order.
     std::vector<NodePair>& stack = scratch.stack;

@@ -31,10 +31,12 @@ struct GridBox {
 /// Working memory of one thread's pair searches, kept between calls so that a step allocates nothing once warm.
 class LeafPairScratch {
 public:
-    /// Each box set's node boxes on the other set's grid, computed on first use in a call.
+    /// Each box set's node boxes on the other set's grid, mapped on first use for a search and kept for the
+    /// thread's next part of the same search (the parts of a split search share most of their upper nodes).
     std::vector<GridBox> nodes0, nodes1;
     std::vector<NodePair> stack, front;
-    std::uint32_t epoch = 0;
+    std::uint32_t epoch = 0;    ///< the stamp of the boxes that are current
+    std::uint64_t search = 0;   ///< the search they are current for
 };
 
 /// One box set's grid coordinates mapped onto the other set's grid (through the frames of the two sets): a node box
@@ -81,6 +83,7 @@ public:
 private:
     const btGImpactBoxSet& m_set0;
     const btGImpactBoxSet& m_set1;
+    std::uint64_t m_id;  // distinct for every search made (copies share it): the scratches' boxes are per search
     BT_BOX_BOX_TRANSFORM_CACHE m_cache;  // frame 1 -> frame 0, as Bullet computes it
     GridMap m_zeroToOne;  // set 0's grid onto set 1's
     GridMap m_oneToZero;  // set 1's grid onto set 0's
