@@ -17,6 +17,13 @@ bool gimpact(const btCollisionObject& object) {
     return object.getCollisionShape()->getShapeType() == GIMPACT_SHAPE_PROXYTYPE;
 }
 
+/// A heightfield's box is the height range the application declares, not a bound computed from its data: data above
+/// or below it still makes points (Bullet's triangles come from the grid cells under the query box, whatever their
+/// heights), so its box proves nothing.
+bool boxDeclared(const btCollisionObject& object) {
+    return object.getCollisionShape()->getShapeType() == TERRAIN_SHAPE_PROXYTYPE;
+}
+
 }  // namespace
 
 btScalar boxDistanceSquared(const btVector3& min0, const btVector3& max0, const btVector3& min1,
@@ -49,7 +56,8 @@ bool clearIfApart(btBroadphasePair& pair, btCollisionDispatcher& dispatcher, btM
     const btScalar gap2 = boxDistanceSquared(proxy0.m_aabbMin, proxy0.m_aabbMax, proxy1.m_aabbMin, proxy1.m_aabbMax);
     if (!(gap2 > 0)) return false;  // overlapping (or NaN) boxes: the algorithm decides
     if (!rigidOrPlain(*object0) || !rigidOrPlain(*object1) ||
-        gimpact(*object0) || gimpact(*object1) || !dispatcher.needsCollision(object0, object1))
+        gimpact(*object0) || gimpact(*object1) || boxDeclared(*object0) || boxDeclared(*object1) ||
+        !dispatcher.needsCollision(object0, object1))
         return false;
     const btScalar t = manifoldBreakingThreshold(dispatcher, *object0, *object1);
     if (!(t >= 0 && gap2 > t * t)) return false;

@@ -13,8 +13,11 @@
 // Left to Bullet's own near callback (the algorithm runs as in Bullet): pairs the dispatch would not collide
 // (needsCollision: sleeping contacts keep their points), a pair never processed yet (its algorithm and manifold are
 // made as in Bullet), soft bodies and other non-rigid objects, GImpact shapes (Bullet's clip method can report points
-// from triangle boxes that overlap only in its own box test; CULLIDE's records decide those pairs), and every pair
-// when the application installed its own near callback.
+// from triangle boxes that overlap only in its own box test; CULLIDE's records decide those pairs), heightfields
+// (their box is the height range the application declares, which its data may exceed), and every pair when the
+// application installed its own near callback. A shape that otherwise lies outside its own box (a compound with a
+// heightfield child whose data exceeds its range, vertices changed without a refit) gets no points where it does,
+// as with btAxisSweep3.
 #pragma once
 
 #include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>

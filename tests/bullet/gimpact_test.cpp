@@ -368,7 +368,8 @@ TEST(BulletGImpact, ScaledMeshAndHeightfieldGroundsGetBulletsContactsPointForPoi
         for (int x = 0; x < side; ++x)
             heights[static_cast<std::size_t>(z * side + x)] =
                 0.4f * std::sin(0.5f * float(x)) * std::cos(0.4f * float(z));
-    btHeightfieldTerrainShape field(side, side, heights.data(), 1.0f, -0.4f, 0.4f, 1, PHY_FLOAT, false);
+    // The float constructor (the legacy one reads PHY_FLOAT data as doubles in a double-precision Bullet).
+    btHeightfieldTerrainShape field(side, side, heights.data(), btScalar(-0.4), btScalar(0.4), 1, false);
     field.setLocalScaling(btVector3(btScalar(0.4), 1, btScalar(0.4)));
     expectConcaveContactsAsBullets(&field, false, "gimpact tori on a heightfield, default");
 }
