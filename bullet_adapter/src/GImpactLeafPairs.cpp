@@ -48,7 +48,8 @@ bool mapNode(const BT_QUANTIZED_BVH_NODE& node, const GridMap& map, GridBox& out
 }
 
 /// Whether `node`'s stored box meets `box` with `depth` steps to spare on every axis.
-CULLIDE_ALWAYS_INLINE bool overlapsBy(const BT_QUANTIZED_BVH_NODE& node, const GridBox& box, const std::array<int, 3>& depth) {
+CULLIDE_ALWAYS_INLINE bool overlapsBy(const BT_QUANTIZED_BVH_NODE& node, const GridBox& box,
+                                      const std::array<int, 3>& depth) {
     for (int k = 0; k < 3; ++k)
         if (int(node.m_quantizedAabbMax[k]) - int(box.min[k]) < depth[static_cast<std::size_t>(k)] ||
             int(box.max[k]) - int(node.m_quantizedAabbMin[k]) < depth[static_cast<std::size_t>(k)])
@@ -65,7 +66,7 @@ CULLIDE_ALWAYS_INLINE bool overlaps(const BT_QUANTIZED_BVH_NODE& node, const Gri
            (node.m_quantizedAabbMax[2] >= box.min[2]);
 }
 
-/// One box set's node boxes on the other set's grid for one call, computed on first use.
+/// One box set's node boxes on the other set's grid for one search, computed on first use.
 class NodeGridView {
 public:
     NodeGridView(const BT_QUANTIZED_BVH_NODE* nodes, int nodeCount, const GridMap& map, std::vector<GridBox>& boxes,
@@ -74,7 +75,7 @@ public:
         const std::size_t n = static_cast<std::size_t>(nodeCount);
         if (m_boxes.size() < n) m_boxes.resize(n, GridBox{{0, 0, 0}, {0, 0, 0}, 0u});
     }
-    /// `node`'s box on the other set's grid, mapped on first use in the call (the stamp's top bit: it lies outside
+    /// `node`'s box on the other set's grid, mapped on first use in the search (the stamp's top bit: it lies outside
     /// that grid).
     CULLIDE_ALWAYS_INLINE const GridBox& at(int node) {
         GridBox& box = m_boxes[static_cast<std::size_t>(node)];
@@ -243,7 +244,7 @@ bool isLeafPair(const Descent& d, const NodePair& p) {
     return d.nodes0[p.node0].isLeafNode() && d.nodes1[p.node1].isLeafNode();
 }
 
-/// The descent of one call over the two sets, with new node boxes.
+/// A descent over the two sets for the search `searchId`, with the scratch's node boxes current for it.
 Descent descentOf(std::uint64_t searchId, const btGImpactBoxSet& set0, const btGImpactBoxSet& set1,
                   const BT_BOX_BOX_TRANSFORM_CACHE& cache, const GridMap& zeroToOne, const GridMap& oneToZero,
                   LeafPairScratch& scratch) {
