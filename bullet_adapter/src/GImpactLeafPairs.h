@@ -56,7 +56,7 @@ struct GridMap {
 /// order, each pair tested on the 6 face axes (each box mapped into the other's frame); here a popped pair's
 /// children are tested together, without branching on the outcomes — with that test decided in
 /// most cases by two integer box overlaps: each set's stored (quantized) node box against the other set's node box
-/// mapped onto its grid once per node and call (GridMap), rounded outwards by more than any rounding of Bullet's or
+/// mapped onto its grid once per node and search (GridMap), rounded outwards by more than any rounding of Bullet's or
 /// the map's. Where either overlap fails, Bullet's test fails; where both hold with the sure depth to spare, it
 /// passes; in between (a few percent of the pairs) Bullet's own test (btAABB::overlapping_trans_cache on the two
 /// stored boxes) decides. So every node pair is kept or pruned as Bullet's descent keeps or prunes it, rounding
