@@ -79,6 +79,9 @@ public:
     /// btGImpactQuantizedBvh::find_collision(&set0, trans0, &set1, trans1, pairSet) finds, so that Bullet's triangle
     /// routine run over them builds the same manifold.
     void descend(const NodePair& start, LeafPairScratch& scratch, std::vector<int>& interleaved) const;
+    /// Whether the descent keeps the node pair (node0, node1) below the roots, decided as descend decides it: as
+    /// Bullet's test on the two nodes' stored boxes decides it. False when the roots are apart.
+    bool keeps(int node0, int node1, LeafPairScratch& scratch) const;
 
 private:
     const btGImpactBoxSet& m_set0;

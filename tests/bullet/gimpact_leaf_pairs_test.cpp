@@ -119,6 +119,57 @@ TEST(GImpactLeafPairs, VerticesFarFromTheOrigin) {
     EXPECT_GT(pairs, 10000u);
 }
 
+// Every node pair, not only those a descent reaches, is kept or pruned as Bullet's test on the two nodes' stored
+// boxes (btAABB::overlapping_trans_cache, its 6 face axes) keeps or prunes it: the integer decisions' allowances
+// cover Bullet's rounding and its widened absolute rotation, and the sure depth leaves no pair to a wrong guess.
+// Meshes near the origin and ~5,000 units from it (Bullet's rounding there spans many grid steps), turned about
+// their centre from apart to coincident. (A leaf-pair list can hide a wrong decision at an inner node whose
+// subtrees hold no kept leaf pair; this test cannot.)
+TEST(GImpactLeafPairs, EveryNodePairDecidedAsBulletsTestDecidesIt) {
+    ShapeStore shapes;
+    std::mt19937 rng(29);
+    std::size_t kept = 0, pruned = 0;
+    struct Scene {
+        btVector3 centre;
+        btScalar small;   // the second torus's size relative to the first's
+        btVector3 place;  // the second torus's centre relative to the first's
+    };
+    // The third: a torus 100 times smaller on the first one's surface (grid steps a hundredfold apart).
+    const btVector3 far(btScalar(3e3), btScalar(-2e3), btScalar(5e3)), none(0, 0, 0);
+    for (const Scene& scene : {Scene{none, 1, none}, Scene{far, 1, none},
+                               Scene{none, btScalar(0.01), btVector3(btScalar(1.35), 0, 0)}}) {
+        const btVector3& centre = scene.centre;
+        const btVector3 centre1 = centre + scene.place;
+        const btGImpactBoxSet& a = boxSetOf(shapes.gimpactTorus(1.0f, 0.35f, 24, 12, 0.0f, centre));
+        const btGImpactBoxSet& b = boxSetOf(
+            shapes.gimpactTorus(0.8f * scene.small, 0.3f * scene.small, 20, 10, 0.01f * scene.small, centre1));
+        detail::LeafPairScratch scratch;
+        for (int trial = 0; trial < 8; ++trial) {
+            const btTransform turn = randomPose(rng, (trial < 4 ? btScalar(0.3) : btScalar(1.2)) * scene.small);
+            const btTransform t1(turn.getBasis(), centre1 - turn.getBasis() * centre1 + turn.getOrigin());
+            const btTransform t0 = trial == 0 ? t1 : btTransform::getIdentity();
+            const detail::LeafPairSearch search(a, t0, b, t1);
+            if (!search.rootsOverlap()) continue;  // Bullet's descent stops at the roots (their 15-axis test)
+            BT_BOX_BOX_TRANSFORM_CACHE cache;
+            cache.calc_from_homogenic(t0, t1);
+            for (int n0 = 0; n0 < a.getNodeCount(); ++n0) {
+                btAABB box0;
+                a.getNodeBound(n0, box0);
+                for (int n1 = n0 == 0 ? 1 : 0; n1 < b.getNodeCount(); ++n1) {
+                    btAABB box1;
+                    b.getNodeBound(n1, box1);
+                    const bool bullet = box0.overlapping_trans_cache(box1, cache, false);
+                    ASSERT_EQ(search.keeps(n0, n1, scratch), bullet)
+                        << "centre " << centre.x() << ", trial " << trial << ", nodes " << n0 << ", " << n1;
+                    ++(bullet ? kept : pruned);
+                }
+            }
+        }
+    }
+    EXPECT_GT(kept, 100000u);
+    EXPECT_GT(pruned, 100000u);
+}
+
 // The search cut into parts (for the narrow-phase threads): the parts' pairs, concatenated in split order, are
 // Bullet's pairs in Bullet's order, for every part count, small trees and large, apart to coincident.
 TEST(GImpactLeafPairs, SplitPartsConcatenateToBulletsPairs) {
