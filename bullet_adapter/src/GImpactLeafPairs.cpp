@@ -142,6 +142,14 @@ std::uint32_t epochFor(std::uint64_t searchId, LeafPairScratch& scratch) {
     return scratch.epoch;
 }
 
+/// Whether `m` is exactly the identity.
+bool isIdentity(const btMatrix3x3& m) {
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j)
+            if (m[i][j] != (i == j ? btScalar(1) : btScalar(0))) return false;
+    return true;
+}
+
 /// Identifies a search for the scratches' node boxes (never 0: a new scratch serves none).
 std::uint64_t newSearchId() {
     static std::atomic<std::uint64_t> last{0};
@@ -185,6 +193,12 @@ LeafPairSearch::LeafPairSearch(const btGImpactBoxSet& set0, const btTransform& t
     const QuantizationGrid grid0 = BoxSetAccess::grid(set0), grid1 = BoxSetAccess::grid(set1);
     m_zeroToOne = gridMap(grid0, inverse, inverseT, grid1, rounding + widening(root0));
     m_oneToZero = gridMap(grid1, m_cache.m_R1to0, m_cache.m_T1to0, grid0, rounding + widening(root1));
+    // Frames that differ by a translation only (deforming meshes kept in world space, bodies that do not turn): with
+    // m_R1to0 exactly the identity, both of Bullet's axis classes test the same three axes, class I on box 1
+    // widened by 1e-6 of its extents and class II on box 0 widened likewise (each more permissive than the exact
+    // test), so one overlap on set 0's grid, with its allowance (which covers the widening of box 1) and sure depth,
+    // decides the pair as both would.
+    m_aligned = isIdentity(m_cache.m_R1to0);
 }
 
 namespace {
@@ -200,6 +214,7 @@ struct Descent {
     const BT_BOX_BOX_TRANSFORM_CACHE& cache;
     const std::array<int, 3>& sure0;  // on set 0's grid
     const std::array<int, 3>& sure1;  // on set 1's grid
+    bool aligned;                     // the frames differ by a translation only (LeafPairSearch::m_aligned)
 };
 
 /// Bullet's test of a node pair below the roots, on the two nodes' stored boxes.
@@ -212,12 +227,14 @@ bool bulletTest(const Descent& d, int node0, int node1) {
 
 /// Whether Bullet's descent keeps the node pair (node0, node1) below the roots: Bullet's test on it (the 6 face axes
 /// of btAABB::overlapping_trans_cache on its rounded boxes) fails where the grid boxes are apart, and passes where
-/// they overlap with room to spare for its rounding; only pairs near its boundary need it.
+/// they overlap with room to spare for its rounding; only pairs near its boundary need it. For aligned frames the
+/// overlap on set 0's grid alone decides (the two axis classes are the same axes).
 CULLIDE_ALWAYS_INLINE bool kept(Descent& d, int node0, int node1) {
     const BT_QUANTIZED_BVH_NODE& n0 = d.nodes0[node0];
     const BT_QUANTIZED_BVH_NODE& n1 = d.nodes1[node1];
     const GridBox& on0 = d.view1.at(node1);  // node 1 on set 0's grid
     if (!overlaps(n0, on0)) return false;  // node 0 need not be mapped (many pairs end here)
+    if (d.aligned) return overlapsBy(n0, on0, d.sure0) || bulletTest(d, node0, node1);
     const GridBox& on1 = d.view0.at(node0);  // node 0 on set 1's grid
     if (!overlaps(n1, on1)) return false;
     if (overlapsBy(n0, on0, d.sure0) && overlapsBy(n1, on1, d.sure1)) return true;
@@ -259,7 +276,7 @@ bool isLeafPair(const Descent& d, const NodePair& p) {
 /// A descent over the two sets for the search `searchId`, with the scratch's node boxes current for it.
 Descent descentOf(std::uint64_t searchId, const btGImpactBoxSet& set0, const btGImpactBoxSet& set1,
                   const BT_BOX_BOX_TRANSFORM_CACHE& cache, const GridMap& zeroToOne, const GridMap& oneToZero,
-                  LeafPairScratch& scratch) {
+                  bool aligned, LeafPairScratch& scratch) {
     const std::uint32_t epoch = epochFor(searchId, scratch);
     const BT_QUANTIZED_BVH_NODE* nodes0 = set0.get_node_pointer();
     const BT_QUANTIZED_BVH_NODE* nodes1 = set1.get_node_pointer();
@@ -271,7 +288,8 @@ Descent descentOf(std::uint64_t searchId, const btGImpactBoxSet& set0, const btG
             NodeGridView(nodes1, set1.getNodeCount(), oneToZero, scratch.nodes1, epoch),
             cache,
             oneToZero.sure,
-            zeroToOne.sure};
+            zeroToOne.sure,
+            aligned};
 }
 
 }  // namespace
@@ -280,7 +298,7 @@ void LeafPairSearch::split(std::size_t target, LeafPairScratch& scratch, std::ve
     out.clear();
     if (!m_rootsOverlap) return;
     out.push_back({0, 0});
-    Descent d = descentOf(m_id, m_set0, m_set1, m_cache, m_zeroToOne, m_oneToZero, scratch);
+    Descent d = descentOf(m_id, m_set0, m_set1, m_cache, m_zeroToOne, m_oneToZero, m_aligned, scratch);
     std::vector<NodePair>& next = scratch.front;
     bool expanded = true;
     while (out.size() < target && expanded) {
@@ -307,7 +325,7 @@ void LeafPairSearch::split(std::size_t target, LeafPairScratch& scratch, std::ve
 
 void LeafPairSearch::descend(const NodePair& start, LeafPairScratch& scratch, std::vector<int>& interleaved) const {
     if (!m_rootsOverlap) return;
-    Descent d = descentOf(m_id, m_set0, m_set1, m_cache, m_zeroToOne, m_oneToZero, scratch);
+    Descent d = descentOf(m_id, m_set0, m_set1, m_cache, m_zeroToOne, m_oneToZero, m_aligned, scratch);
     // Bullet's recursion with an explicit stack of kept pairs: each popped internal pair's children are all tested
     // at once and the kept ones pushed last to first, so that they pop in Bullet's order.
     std::vector<NodePair>& stack = scratch.stack;
@@ -328,7 +346,7 @@ void LeafPairSearch::descend(const NodePair& start, LeafPairScratch& scratch, st
 
 bool LeafPairSearch::keeps(int node0, int node1, LeafPairScratch& scratch) const {
     if (!m_rootsOverlap) return false;
-    Descent d = descentOf(m_id, m_set0, m_set1, m_cache, m_zeroToOne, m_oneToZero, scratch);
+    Descent d = descentOf(m_id, m_set0, m_set1, m_cache, m_zeroToOne, m_oneToZero, m_aligned, scratch);
     return kept(d, node0, node1);
 }
 

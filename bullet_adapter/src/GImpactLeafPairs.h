@@ -59,8 +59,11 @@ struct GridMap {
 /// mapped onto its grid once per node and search (GridMap), rounded outwards by more than any rounding of Bullet's or
 /// the map's. Where either overlap fails, Bullet's test fails; where both hold with the sure depth to spare, it
 /// passes; in between (a few percent of the pairs) Bullet's own test (btAABB::overlapping_trans_cache on the two
-/// stored boxes) decides. So every node pair is kept or pruned as Bullet's descent keeps or prunes it, rounding
-/// included (meshes far from the origin, where Bullet's rounded boxes of a parent and a child can disagree).
+/// stored boxes) decides. Where the two frames differ by a translation only (Bullet's rotation between them exactly
+/// the identity: deforming meshes kept in world space), Bullet's two axis classes test the same axes and the first
+/// overlap alone decides (with its sure depth), so the first set's nodes are never mapped. So every node pair is kept
+/// or pruned as Bullet's descent keeps or prunes it, rounding included (meshes far from the origin, where Bullet's
+/// rounded boxes of a parent and a child can disagree).
 ///
 /// The descent can be cut into parts (split) that run independently, on any threads (the search is read-only;
 /// each thread brings its own scratch): their pairs, concatenated in split order, are the whole descent's.
@@ -91,6 +94,7 @@ private:
     GridMap m_zeroToOne;  // set 0's grid onto set 1's
     GridMap m_oneToZero;  // set 1's grid onto set 0's
     bool m_rootsOverlap = false;
+    bool m_aligned = false;  // Bullet's frame change has exactly the identity rotation: one overlap decides
 };
 
 }  // namespace detail

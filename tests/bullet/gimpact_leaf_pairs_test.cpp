@@ -124,8 +124,9 @@ TEST(GImpactLeafPairs, VerticesFarFromTheOrigin) {
 // covers Bullet's rounding, and the sure depth leaves no pair to a wrong guess. (Bullet's |R| + 1e-6 widening is
 // not isolated by these poses: removing its term from the allowance fails nothing here.)
 // Meshes near the origin and ~5,000 units from it (Bullet's rounding there spans many grid steps), turned about
-// their centre from apart to coincident. (A leaf-pair list can hide a wrong decision at an inner node whose
-// subtrees hold no kept leaf pair; this test cannot.)
+// their centre from apart to coincident, and moved without turning (frames that differ by a translation only, as
+// those of deforming meshes kept in world space: there one overlap decides). (A leaf-pair list can hide a wrong
+// decision at an inner node whose subtrees hold no kept leaf pair; this test cannot.)
 TEST(GImpactLeafPairs, EveryNodePairDecidedAsBulletsTestDecidesIt) {
     ShapeStore shapes;
     std::mt19937 rng(29);
@@ -145,10 +146,12 @@ TEST(GImpactLeafPairs, EveryNodePairDecidedAsBulletsTestDecidesIt) {
         const btGImpactBoxSet& b = boxSetOf(
             shapes.gimpactTorus(0.8f * scene.small, 0.3f * scene.small, 20, 10, 0.01f * scene.small, centre1));
         detail::LeafPairScratch scratch;
-        for (int trial = 0; trial < 8; ++trial) {
-            const btTransform turn = randomPose(rng, (trial < 4 ? btScalar(0.3) : btScalar(1.2)) * scene.small);
-            const btTransform t1(turn.getBasis(), centre1 - turn.getBasis() * centre1 + turn.getOrigin());
-            const btTransform t0 = trial == 0 ? t1 : btTransform::getIdentity();
+        for (int trial = 0; trial < 12; ++trial) {
+            const btTransform turn = randomPose(rng, (trial % 4 < 2 ? btScalar(0.3) : btScalar(1.2)) * scene.small);
+            const btTransform t1 =
+                trial < 8 ? btTransform(turn.getBasis(), centre1 - turn.getBasis() * centre1 + turn.getOrigin())
+                          : btTransform(btMatrix3x3::getIdentity(), turn.getOrigin());  // moved, not turned
+            const btTransform t0 = trial == 0 || trial == 8 ? t1 : btTransform::getIdentity();
             const detail::LeafPairSearch search(a, t0, b, t1);
             if (!search.rootsOverlap()) continue;  // Bullet's descent stops at the roots (their 15-axis test)
             BT_BOX_BOX_TRANSFORM_CACHE cache;
@@ -420,7 +423,8 @@ TEST(GImpactMeshContacts, SharedTrianglesWithinTheBudgetOrEachTaskItsOwn) {
     ShapeStore shapes;
     auto* fine = static_cast<btGImpactMeshShape*>(shapes.gimpactTorus(2, btScalar(0.5), 128, 32, btScalar(0.01)));
     btCollisionObject a, b, c;
-    const std::size_t oneStore = std::size_t(fine->getMeshPart(0)->getNumChildShapes()) * sizeof(detail::PreparedTriangle);
+    const std::size_t oneStore =
+        std::size_t(fine->getMeshPart(0)->getNumChildShapes()) * sizeof(detail::PreparedTriangle);
     const auto same = [](const std::vector<detail::MeshContact>& x, const std::vector<detail::MeshContact>& y) {
         return std::equal(x.begin(), x.end(), y.begin(), y.end(), sameContact);
     };
