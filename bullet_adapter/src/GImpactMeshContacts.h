@@ -74,11 +74,17 @@ public:
     /// Triangles the store has room for (its memory, kept between spans).
     std::size_t capacity() const { return m_capacity; }
     const btTransform& transform() const { return m_transform; }
+    /// Hints that triangle `prim` will be asked for soon: its slot, its stamp and its indices (prefetchSlot), then,
+    /// once those have arrived and unless it is prepared, its vertices (prefetchVertices). No effect on results. The
+    /// part must be locked.
+    void prefetchSlot(int prim) const;
+    void prefetchVertices(int prim) const;
 
 private:
     void prepare(int prim, PreparedTriangle& out) const;
 
     const btGImpactMeshShapePart* m_part = nullptr;
+    const btGImpactMeshShapePart::TrimeshPrimitiveManager* m_mesh = nullptr;  // the part's mesh data
     btTransform m_transform;
     std::vector<PreparedTriangle> m_triangles;
     std::unique_ptr<std::atomic<std::uint32_t>[]> m_stamp;  // m_epoch: prepared; m_epoch | kBusy: being prepared
