@@ -54,7 +54,7 @@ void TriangleStore::prefetchSlot(int prim) const {
     prefetch(&m_stamp[i]);
     prefetch(&m_triangles[i]);
     prefetch(reinterpret_cast<const char*>(&m_triangles[i]) + 64);  // a PreparedTriangle spans two cache lines
-    prefetch(m_mesh->indexbase + i * static_cast<std::size_t>(m_mesh->indexstride));
+    prefetch(m_mesh->indexbase + prim * m_mesh->indexstride);  // Bullet's own address arithmetic
 }
 
 void TriangleStore::prefetchVertices(int prim) const {
@@ -63,7 +63,7 @@ void TriangleStore::prefetchVertices(int prim) const {
     if (m_stamp[i].load(std::memory_order_relaxed) == m_epoch) return;  // prepared: its vertices are not read
     unsigned int v[3];
     m_mesh->get_indices(prim, v[0], v[1], v[2]);
-    for (const unsigned int k : v) prefetch(m_mesh->vertexbase + k * static_cast<std::size_t>(m_mesh->stride));
+    for (const unsigned int k : v) prefetch(m_mesh->vertexbase + k * m_mesh->stride);  // as Bullet's get_vertex
 }
 
 const PreparedTriangle* TriangleStore::get(int prim, PreparedTriangle& spare) {
