@@ -327,16 +327,17 @@ public:
         m_dispatchInfo = &dispatchInfo;
         const btTransform& trans0 = body0Wrap->getWorldTransform();
         const btTransform& trans1 = body1Wrap->getWorldTransform();
-        const std::vector<detail::MeshContact>* ahead =
+        const detail::ContactLists* ahead =
             detail::AdapterAccess::meshContacts(cullideDispatcher(m_dispatcher))
                 .find(body0Wrap->getCollisionObject(), body1Wrap->getCollisionObject(), &shape0, &shape1, trans0,
                       trans1);
-        if (ahead == nullptr) {
+        if (ahead != nullptr) {
+            ahead->forEach([&](const detail::MeshContact& c) { addContact(body0Wrap, body1Wrap, c); });
+        } else {
             contacts.clear();
             detail::meshPairContacts(shape0, trans0, shape1, trans1, detail::threadScratch(), contacts);
-            ahead = &contacts;
+            addContacts(body0Wrap, body1Wrap, contacts);
         }
-        addContacts(body0Wrap, body1Wrap, *ahead);
         if (getLastManifold() != nullptr) m_resultOut->refreshContactPoints();
     }
 
@@ -344,13 +345,15 @@ public:
     /// collide_sat_triangles adds them).
     void addContacts(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
                      const std::vector<detail::MeshContact>& points) {
-        for (const detail::MeshContact& c : points) {
-            m_part0 = c.part0;
-            m_triface0 = c.face0;
-            m_part1 = c.part1;
-            m_triface1 = c.face1;
-            addContactPoint(body0Wrap, body1Wrap, c.point, c.normal, c.distance);
-        }
+        for (const detail::MeshContact& c : points) addContact(body0Wrap, body1Wrap, c);
+    }
+    void addContact(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
+                    const detail::MeshContact& c) {
+        m_part0 = c.part0;
+        m_triface0 = c.face0;
+        m_part1 = c.part1;
+        m_triface1 = c.face1;
+        addContactPoint(body0Wrap, body1Wrap, c.point, c.normal, c.distance);
     }
 
     /// A btGImpactMeshShape (not a GImpact compound, not a lone mesh part).

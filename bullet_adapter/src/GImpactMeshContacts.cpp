@@ -5,25 +5,38 @@
 #include <BulletCollision/Gimpact/btClipPolygon.h>
 
 #include <algorithm>
+#include <new>
+#include <type_traits>
 
 namespace cullide {
 namespace detail {
 
 namespace {
 constexpr std::uint32_t kBusy = 0x80000000u;
+// A slot is made anew (placement new) each time it is prepared and never destroyed.
+static_assert(std::is_trivially_destructible<PreparedTriangle>::value, "a store's slots are never destroyed");
+constexpr std::align_val_t kSlotAlignment{alignof(PreparedTriangle)};
 }  // namespace
+
+void TriangleStore::FreeSlots::operator()(PreparedTriangle* slots) const { ::operator delete(slots, kSlotAlignment); }
 
 void TriangleStore::begin(const btGImpactMeshShapePart& part, const btTransform& t) {
     m_part = &part;
     // Bullet offers the part's mesh data (read here only) through a non-const accessor.
     m_mesh = const_cast<btGImpactMeshShapePart&>(part).getTrimeshPrimitiveManager();
     m_transform = t;
-    m_count = static_cast<std::size_t>(std::max(part.getNumChildShapes(), 0));
-    if (m_capacity < m_count) {
-        m_triangles.resize(m_count);
-        m_stamp = std::make_unique<std::atomic<std::uint32_t>[]>(m_count);  // zero: no epoch
-        m_capacity = m_count;
+    m_count = 0;  // until there is room (an allocation that throws leaves an empty span)
+    const std::size_t count = static_cast<std::size_t>(std::max(part.getNumChildShapes(), 0));
+    if (m_capacity < count) {
+        m_triangles.reset();  // no copy of the old slots: a new span prepares every triangle again
+        m_stamp.reset();
+        m_capacity = 0;
+        m_triangles.reset(static_cast<PreparedTriangle*>(::operator new(count * sizeof(PreparedTriangle),
+                                                                          kSlotAlignment)));
+        m_stamp = std::make_unique<std::atomic<std::uint32_t>[]>(count);  // zero: no epoch
+        m_capacity = count;
     }
+    m_count = count;
     if (++m_epoch == kBusy) {  // wrapped: no stamp may look current
         for (std::size_t i = 0; i < m_capacity; ++i) m_stamp[i].store(0, std::memory_order_relaxed);
         m_epoch = 1;
@@ -52,8 +65,9 @@ void TriangleStore::prefetchSlot(int prim) const {
     if (prim < 0 || static_cast<std::size_t>(prim) >= m_count) return;
     const std::size_t i = static_cast<std::size_t>(prim);
     prefetch(&m_stamp[i]);
-    prefetch(&m_triangles[i]);
-    prefetch(reinterpret_cast<const char*>(&m_triangles[i]) + 64);  // a PreparedTriangle spans two cache lines
+    const PreparedTriangle* slot = m_triangles.get() + i;
+    prefetch(slot);
+    prefetch(reinterpret_cast<const char*>(slot) + 64);  // a PreparedTriangle spans two cache lines
     prefetch(m_mesh->indexbase + prim * m_mesh->indexstride);  // Bullet's own address arithmetic
 }
 
@@ -71,14 +85,15 @@ const PreparedTriangle* TriangleStore::get(int prim, PreparedTriangle& spare) {
     const std::size_t i = static_cast<std::size_t>(prim);
     std::atomic<std::uint32_t>& stamp = m_stamp[i];
     std::uint32_t seen = stamp.load(std::memory_order_acquire);
-    if (seen == m_epoch) return &m_triangles[i];
+    PreparedTriangle* slot = m_triangles.get() + i;
+    if (seen == m_epoch) return slot;
     if (seen != (m_epoch | kBusy) &&
         stamp.compare_exchange_strong(seen, m_epoch | kBusy, std::memory_order_acquire)) {
-        prepare(prim, m_triangles[i]);
+        prepare(prim, *new (slot) PreparedTriangle);
         stamp.store(m_epoch, std::memory_order_release);
-        return &m_triangles[i];
+        return slot;
     }
-    if (seen == m_epoch) return &m_triangles[i];  // prepared by another thread just now
+    if (seen == m_epoch) return slot;  // prepared by another thread just now
     prepare(prim, spare);  // another thread is preparing the shared copy: the same values, computed here
     return &spare;
 }
@@ -233,6 +248,12 @@ void meshPairContacts(const btGImpactMeshShape& shape0, const btTransform& trans
     lockAll(shape0, false);
 }
 
+std::size_t ContactLists::size() const {
+    std::size_t n = 0;
+    for (std::size_t l = 0; l < m_count; ++l) n += m_first[l].size();
+    return n;
+}
+
 void MeshContactBatch::clear() {
     m_pairCount = 0;
     m_index.clear();
@@ -271,7 +292,7 @@ void MeshContactBatch::add(const btCollisionObject* object0, const btCollisionOb
     p.trans0 = trans0;
     p.trans1 = trans1;
     p.firstTask = p.endTask = 0;
-    p.contacts.clear();
+    p.contacts = ContactLists();
     p.points = Pair::Points::Pending;
     m_index[{object0, object1}] = m_pairCount;  // a pair listed twice: the last one (the same inputs)
     ++m_pairCount;
@@ -401,10 +422,9 @@ void MeshContactBatch::lockParts(bool lock) const {
     }
 }
 
-const std::vector<MeshContact>* MeshContactBatch::find(const btCollisionObject* object0,
-                                                       const btCollisionObject* object1,
-                                                       const btCollisionShape* shape0, const btCollisionShape* shape1,
-                                                       const btTransform& trans0, const btTransform& trans1) {
+const ContactLists* MeshContactBatch::find(const btCollisionObject* object0, const btCollisionObject* object1,
+                                           const btCollisionShape* shape0, const btCollisionShape* shape1,
+                                           const btTransform& trans0, const btTransform& trans1) {
     if (!m_running) return nullptr;
     const auto it = m_index.find({object0, object1});
     if (it == m_index.end()) return nullptr;
@@ -415,8 +435,7 @@ const std::vector<MeshContact>* MeshContactBatch::find(const btCollisionObject* 
     if (p.points == Pair::Points::Pending) {
         p.points = waitForTasks(p) ? Pair::Points::Ready : Pair::Points::Failed;
         if (p.points == Pair::Points::Ready)
-            for (std::size_t t = p.firstTask; t < p.endTask; ++t)
-                p.contacts.insert(p.contacts.end(), m_taskContacts[t].begin(), m_taskContacts[t].end());
+            p.contacts = ContactLists(m_taskContacts.data() + p.firstTask, p.endTask - p.firstTask);
     }
     return p.points == Pair::Points::Ready ? &p.contacts : nullptr;
 }

@@ -86,7 +86,14 @@ private:
     const btGImpactMeshShapePart* m_part = nullptr;
     const btGImpactMeshShapePart::TrimeshPrimitiveManager* m_mesh = nullptr;  // the part's mesh data
     btTransform m_transform;
-    std::vector<PreparedTriangle> m_triangles;
+    /// Frees the slots' storage (allocated for PreparedTriangle's alignment).
+    struct FreeSlots {
+        void operator()(PreparedTriangle* slots) const;
+    };
+    /// Raw storage, not written when allocated: a slot holds a triangle once prepared in the span. A large store's
+    /// pages are then first touched by the threads that prepare their triangles, and only where triangles are asked
+    /// for (writing all of it up front cost ~1 ms per 20K triangles, serial, on the dispatch's first step).
+    std::unique_ptr<PreparedTriangle, FreeSlots> m_triangles;
     std::unique_ptr<std::atomic<std::uint32_t>[]> m_stamp;  // m_epoch: prepared; m_epoch | kBusy: being prepared
     std::size_t m_capacity = 0;
     std::size_t m_count = 0;
@@ -102,6 +109,25 @@ struct MeshContactScratch {
 
 /// This thread's scratch (worker threads and the dispatching thread alike).
 MeshContactScratch& threadScratch();
+
+/// A pair's points as lists held elsewhere (the batch's per-task lists, or one list of the caller's), read in place:
+/// the lists in order, each list's points in order.
+class ContactLists {
+public:
+    ContactLists() = default;
+    ContactLists(const std::vector<MeshContact>* first, std::size_t count) : m_first(first), m_count(count) {}
+    template <typename Visit>
+    void forEach(const Visit& visit) const {
+        for (std::size_t l = 0; l < m_count; ++l)
+            for (const MeshContact& c : m_first[l]) visit(c);
+    }
+    /// The points, counted.
+    std::size_t size() const;
+
+private:
+    const std::vector<MeshContact>* m_first = nullptr;
+    std::size_t m_count = 0;
+};
 
 /// One part pair of a mesh pair: its indices and world transforms (as the algorithm's wrappers give them).
 struct PartPair {
@@ -150,11 +176,12 @@ public:
     /// `meanwhile` is rethrown once the workers are done.
     void run(TaskPool* pool, const std::function<void()>& meanwhile);
     /// During run(), on the thread that called it: the points of (object0, object1) when the batch computes them for
-    /// exactly these shapes and transforms, once its tasks are done (running pending tasks meanwhile); nullptr
-    /// otherwise (the caller computes them itself).
-    const std::vector<MeshContact>* find(const btCollisionObject* object0, const btCollisionObject* object1,
-                                         const btCollisionShape* shape0, const btCollisionShape* shape1,
-                                         const btTransform& trans0, const btTransform& trans1);
+    /// exactly these shapes and transforms, once its tasks are done (running pending tasks meanwhile), read in place
+    /// from the tasks' lists (valid until the batch runs or is cleared again); nullptr otherwise (the caller computes
+    /// them itself).
+    const ContactLists* find(const btCollisionObject* object0, const btCollisionObject* object1,
+                             const btCollisionShape* shape0, const btCollisionShape* shape1, const btTransform& trans0,
+                             const btTransform& trans1);
 
     /// Search parts (tasks) of the last run.
     std::size_t taskCount() const { return m_tasks.size(); }
@@ -171,8 +198,8 @@ private:
         const btGImpactMeshShape* shape1;
         btTransform trans0, trans1;
         std::size_t firstTask, endTask;
-        std::vector<MeshContact> contacts;
-        enum class Points { Pending, Ready, Failed } points;  // contacts gathered from the tasks' lists
+        ContactLists contacts;  // the tasks' lists, once Ready
+        enum class Points { Pending, Ready, Failed } points;
     };
     struct Task {
         std::size_t pair;
