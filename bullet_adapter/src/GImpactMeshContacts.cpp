@@ -325,6 +325,22 @@ void MeshContactBatch::makeTasks(std::size_t target, MeshContactScratch& scratch
     }
 }
 
+void MeshContactBatch::prepareTasks(std::size_t target) {
+    try {
+        makeTasks(target, threadScratch());
+        if (m_taskContacts.size() < m_tasks.size()) m_taskContacts.resize(m_tasks.size());
+        if (m_taskStateSize < m_tasks.size()) {
+            m_taskState = std::make_unique<std::atomic<int>[]>(m_tasks.size());
+            m_taskStateSize = m_tasks.size();
+        }
+    } catch (const std::exception&) {
+        m_tasks.clear();  // out of memory: every pair is computed by its algorithm instead
+        for (std::size_t i = 0; i < m_pairCount; ++i) m_pairs[i].points = Pair::Points::Failed;
+    }
+    for (std::size_t t = 0; t < m_tasks.size(); ++t) m_taskState[t].store(0, std::memory_order_relaxed);
+    m_nextTask.store(0, std::memory_order_relaxed);
+}
+
 void MeshContactBatch::run(TaskPool* pool, const std::function<void()>& meanwhile) {
     m_searches.clear();
     m_tasks.clear();
@@ -343,27 +359,33 @@ void MeshContactBatch::run(TaskPool* pool, const std::function<void()>& meanwhil
     m_running = true;
     const Done done{*this};
     const std::size_t threads = pool != nullptr ? pool->size() : 1;
-    bool made = true;
-    try {
-        makeTasks(threads > 1 ? 16 * threads : 1, threadScratch());
-        if (m_taskContacts.size() < m_tasks.size()) m_taskContacts.resize(m_tasks.size());
-        if (m_taskStateSize < m_tasks.size()) {
-            m_taskState = std::make_unique<std::atomic<int>[]>(m_tasks.size());
-            m_taskStateSize = m_tasks.size();
-        }
-    } catch (const std::exception&) {
-        made = false;  // out of memory: every pair is computed by its algorithm instead
-        m_tasks.clear();
-        for (std::size_t i = 0; i < m_pairCount; ++i) m_pairs[i].points = Pair::Points::Failed;
-    }
-    for (std::size_t t = 0; t < m_tasks.size(); ++t) m_taskState[t].store(0, std::memory_order_relaxed);
-    m_nextTask.store(0, std::memory_order_relaxed);
-    if (pool == nullptr || threads < 2 || !made || m_tasks.empty()) {
+    if (threads < 2) {
+        prepareTasks(1);
         meanwhile();  // the algorithms run their pairs' tasks as they ask for them
         return;
     }
-    // One slot per thread; each takes tasks until none is left (the calling thread once `meanwhile` returns).
-    pool->parallelFor(threads, 1, [this](std::size_t, std::size_t) { work(); }, meanwhile);
+    // The workers are woken first and wait while this thread makes the tasks (waking one takes about as long as
+    // making them); then each thread takes tasks until none is left (this one once `meanwhile` returns).
+    struct Publish {
+        MeshContactBatch& batch;
+        ~Publish() {  // also when making them throws: the workers must not wait for ever
+            batch.m_tasksMade.store(true);
+            batch.m_tasksReady.notify();
+        }
+    };
+    m_tasksMade.store(false);
+    const auto work = [this](std::size_t, std::size_t) {
+        m_tasksReady.wait([this] { return m_tasksMade.load(); });
+        while (runNextTask()) {
+        }
+    };
+    pool->parallelFor(threads, 1, work, [&] {
+        {
+            const Publish publish{*this};
+            prepareTasks(16 * threads);
+        }
+        meanwhile();
+    });
 }
 
 bool MeshContactBatch::runNextTask() {
@@ -378,11 +400,6 @@ bool MeshContactBatch::runNextTask() {
     m_taskState[t].store(state);
     m_taskDone.notify();
     return true;
-}
-
-void MeshContactBatch::work() {
-    while (runNextTask()) {
-    }
 }
 
 bool MeshContactBatch::waitForTasks(const Pair& pair) {

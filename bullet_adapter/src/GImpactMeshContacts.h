@@ -224,8 +224,9 @@ private:
     void runTask(std::size_t task, MeshContactScratch& scratch);
     /// Takes the next task nobody took and runs it; false when none is left.
     bool runNextTask();
-    /// Runs tasks until none is left.
-    void work();
+    /// Makes the tasks for `target` parts per large pair and readies their states (none, each pair Failed, when out
+    /// of memory).
+    void prepareTasks(std::size_t target);
     /// Whether every task of the pair succeeded, waiting for (and meanwhile running) tasks until they are done.
     bool waitForTasks(const Pair& pair);
     void lockParts(bool lock) const;
@@ -248,6 +249,8 @@ private:
     std::size_t m_taskStateSize = 0;
     std::atomic<std::size_t> m_nextTask{0};
     bullet::Waiter m_taskDone;  // the dispatching thread waits here for a worker's task
+    std::atomic<bool> m_tasksMade{false};
+    bullet::Waiter m_tasksReady;  // the workers wait here while the dispatching thread makes the tasks
     bool m_running = false;
 };
 
