@@ -26,6 +26,7 @@
 #include "cullide_bullet/CullideCollisionDispatcher.h"
 
 #include <BulletCollision/CollisionShapes/btConvexHullShape.h>
+#include <BulletCollision/CollisionShapes/btHeightfieldTerrainShape.h>
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <BulletCollision/Gimpact/btGImpactShape.h>
 #include <btBulletDynamicsCommon.h>
@@ -73,6 +74,7 @@ struct Shapes {
     std::vector<std::unique_ptr<btTriangleIndexVertexArray>> arrays;
     std::vector<std::vector<btScalar>> vertexData;
     std::vector<std::vector<int>> indexData;
+    std::vector<std::vector<float>> heightData;
 
     template <typename T>
     T* own(T* shape) {
@@ -111,6 +113,21 @@ struct Shapes {
                 idx.insert(idx.end(), {a, a + cells + 1, a + 1, a + 1, a + cells + 1, a + cells + 2});
             }
         return own(new btBvhTriangleMeshShape(mesh(std::move(v), std::move(idx)), true));
+    }
+
+    /// A heightfield of (cells + 1)^2 samples `cell` apart, centred on the origin (Bullet centres it on its box).
+    btHeightfieldTerrainShape* heightfield(int cells, double cell) {
+        std::vector<float> h;
+        for (int z = 0; z <= cells; ++z)
+            for (int x = 0; x <= cells; ++x) {
+                const double wx = (x - 0.5 * cells) * cell, wz = (z - 0.5 * cells) * cell;
+                h.push_back(float(1.5 * std::sin(0.21 * wx) * std::cos(0.17 * wz) + 0.6 * std::sin(0.5 * wx + 0.3 * wz)));
+            }
+        heightData.push_back(std::move(h));
+        auto* shape = own(new btHeightfieldTerrainShape(cells + 1, cells + 1, heightData.back().data(), btScalar(1),
+                                                        btScalar(-2.5), btScalar(2.5), 1, PHY_FLOAT, false));
+        shape->setLocalScaling(btVector3(btScalar(cell), 1, btScalar(cell)));
+        return shape;
     }
 
     btGImpactMeshShape* torus(double R, double r, int segments, int sides) {
@@ -250,6 +267,55 @@ SceneSpec toriPile(Shapes& s) {
     return sc;
 }
 
+/// Compound bodies, as applications model furniture and debris: 400 tables (a top and four legs), chairs (a seat, a
+/// back, four legs) and L-shaped pieces (two boxes), dropped in a heap on a ground box.
+SceneSpec compoundHeap(Shapes& s) {
+    SceneSpec sc{"compounds-400", "400 compounds (tables, chairs, L pieces: 2-6 boxes each) heaped on a ground box", {}};
+    sc.bodies.push_back({s.own(new btBoxShape(btVector3(30, 1, 30))), 0, at(0, -1, 0)});
+    const auto box = [&](double x, double y, double z) {
+        return s.own(new btBoxShape(btVector3(btScalar(x), btScalar(y), btScalar(z))));
+    };
+    const auto part = [](btCompoundShape* c, btCollisionShape* child, double x, double y, double z) {
+        c->addChildShape(at(x, y, z), child);
+    };
+    auto* table = s.own(new btCompoundShape());
+    part(table, box(0.6, 0.05, 0.4), 0, 0.45, 0);
+    for (int k = 0; k < 4; ++k) part(table, box(0.05, 0.2, 0.05), k % 2 ? 0.5 : -0.5, 0.2, k / 2 ? 0.3 : -0.3);
+    auto* chair = s.own(new btCompoundShape());
+    part(chair, box(0.25, 0.04, 0.25), 0, 0.3, 0);
+    part(chair, box(0.25, 0.3, 0.04), 0, 0.6, -0.22);
+    for (int k = 0; k < 4; ++k) part(chair, box(0.03, 0.15, 0.03), k % 2 ? 0.2 : -0.2, 0.15, k / 2 ? 0.2 : -0.2);
+    auto* piece = s.own(new btCompoundShape());
+    part(piece, box(0.5, 0.1, 0.1), 0, 0, 0);
+    part(piece, box(0.1, 0.4, 0.1), -0.4, 0.5, 0);
+    btCollisionShape* kinds[] = {table, chair, piece};
+    Random rng(29);
+    for (int i = 0; i < 400; ++i) {
+        btTransform t = at(-9 + (i % 8) * 2.6, 1 + (i / 64) * 1.6, -9 + ((i / 8) % 8) * 2.6);
+        t.setRotation(btQuaternion(btVector3(rng.uniform(-0.3, 0.3), 1, rng.uniform(-0.3, 0.3)).normalized(),
+                                   rng.uniform(0, 3)));
+        sc.bodies.push_back({kinds[i % 3], 1, t});
+    }
+    return sc;
+}
+
+/// A heightfield terrain (128 x 128 cells, 32K triangles) with 1,000 boxes, spheres, capsules and cylinders dropped
+/// on it.
+SceneSpec primitivesOnHeightfield(Shapes& s) {
+    SceneSpec sc{"heightfield-prims", "1,000 boxes/spheres/capsules/cylinders over a 128 x 128 heightfield", {}};
+    sc.bodies.push_back({s.heightfield(128, 0.75), 0, at(0, 0, 0)});
+    const btScalar r = btScalar(0.3);
+    std::vector<btCollisionShape*> kinds = {s.own(new btBoxShape(btVector3(btScalar(0.4), r, btScalar(0.35)))),
+                                            s.own(new btSphereShape(btScalar(0.4))),
+                                            s.own(new btCapsuleShape(btScalar(0.25), btScalar(0.6))),
+                                            s.own(new btCylinderShape(btVector3(r, r, r)))};
+    Random rng(31);
+    for (int i = 0; i < 1000; ++i)
+        sc.bodies.push_back({kinds[static_cast<std::size_t>(i) % kinds.size()], 1,
+                             at(rng.uniform(-44, 44), rng.uniform(3, 9), rng.uniform(-44, 44))});
+    return sc;
+}
+
 /// bench_run's stepping scene 'stack' (55 boxes in a pyramid on a static box), here in lockstep.
 SceneSpec boxPyramid(Shapes& s) {
     SceneSpec sc{"stack", "55 boxes in a pyramid on a static box (bench_run's stepping scene)", {}};
@@ -307,7 +373,8 @@ const SceneFactory kScenes[] = {{"boxes-3000", boxesFalling},      {"pyramid-wal
                                 {"hulls-1000", hullStack},         {"landscape-prims", primitivesOnLandscape},
                                 {"landscape-hulls", hullsOnLandscape}, {"landscape-rays", hullsOnLandscapeRays},
                                 {"tori-pile", toriPile},           {"stack", boxPyramid},
-                                {"landscape-150", landscapeSmall}, {"gimpact-landscape", gimpactLandscape}};
+                                {"landscape-150", landscapeSmall}, {"gimpact-landscape", gimpactLandscape},
+                                {"compounds-400", compoundHeap},   {"heightfield-prims", primitivesOnHeightfield}};
 
 /// A dynamics world that times the parts of its step.
 class TimedWorld final : public btDiscreteDynamicsWorld {
