@@ -121,7 +121,8 @@ struct Shapes {
         for (int z = 0; z <= cells; ++z)
             for (int x = 0; x <= cells; ++x) {
                 const double wx = (x - 0.5 * cells) * cell, wz = (z - 0.5 * cells) * cell;
-                h.push_back(float(1.5 * std::sin(0.21 * wx) * std::cos(0.17 * wz) + 0.6 * std::sin(0.5 * wx + 0.3 * wz)));
+                const double height = 1.5 * std::sin(0.21 * wx) * std::cos(0.17 * wz) + 0.6 * std::sin(0.5 * wx + 0.3 * wz);
+                h.push_back(float(height));
             }
         heightData.push_back(std::move(h));
         auto* shape = own(new btHeightfieldTerrainShape(cells + 1, cells + 1, heightData.back().data(), btScalar(1),
@@ -270,7 +271,8 @@ SceneSpec toriPile(Shapes& s) {
 /// Compound bodies, as applications model furniture and debris: 400 tables (a top and four legs), chairs (a seat, a
 /// back, four legs) and L-shaped pieces (two boxes), dropped in a heap on a ground box.
 SceneSpec compoundHeap(Shapes& s) {
-    SceneSpec sc{"compounds-400", "400 compounds (tables, chairs, L pieces: 2-6 boxes each) heaped on a ground box", {}};
+    SceneSpec sc{"compounds-400", "400 compounds (tables, chairs, L pieces: 2-6 boxes each) heaped on a ground box",
+                 {}};
     sc.bodies.push_back({s.own(new btBoxShape(btVector3(30, 1, 30))), 0, at(0, -1, 0)});
     const auto box = [&](double x, double y, double z) {
         return s.own(new btBoxShape(btVector3(btScalar(x), btScalar(y), btScalar(z))));
