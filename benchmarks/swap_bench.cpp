@@ -121,7 +121,8 @@ struct Shapes {
         for (int z = 0; z <= cells; ++z)
             for (int x = 0; x <= cells; ++x) {
                 const double wx = (x - 0.5 * cells) * cell, wz = (z - 0.5 * cells) * cell;
-                const double height = 1.5 * std::sin(0.21 * wx) * std::cos(0.17 * wz) + 0.6 * std::sin(0.5 * wx + 0.3 * wz);
+                const double height =
+                    1.5 * std::sin(0.21 * wx) * std::cos(0.17 * wz) + 0.6 * std::sin(0.5 * wx + 0.3 * wz);
                 h.push_back(float(height));
             }
         heightData.push_back(std::move(h));
