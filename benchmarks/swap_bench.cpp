@@ -97,6 +97,11 @@ struct Shapes {
         return arrays.back().get();
     }
 
+    /// The rolling terrain of the landscape scenes: height at (x, z), within [-2.1, 2.1].
+    static double terrainHeight(double x, double z) {
+        return 1.5 * std::sin(0.21 * x) * std::cos(0.17 * z) + 0.6 * std::sin(0.5 * x + 0.3 * z);
+    }
+
     /// A height-field patch of cells x cells quads as a static BVH mesh, origin at its corner.
     btBvhTriangleMeshShape* landscape(int cells, double cell, double x0, double z0) {
         std::vector<btScalar> v;
@@ -104,8 +109,7 @@ struct Shapes {
         for (int z = 0; z <= cells; ++z)
             for (int x = 0; x <= cells; ++x) {
                 const double wx = x0 + x * cell, wz = z0 + z * cell;
-                const double h = 1.5 * std::sin(0.21 * wx) * std::cos(0.17 * wz) + 0.6 * std::sin(0.5 * wx + 0.3 * wz);
-                v.insert(v.end(), {btScalar(wx), btScalar(h), btScalar(wz)});
+                v.insert(v.end(), {btScalar(wx), btScalar(terrainHeight(wx, wz)), btScalar(wz)});
             }
         for (int z = 0; z < cells; ++z)
             for (int x = 0; x < cells; ++x) {
@@ -121,9 +125,7 @@ struct Shapes {
         for (int z = 0; z <= cells; ++z)
             for (int x = 0; x <= cells; ++x) {
                 const double wx = (x - 0.5 * cells) * cell, wz = (z - 0.5 * cells) * cell;
-                const double height =
-                    1.5 * std::sin(0.21 * wx) * std::cos(0.17 * wz) + 0.6 * std::sin(0.5 * wx + 0.3 * wz);
-                h.push_back(float(height));
+                h.push_back(float(terrainHeight(wx, wz)));
             }
         heightData.push_back(std::move(h));
         auto* shape = own(new btHeightfieldTerrainShape(cells + 1, cells + 1, heightData.back().data(), btScalar(1),
