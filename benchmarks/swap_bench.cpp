@@ -304,6 +304,25 @@ SceneSpec compoundHeap(Shapes& s) {
     return sc;
 }
 
+/// Compounds of 2-4 hulls, as a convex decomposition (V-HACD and the like) gives an application its non-convex
+/// bodies, dropped on the landscape: compound-mesh pairs whose children meet triangles, and compound-compound pairs.
+SceneSpec compoundsOnLandscape(Shapes& s) {
+    Random rng(37);
+    std::vector<btCollisionShape*> kinds;
+    for (int k = 0; k < 4; ++k) {
+        auto* c = s.own(new btCompoundShape());
+        const int parts = 2 + k % 3;
+        for (int p = 0; p < parts; ++p) {
+            const double angle = 2 * M_PI * p / parts;
+            c->addChildShape(at(0.35 * std::cos(angle), 0.1 * p, 0.35 * std::sin(angle)),
+                             s.hull(rng, 24, 0.35, 0.3, 0.3));
+        }
+        kinds.push_back(c);
+    }
+    return overLandscape(s, "landscape-compounds",
+                         "1,000 compounds of 2-4 hulls (24 points) over 4 BVH parts (32K triangles)", kinds);
+}
+
 /// A heightfield terrain (128 x 128 cells, 32K triangles) with 1,000 boxes, spheres, capsules and cylinders dropped
 /// on it.
 SceneSpec primitivesOnHeightfield(Shapes& s) {
@@ -379,7 +398,8 @@ const SceneFactory kScenes[] = {{"boxes-3000", boxesFalling},      {"pyramid-wal
                                 {"landscape-hulls", hullsOnLandscape}, {"landscape-rays", hullsOnLandscapeRays},
                                 {"tori-pile", toriPile},           {"stack", boxPyramid},
                                 {"landscape-150", landscapeSmall}, {"gimpact-landscape", gimpactLandscape},
-                                {"compounds-400", compoundHeap},   {"heightfield-prims", primitivesOnHeightfield}};
+                                {"compounds-400", compoundHeap},   {"heightfield-prims", primitivesOnHeightfield},
+                                {"landscape-compounds", compoundsOnLandscape}};
 
 /// A dynamics world that times the parts of its step.
 class TimedWorld final : public btDiscreteDynamicsWorld {
@@ -536,6 +556,7 @@ struct Row {
     cullide::CullideFrameStats last;
     cullide::CullideMemoryStats memory;  ///< what the CULLIDE broadphase keeps after the last step
     double cullidePairs = 0, fallbackPairs = 0, penetrationPairs = 0, apartPairs = 0;  ///< dispatcher, per step
+    double threadedPairs = 0;  ///< dispatcher, per step: pairs run by Bullet's algorithms on the narrow-phase threads
     double buildMs = 0, cullMs = 0, recordMs = 0;  ///< CullideBroadphase's stages, per step
     /// Lost pairs explained (explainLost, the first kLostChecks), and of those the meshes without a triangle pair
     /// within the culling margin at the detected state.
@@ -554,6 +575,7 @@ void addCullideStep(btCollisionDispatcher& dispatcher, btBroadphaseInterface& br
     row.fallbackPairs += double(d.fallbackPairs) / steps;
     row.penetrationPairs += double(d.penetrationPairs) / steps;
     row.apartPairs += double(d.apartPairs) / steps;
+    row.threadedPairs += double(d.threadedPairs) / steps;
     row.convexCandidates += double(d.convexCandidates) / steps;
     row.convexTriangles += double(d.convexTriangles) / steps;
     const auto& b = static_cast<cullide::CullideBroadphase&>(broadphase).getLastFrameStats();
@@ -798,14 +820,14 @@ void printRow(const Row& r) {
     const double best = std::min(r.ms[0], r.ms[1]);
     std::printf("%-16s %6zu %5d | %8.2f %8.2f %8.2f | %5.2fx | bp %6.2f/%6.2f/%6.2f nar %7.2f/%7.2f/%7.2f | pairs %8.0f/%8.0f/%8.0f | "
                 "lost %zu of %zu (checked %zu: %zu apart) extra %zu | dispatcher: culled %.1f, full %.1f "
-                "(penetrating %.1f), apart %.1f | culling frame %.2f ms, culler %.2f, records %.2f; last step: %zu object pairs, "
+                "(penetrating %.1f), apart %.1f, threaded %.1f | culling frame %.2f ms, culler %.2f, records %.2f; last step: %zu object pairs, "
                 "%zu pruned | contact keys missing %zu of %zu, deepest point diff max %.3g mean %.3g (%zu pair-steps) | "
                 "GImpact-convex triangles %.0f of %.0f | kept: %zu shapes %zu B shared, %zu objects %zu B "
                 "(%zu world copies), %.0f B per object\n",
                 r.scene.c_str(), r.bodies, r.steps, r.ms[0], r.ms[1], r.ms[2], r.ms[2] / best, r.broadphaseMs[0],
                 r.broadphaseMs[1], r.broadphaseMs[2], r.narrowMs[0], r.narrowMs[1], r.narrowMs[2], r.pairs[0],
                 r.pairs[1], r.pairs[2], r.lost, r.contactPairSteps,
-                r.lostChecked, r.lostApart, r.extra, r.cullidePairs, r.fallbackPairs, r.penetrationPairs, r.apartPairs, r.buildMs, r.cullMs, r.recordMs, r.last.objectPairs,
+                r.lostChecked, r.lostApart, r.extra, r.cullidePairs, r.fallbackPairs, r.penetrationPairs, r.apartPairs, r.threadedPairs, r.buildMs, r.cullMs, r.recordMs, r.last.objectPairs,
                 r.last.prunedPairs, r.pointsMissing, r.points, r.deepestDiffMax,
                 r.comparedPairSteps ? r.deepestDiffSum / double(r.comparedPairSteps) : 0.0, r.comparedPairSteps,
                 r.convexTriangles, r.convexCandidates, r.memory.shapes, r.memory.sharedGeometryBytes,
@@ -825,13 +847,13 @@ void writeJson(const std::string& path, const std::vector<Row>& rows) {
                       "\"sap_ms\": %.4f, \"cullide_ms\": %.4f, \"ratio\": %.4f, \"dbvt_broadphase_ms\": %.4f, "
                       "\"sap_broadphase_ms\": %.4f, \"cullide_broadphase_ms\": %.4f, \"dbvt_narrow_ms\": %.4f, "
                       "\"sap_narrow_ms\": %.4f, \"cullide_narrow_ms\": %.4f, \"dbvt_pairs\": %.1f, \"sap_pairs\": %.1f, "
-                      "\"cullide_pairs\": %.1f, \"apart_pairs\": %.1f, \"contact_pair_steps\": %zu, \"lost\": %zu, "
+                      "\"cullide_pairs\": %.1f, \"apart_pairs\": %.1f, \"threaded_pairs\": %.1f, \"contact_pair_steps\": %zu, \"lost\": %zu, "
                       "\"lost_checked\": %zu, \"lost_apart\": %zu, \"extra\": %zu, \"culled_pairs\": %zu, "
                       "\"pruned_pairs\": %zu, \"points\": %zu, \"points_missing\": %zu, \"deepest_diff_max\": %.6g, "
                       "\"deepest_diff_mean\": %.6g, \"penetration_fallback\": %s}%s\n",
                       r.scene.c_str(), r.what.c_str(), r.bodies, r.steps, r.ms[0], r.ms[1], r.ms[2],
                       r.ms[2] / std::min(r.ms[0], r.ms[1]), r.broadphaseMs[0], r.broadphaseMs[1], r.broadphaseMs[2],
-                      r.narrowMs[0], r.narrowMs[1], r.narrowMs[2], r.pairs[0], r.pairs[1], r.pairs[2], r.apartPairs, r.contactPairSteps, r.lost, r.lostChecked, r.lostApart,
+                      r.narrowMs[0], r.narrowMs[1], r.narrowMs[2], r.pairs[0], r.pairs[1], r.pairs[2], r.apartPairs, r.threadedPairs, r.contactPairSteps, r.lost, r.lostChecked, r.lostApart,
                       r.extra, r.last.culledPairs, r.last.prunedPairs, r.points, r.pointsMissing, r.deepestDiffMax,
                       r.comparedPairSteps ? r.deepestDiffSum / double(r.comparedPairSteps) : 0.0,
                       g_penetrationFallback ? "true" : "false", i + 1 < rows.size() ? "," : "");

@@ -831,25 +831,14 @@ TaskPool& CullideCollisionDispatcher::pool(unsigned threads) {
 }
 
 bullet::AlgorithmKind CullideCollisionDispatcher::threadablePair(btBroadphasePair& pair) {
-    using bullet::AlgorithmKind;
     // An algorithm not made yet is made by this dispatch, on the calling thread, in Bullet's order.
-    if (pair.m_algorithm == nullptr) return AlgorithmKind::Other;
+    if (pair.m_algorithm == nullptr) return bullet::AlgorithmKind::Other;
     const auto* object0 = static_cast<const btCollisionObject*>(pair.m_pProxy0->m_clientObject);
     const auto* object1 = static_cast<const btCollisionObject*>(pair.m_pProxy1->m_clientObject);
-    if (!bullet::objectsMayThread(*object0, *object1) || !needsCollision(object0, object1)) return AlgorithmKind::Other;
-    const AlgorithmKind kind = bullet::algorithmKindOf(typeid(*pair.m_algorithm));
-    if (kind == AlgorithmKind::Other) return kind;
-    const btCollisionShape& shape0 = *object0->getCollisionShape();
-    const btCollisionShape& shape1 = *object1->getCollisionShape();
-    const int t0 = shape0.getShapeType(), t1 = shape1.getShapeType();
-    const int convexType = shape0.isConvex() ? t0 : t1;
-    if (!bullet::threadableAlgorithm(kind, shape0, shape1, m_doubleDispatchContactPoints[t0][t1],
-                                     m_doubleDispatchContactPoints[convexType][TRIANGLE_SHAPE_PROXYTYPE]))
-        return AlgorithmKind::Other;
-    if (kind != AlgorithmKind::ConvexConvex) return kind;
-    m_manifoldScratch.resize(0);  // btConvexConvexAlgorithm makes its manifold on its first run
-    pair.m_algorithm->getAllContactManifolds(m_manifoldScratch);
-    return m_manifoldScratch.size() > 0 ? kind : AlgorithmKind::Other;
+    if (!bullet::objectsMayThread(*object0, *object1) || !needsCollision(object0, object1))
+        return bullet::AlgorithmKind::Other;
+    const bullet::CreateFuncLookup funcs = [this](int t0, int t1) { return m_doubleDispatchContactPoints[t0][t1]; };
+    return bullet::threadableKind(*pair.m_algorithm, *object0, *object1, funcs, m_manifoldScratch);
 }
 
 btCollisionAlgorithm* CullideCollisionDispatcher::findAlgorithm(const btCollisionObjectWrapper* body0Wrap,

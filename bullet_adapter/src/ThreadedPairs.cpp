@@ -4,6 +4,9 @@
 #include <BulletCollision/CollisionDispatch/btBoxBoxCollisionAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btCollisionObject.h>
 #include <BulletCollision/CollisionDispatch/btCollisionObjectWrapper.h>
+#include <BulletCollision/CollisionDispatch/btCompoundCollisionAlgorithm.h>
+#include <BulletCollision/CollisionDispatch/btCompoundCompoundCollisionAlgorithm.h>
+#include <BulletCollision/CollisionDispatch/btHashedSimplePairCache.h>
 #include <BulletCollision/CollisionDispatch/btConvexConcaveCollisionAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btConvexConvexAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btConvexPlaneCollisionAlgorithm.h>
@@ -13,6 +16,7 @@
 #include <BulletCollision/CollisionDispatch/btSphereTriangleCollisionAlgorithm.h>
 #include <BulletCollision/CollisionShapes/btBoxShape.h>
 #include <BulletCollision/CollisionShapes/btBvhTriangleMeshShape.h>
+#include <BulletCollision/CollisionShapes/btCompoundShape.h>
 #include <BulletCollision/CollisionShapes/btCapsuleShape.h>
 #include <BulletCollision/CollisionShapes/btConeShape.h>
 #include <BulletCollision/CollisionShapes/btConvexHullShape.h>
@@ -28,6 +32,7 @@
 #include <BulletCollision/CollisionShapes/btTriangleShape.h>
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpaPenetrationDepthSolver.h>
 #include <BulletCollision/NarrowPhaseCollision/btPersistentManifold.h>
+#include <LinearMath/btAabbUtil2.h>
 #include <LinearMath/btIDebugDraw.h>
 #include <LinearMath/btQuickprof.h>
 
@@ -97,6 +102,86 @@ btLeaveProfileZoneFunc* const g_defaultLeaveProfile = btGetCurrentLeaveProfileZo
 
 thread_local bool t_onPairThread = false;
 
+/// btCompoundCollisionAlgorithm's protected state, read through pointers to its members (formed in a derived class,
+/// as the language allows): which object is the compound, the children's algorithms and the revision they are for.
+struct CompoundAlgorithmState final : btCompoundCollisionAlgorithm {
+    CompoundAlgorithmState() = delete;
+    static bool swapped(const btCompoundCollisionAlgorithm& a) { return a.*(&CompoundAlgorithmState::m_isSwapped); }
+    static int revision(const btCompoundCollisionAlgorithm& a) {
+        return a.*(&CompoundAlgorithmState::m_compoundShapeRevision);
+    }
+    static int childCount(const btCompoundCollisionAlgorithm& a) {
+        return (a.*(&CompoundAlgorithmState::m_childCollisionAlgorithms)).size();
+    }
+};
+
+/// btCompoundCompoundCollisionAlgorithm's private state: its cache of child pairs (each with its algorithm) and the
+/// revisions of the two compounds it was made for. Bullet has no accessor for them; pointers to them are named in an
+/// explicit instantiation, where the language does not check access ([temp.explicit]), and handed out by a friend.
+template <typename Tag, typename Tag::Type Member>
+struct ExposedMember {
+    friend typename Tag::Type memberPointer(Tag) { return Member; }
+};
+struct ChildPairCache {
+    using Type = btHashedSimplePairCache* btCompoundCompoundCollisionAlgorithm::*;
+    friend Type memberPointer(ChildPairCache);
+};
+struct Revision0 {
+    using Type = int btCompoundCompoundCollisionAlgorithm::*;
+    friend Type memberPointer(Revision0);
+};
+struct Revision1 {
+    using Type = int btCompoundCompoundCollisionAlgorithm::*;
+    friend Type memberPointer(Revision1);
+};
+template struct ExposedMember<ChildPairCache, &btCompoundCompoundCollisionAlgorithm::m_childCollisionAlgorithmCache>;
+template struct ExposedMember<Revision0, &btCompoundCompoundCollisionAlgorithm::m_compoundShapeRevision0>;
+template struct ExposedMember<Revision1, &btCompoundCompoundCollisionAlgorithm::m_compoundShapeRevision1>;
+
+/// The world boxes of a compound's children as Bullet's compound algorithms compute them (child shape's getAabb at
+/// the object's transform times the child's), for compounds of at most kMaxChildren children, all Bullet's convex
+/// shapes; `extent` grows to the largest coordinate seen.
+struct ChildBoxes {
+    static constexpr int kMaxChildren = 16;
+    btVector3 min[kMaxChildren], max[kMaxChildren];
+    int count = 0;
+
+    bool compute(const btCompoundShape& compound, const btTransform& transform, btScalar& extent) {
+        count = compound.getNumChildShapes();
+        if (count > kMaxChildren) return false;
+        for (int i = 0; i < count; ++i) {
+            const btCollisionShape& child = *compound.getChildShape(i);
+            if (!bulletConvex(child)) return false;
+            child.getAabb(transform * compound.getChildTransform(i), min[i], max[i]);
+            extent = btMax(extent, largestMagnitude(min[i], max[i]));
+        }
+        return true;
+    }
+    static btScalar largestMagnitude(const btVector3& mn, const btVector3& mx) {
+        btVector3 m = mn.absolute();
+        m.setMax(mx.absolute());
+        return btMax(m.x(), btMax(m.y(), m.z()));
+    }
+};
+
+/// A few ulps of coordinates up to `extent`: how far a box computed in another build may be rounded differently.
+btScalar roundingSlack(btScalar extent) { return btScalar(16) * SIMD_EPSILON * (btScalar(1) + extent); }
+
+/// Whether two boxes overlap as TestAabbAgainstAabb2 decides, told apart from a decision that rounding the first box
+/// by up to `slack` could turn: 1 overlapping, 0 apart, -1 too close to tell.
+int clearOverlap(const btVector3& min0, const btVector3& max0, const btVector3& min1, const btVector3& max1,
+                 btScalar slack) {
+    const btVector3 s(slack, slack, slack);
+    if (!TestAabbAgainstAabb2(min0 - s, max0 + s, min1, max1)) return 0;
+    if (TestAabbAgainstAabb2(min0 + s, max0 - s, min1, max1)) return 1;
+    return -1;
+}
+
+/// A shape whose box a compound algorithm reads on a worker: one of Bullet's convex or concave shapes, or a plane.
+bool bulletShape(const btCollisionShape& shape) {
+    return bulletConvex(shape) || bulletConcave(shape) || typeid(shape) == typeid(btStaticPlaneShape);
+}
+
 }  // namespace
 
 AlgorithmKind algorithmKindOf(const std::type_info& algorithmClass) {
@@ -104,6 +189,8 @@ AlgorithmKind algorithmKindOf(const std::type_info& algorithmClass) {
     if (algorithmClass == typeid(btConvexConvexAlgorithm)) return AlgorithmKind::ConvexConvex;
     if (algorithmClass == typeid(btBoxBoxCollisionAlgorithm)) return AlgorithmKind::Convex;
     if (algorithmClass == typeid(btConvexConcaveCollisionAlgorithm)) return AlgorithmKind::ConvexConcave;
+    if (isOneOf<btCompoundCollisionAlgorithm, btCompoundCompoundCollisionAlgorithm>(algorithmClass))
+        return AlgorithmKind::Compound;
     if (isOneOf<btSphereSphereCollisionAlgorithm, btSphereBoxCollisionAlgorithm, btSphereTriangleCollisionAlgorithm,
                 btConvexPlaneCollisionAlgorithm>(algorithmClass))
         return AlgorithmKind::Convex;
@@ -111,7 +198,8 @@ AlgorithmKind algorithmKindOf(const std::type_info& algorithmClass) {
 }
 
 bool worthHandingOff(AlgorithmKind kind) {
-    return kind == AlgorithmKind::ConvexConvex || kind == AlgorithmKind::ConvexConcave;
+    return kind == AlgorithmKind::ConvexConvex || kind == AlgorithmKind::ConvexConcave ||
+           kind == AlgorithmKind::Compound;
 }
 
 std::size_t typicalCost(AlgorithmKind kind) {
@@ -122,6 +210,8 @@ std::size_t typicalCost(AlgorithmKind kind) {
             return 4;
         case AlgorithmKind::ConvexConcave:
             return 16;
+        case AlgorithmKind::Compound:
+            return 4;
         case AlgorithmKind::Other:
             break;
     }
@@ -148,10 +238,137 @@ bool threadableAlgorithm(AlgorithmKind kind, const btCollisionShape& shape0, con
                     (triangleFunc != nullptr &&
                      typeid(*triangleFunc) == typeid(btSphereTriangleCollisionAlgorithm::CreateFunc)));
         }
+        case AlgorithmKind::Compound:  // compoundMayThread
         case AlgorithmKind::Other:
             break;
     }
     return false;
+}
+
+namespace {
+
+/// threadableKind for a non-compound algorithm on two shapes (the algorithm's first, then its second).
+AlgorithmKind threadableOnShapes(AlgorithmKind kind, btCollisionAlgorithm& algorithm, const btCollisionShape& shape0,
+                                 const btCollisionShape& shape1, const CreateFuncLookup& funcs,
+                                 btManifoldArray& scratch) {
+    const int t0 = shape0.getShapeType(), t1 = shape1.getShapeType();
+    const int convexType = shape0.isConvex() ? t0 : t1;
+    if (!threadableAlgorithm(kind, shape0, shape1, funcs(t0, t1), funcs(convexType, TRIANGLE_SHAPE_PROXYTYPE)))
+        return AlgorithmKind::Other;
+    if (kind != AlgorithmKind::ConvexConvex) return kind;
+    scratch.resize(0);  // btConvexConvexAlgorithm makes its manifold on its first run
+    algorithm.getAllContactManifolds(scratch);
+    return scratch.size() > 0 ? kind : AlgorithmKind::Other;
+}
+
+}  // namespace
+
+AlgorithmKind threadableKind(btCollisionAlgorithm& algorithm, const btCollisionObject& object0,
+                             const btCollisionObject& object1, const CreateFuncLookup& funcs,
+                             btManifoldArray& scratch) {
+    const AlgorithmKind kind = algorithmKindOf(typeid(algorithm));
+    if (kind == AlgorithmKind::Other) return kind;
+    if (kind != AlgorithmKind::Compound)
+        return threadableOnShapes(kind, algorithm, *object0.getCollisionShape(), *object1.getCollisionShape(), funcs,
+                                  scratch);
+    const auto child = [&](btCollisionAlgorithm& a, const btCollisionShape& childShape,
+                           const btCollisionShape& otherShape) {
+        const AlgorithmKind k = algorithmKindOf(typeid(a));
+        return k != AlgorithmKind::Other && k != AlgorithmKind::Compound &&
+               threadableOnShapes(k, a, childShape, otherShape, funcs, scratch) != AlgorithmKind::Other;
+    };
+    const bool mayThread = typeid(algorithm) == typeid(btCompoundCollisionAlgorithm)
+                               ? compoundMayThread(algorithm, object0, object1, child)
+                               : compoundPairMayThread(algorithm, object0, object1, child);
+    return mayThread ? kind : AlgorithmKind::Other;
+}
+
+bool compoundMayThread(btCollisionAlgorithm& algorithm, const btCollisionObject& object0,
+                       const btCollisionObject& object1, const ChildThreadable& childThreadable) {
+    if (typeid(algorithm) != typeid(btCompoundCollisionAlgorithm) || gCompoundChildShapePairCallback != nullptr)
+        return false;
+    const auto& compoundAlgorithm = static_cast<const btCompoundCollisionAlgorithm&>(algorithm);
+    const bool swapped = CompoundAlgorithmState::swapped(compoundAlgorithm);
+    const btCollisionObject& compoundObject = swapped ? object1 : object0;
+    const btCollisionObject& otherObject = swapped ? object0 : object1;
+    const btCollisionShape& shape = *compoundObject.getCollisionShape();
+    const btCollisionShape& otherShape = *otherObject.getCollisionShape();
+    if (typeid(shape) != typeid(btCompoundShape) || !bulletShape(otherShape)) return false;
+    const auto& compound = static_cast<const btCompoundShape&>(shape);
+    if (CompoundAlgorithmState::revision(compoundAlgorithm) != compound.getUpdateRevision() ||
+        CompoundAlgorithmState::childCount(compoundAlgorithm) != compound.getNumChildShapes())
+        return false;
+    bool worthIt = false;
+    for (int i = 0; i < compound.getNumChildShapes() && !worthIt; ++i) {
+        const btCollisionAlgorithm* child = compoundAlgorithm.getChildAlgorithm(i);
+        worthIt = child != nullptr && worthHandingOff(algorithmKindOf(typeid(*child)));
+    }
+    if (!worthIt) return false;
+    btVector3 otherMin, otherMax;
+    otherShape.getAabb(otherObject.getWorldTransform(), otherMin, otherMax);
+    btScalar extent = ChildBoxes::largestMagnitude(otherMin, otherMax);
+    ChildBoxes boxes;
+    if (!boxes.compute(compound, compoundObject.getWorldTransform(), extent)) return false;
+    const btScalar slack = roundingSlack(extent);
+    for (int i = 0; i < boxes.count; ++i) {
+        btCollisionAlgorithm* const child = compoundAlgorithm.getChildAlgorithm(i);
+        const int overlap = clearOverlap(boxes.min[i], boxes.max[i], otherMin, otherMax, slack);
+        if (overlap != (child != nullptr ? 1 : 0)) return false;  // made, freed, or too close to tell
+        if (child != nullptr && !childThreadable(*child, *compound.getChildShape(i), otherShape)) return false;
+    }
+    return true;
+}
+
+bool compoundPairMayThread(btCollisionAlgorithm& algorithm, const btCollisionObject& object0,
+                           const btCollisionObject& object1, const ChildThreadable& childThreadable) {
+    if (typeid(algorithm) != typeid(btCompoundCompoundCollisionAlgorithm) ||
+        gCompoundCompoundChildShapePairCallback != nullptr)
+        return false;
+    const btCollisionShape& shape0 = *object0.getCollisionShape();
+    const btCollisionShape& shape1 = *object1.getCollisionShape();
+    if (typeid(shape0) != typeid(btCompoundShape) || typeid(shape1) != typeid(btCompoundShape)) return false;
+    const auto& compound0 = static_cast<const btCompoundShape&>(shape0);
+    const auto& compound1 = static_cast<const btCompoundShape&>(shape1);
+    // Without both trees Bullet runs the single-compound algorithm, with compound children.
+    if (compound0.getDynamicAabbTree() == nullptr || compound1.getDynamicAabbTree() == nullptr) return false;
+    const auto& pairAlgorithm = static_cast<const btCompoundCompoundCollisionAlgorithm&>(algorithm);
+    if (pairAlgorithm.*memberPointer(Revision0{}) != compound0.getUpdateRevision() ||
+        pairAlgorithm.*memberPointer(Revision1{}) != compound1.getUpdateRevision())
+        return false;
+    const btSimplePairArray& cached = (pairAlgorithm.*memberPointer(ChildPairCache{}))->getOverlappingPairArray();
+    bool worthIt = false;
+    for (int k = 0; k < cached.size() && !worthIt; ++k)
+        worthIt = cached[k].m_userPointer != nullptr &&
+                  worthHandingOff(algorithmKindOf(typeid(*static_cast<btCollisionAlgorithm*>(cached[k].m_userPointer))));
+    if (!worthIt) return false;
+    btScalar extent = 0;
+    ChildBoxes boxes0, boxes1;
+    if (!boxes0.compute(compound0, object0.getWorldTransform(), extent) ||
+        !boxes1.compute(compound1, object1.getWorldTransform(), extent))
+        return false;
+    const btScalar slack = roundingSlack(extent);
+    int overlapping = 0;
+    for (int i = 0; i < boxes0.count; ++i)
+        for (int j = 0; j < boxes1.count; ++j) {
+            const int overlap = clearOverlap(boxes0.min[i], boxes0.max[i], boxes1.min[j], boxes1.max[j], slack);
+            if (overlap < 0) return false;
+            overlapping += overlap;
+        }
+    // Every child pair the cache holds overlaps, and there are as many as overlap: the cache holds exactly the
+    // overlapping child pairs, so none is made or freed.
+    if (cached.size() != overlapping) return false;
+    for (int k = 0; k < cached.size(); ++k) {
+        const btSimplePair& p = cached[k];
+        if (p.m_userPointer == nullptr || p.m_indexA < 0 || p.m_indexA >= boxes0.count || p.m_indexB < 0 ||
+            p.m_indexB >= boxes1.count)
+            return false;
+        const int i = p.m_indexA, j = p.m_indexB;
+        if (clearOverlap(boxes0.min[i], boxes0.max[i], boxes1.min[j], boxes1.max[j], slack) != 1) return false;
+        if (!childThreadable(*static_cast<btCollisionAlgorithm*>(p.m_userPointer), *compound0.getChildShape(i),
+                             *compound1.getChildShape(j)))
+            return false;
+    }
+    return true;
 }
 
 bool dispatchMayThread(const btDispatcherInfo& info) {
@@ -205,7 +422,9 @@ bool PairStream::push(btBroadphasePair* pair) {
     if (n >= m_pairs.size()) return false;
     m_pairs[n] = pair;
     m_published.store(n + 1);
-    m_waiter.notify();
+    // A sleeping consumer is woken per kWakeBatch pairs (and by close), not per pair: waking one costs a system call,
+    // several pairs' worth of work, which pairs scattered through the cache would pay one by one.
+    if ((n + 1) % kWakeBatch == 0) m_waiter.notify();
     return true;
 }
 

@@ -18,8 +18,12 @@
 // - btConvexConcaveCollisionAlgorithm against a btBvhTriangleMeshShape (over Bullet's btTriangleIndexVertexArray or
 //   btTriangleMesh), its scaled form or a btHeightfieldTerrainShape, when the per-triangle algorithm is Bullet's
 //   convex or sphere-triangle one: the algorithm it makes and frees per triangle comes from the heap on a worker
-//   (CullideCollisionDispatcher::allocateCollisionAlgorithm), not from the pool.
-// Everything else — algorithms made this step, compounds, GImpact shapes, soft bodies, the adapter's own algorithms,
+//   (CullideCollisionDispatcher::allocateCollisionAlgorithm), not from the pool;
+// - btCompoundCollisionAlgorithm (a btCompoundShape of Bullet's convex shapes against a shape above) when this run
+//   makes and frees no child algorithm (compoundMayThread below) and every child algorithm it holds may run on a
+//   worker by these rules.
+// Everything else — algorithms made this step, compounds whose children start or stop overlapping the other shape,
+// compound against compound, GImpact shapes, soft bodies, the adapter's own algorithms,
 // every pair while an application hook is installed — runs on the calling thread, in the pair cache's order, so the
 // manifolds are made in Bullet's order. Bullet's own multithreaded dispatcher (btCollisionDispatcherMt) runs these
 // algorithms concurrently too; it is not used here because its manifold order depends on scheduling.
@@ -31,9 +35,11 @@
 
 #include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
 #include <BulletCollision/BroadphaseCollision/btDispatcher.h>
+#include <BulletCollision/BroadphaseCollision/btCollisionAlgorithm.h>
 
 #include <atomic>
 #include <cstddef>
+#include <functional>
 #include <typeinfo>
 #include <vector>
 
@@ -49,6 +55,7 @@ enum class AlgorithmKind : int {
     Convex,         ///< btBoxBox, btSphereSphere, btSphereBox, btSphereTriangle, btConvexPlane collision algorithms
     ConvexConvex,   ///< btConvexConvexAlgorithm: makes its manifold on its first run
     ConvexConcave,  ///< btConvexConcaveCollisionAlgorithm: makes and frees an algorithm per triangle
+    Compound,       ///< btCompound(Compound)CollisionAlgorithm: makes and frees its children's algorithms
 };
 AlgorithmKind algorithmKindOf(const std::type_info& algorithmClass);
 
@@ -68,6 +75,43 @@ std::size_t typicalCost(AlgorithmKind kind);
 bool threadableAlgorithm(AlgorithmKind kind, const btCollisionShape& shape0, const btCollisionShape& shape1,
                          const btCollisionAlgorithmCreateFunc* pairFunc,
                          const btCollisionAlgorithmCreateFunc* triangleFunc);
+
+/// The dispatcher's creation function for two shape types in contact-point queries (btCollisionDispatcher's
+/// m_doubleDispatchContactPoints, which only the dispatcher reads).
+using CreateFuncLookup = std::function<const btCollisionAlgorithmCreateFunc*(int type0, int type1)>;
+
+/// The kind of the pair's existing algorithm if its next run, as Bullet's near callback runs it in a discrete
+/// dispatch, may happen on a narrow-phase thread, else Other: threadableAlgorithm's rules for the algorithm on the
+/// objects' shapes, a ConvexConvex algorithm that holds its manifold, and for a compound (compoundMayThread) the same
+/// rules for each child algorithm on the child's shape. The caller checks the objects (objectsMayThread,
+/// needsCollision) and the dispatch (dispatchMayThread). `scratch` is reused between calls.
+AlgorithmKind threadableKind(btCollisionAlgorithm& algorithm, const btCollisionObject& object0,
+                             const btCollisionObject& object1, const CreateFuncLookup& funcs,
+                             btManifoldArray& scratch);
+
+/// Whether a child algorithm of a compound may run on a worker (threadableKind's rules, the child's shape as the
+/// algorithm's first shape and the other object's shape, or the other compound's child, as its second).
+using ChildThreadable = std::function<bool(btCollisionAlgorithm& child, const btCollisionShape& childShape,
+                                           const btCollisionShape& otherShape)>;
+
+/// Whether a btCompoundCollisionAlgorithm's next run on these objects may happen on a worker: one of its child
+/// algorithms is worth handing off (worthHandingOff: compounds of boxes on boxes stay, as box pairs do), and the run
+/// makes or frees no child algorithm, so that it touches only what it holds. Bullet's algorithm (discrete dispatch: no closest-point distance) makes a child's
+/// algorithm when the child's world box, as it computes it, overlaps the other shape's world box and frees it when
+/// they no longer overlap; it remakes all of them when the compound's revision changed. So: the same revision, at
+/// most 16 children, all Bullet convex shapes, and each child holding an algorithm exactly when its box overlaps the
+/// other's — where an overlap is within a few ulps of the coordinates of being decided the other way (a box rounded
+/// differently than in Bullet's build), the pair stays on the calling thread.
+bool compoundMayThread(btCollisionAlgorithm& algorithm, const btCollisionObject& object0,
+                       const btCollisionObject& object1, const ChildThreadable& childThreadable);
+
+/// The same for a btCompoundCompoundCollisionAlgorithm (two compounds, each with its box tree; a child pair's
+/// algorithm worth handing off): it makes a child
+/// pair's algorithm when the two children's world boxes overlap (and its trees find them) and frees it when they no
+/// longer do, and frees all when either revision changed. So: the same revisions, at most 16 children each, all
+/// Bullet convex shapes, and its cache of child pairs holding exactly the clearly overlapping ones.
+bool compoundPairMayThread(btCollisionAlgorithm& algorithm, const btCollisionObject& object0,
+                           const btCollisionObject& object1, const ChildThreadable& childThreadable);
 
 /// Whether nothing installed process-wide forbids workers in this dispatch: discrete dispatch, none of Bullet's
 /// manifold callbacks, Bullet's friction/restitution combiners and profile hooks, no debug drawer that draws.
@@ -97,6 +141,7 @@ public:
     std::size_t size() const { return m_published.load(std::memory_order_relaxed); }
 
 private:
+    static constexpr std::size_t kWakeBatch = 8;
     std::vector<btBroadphasePair*> m_pairs;
     std::atomic<std::size_t> m_published{0};
     std::atomic<std::size_t> m_next{0};

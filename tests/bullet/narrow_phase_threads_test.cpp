@@ -10,6 +10,7 @@
 
 #include <BulletCollision/CollisionDispatch/btBoxBoxCollisionAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btCompoundCollisionAlgorithm.h>
+#include <BulletCollision/CollisionDispatch/btCompoundCompoundCollisionAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btConvexConcaveCollisionAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btConvexConvexAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btEmptyCollisionAlgorithm.h>
@@ -159,6 +160,95 @@ TEST(NarrowPhaseThreads, PileMovesBitForBitAsInBulletForEveryThreadCount) {
     }
 }
 
+/// Compounds as convex decompositions give them (2-4 hulls) and as furniture is built (boxes and a sphere), dropped
+/// on the landscape and the heightfield and on each other: compound-mesh pairs whose children
+/// meet triangles and compound-compound pairs (every pair a threadable one could be), children starting and stopping
+/// to overlap the other shape as the bodies fall, tumble and settle.
+struct CompoundScene {
+    ShapeStore shapes;
+    Heightfield field;
+    btCollisionShape* landscape = shapes.landscape(24, 1, btScalar(0.8));
+    std::vector<std::unique_ptr<btCompoundShape>> compounds;
+    std::vector<btCollisionShape*> kinds;
+
+    CompoundScene() {
+        for (int k = 0; k < 3; ++k) {
+            compounds.push_back(std::make_unique<btCompoundShape>());
+            const int parts = 2 + k;
+            for (int p = 0; p < parts; ++p) {
+                const double angle = 6.2832 * p / parts;
+                compounds.back()->addChildShape(
+                    at(0.35 * std::cos(angle), 0.12 * p, 0.35 * std::sin(angle)),
+                    shapes.hull(btVector3(0.35f, 0.3f, 0.3f), 16 + 4 * p, static_cast<std::uint32_t>(7 + 3 * k + p)));
+            }
+        }
+        compounds.push_back(std::make_unique<btCompoundShape>());
+        compounds.back()->addChildShape(at(0, 0, 0), shapes.box(btVector3(0.5f, 0.08f, 0.35f)));
+        compounds.back()->addChildShape(at(-0.4, -0.3, 0), shapes.box(btVector3(0.06f, 0.25f, 0.06f)));
+        compounds.back()->addChildShape(at(0.4, 0.25, 0), shapes.sphere(btScalar(0.2)));
+        for (const auto& c : compounds) kinds.push_back(c.get());
+    }
+
+    void populate(TestWorld& w) const {
+        w.addBody(landscape, 0, at(-6, 0, 0));
+        w.addBody(field.shape.get(), 0, at(14, 0, 0));
+        int k = 0;
+        for (int side = 0; side < 2; ++side)
+            for (int layer = 0; layer < 3; ++layer)
+                for (int i = 0; i < 5; ++i)
+                    for (int j = 0; j < 5; ++j, ++k) {
+                        const btQuaternion turn(btVector3(0.3f, 1, 0.2f).normalized(), btScalar(0.41 * k));
+                        w.addBody(kinds[static_cast<std::size_t>(k) % kinds.size()], 1,
+                                  at((side == 0 ? -6.0 : 14.0) + 1.4 * (i - 2) + 0.1 * layer, 2.5 + 1.3 * layer,
+                                     1.4 * (j - 2), turn));
+                    }
+    }
+};
+
+TEST(NarrowPhaseThreads, CompoundsMoveBitForBitAsInBulletForEveryThreadCount) {
+    CompoundScene scene;
+    for (const unsigned threads : {1u, 2u, 5u}) {
+        const std::unique_ptr<TestWorld> reference = makeReference();
+        TestWorld w(PipelineKind::Cullide, referenceFactory());
+        w.cullideDispatcher()->setNarrowPhaseThreads(threads);
+        scene.populate(*reference);
+        scene.populate(w);
+        EXPECT_EQ(firstDivergingStep(*reference, w, 200), -1) << threads << " threads";
+        std::printf("[ measure  ] %u threads: %zu pair-steps on the workers, %d manifolds, %zu pairs in contact\n",
+                    threads, threadedPairs(w), w.dispatcher().getNumManifolds(), contactsOf(w.world()).size());
+        EXPECT_GT(contactsOf(w.world()).size(), 100u) << "the bodies must rest in contact";
+        if (threads == 1)
+            EXPECT_EQ(threadedPairs(w), 0u);
+        else
+            EXPECT_GT(threadedPairs(w), 10000u) << "compound pairs run on the narrow-phase threads";
+    }
+}
+
+TEST(NarrowPhaseThreads, CompoundsEditedWhileInContactStayBitForBit) {
+    // A compound that gains and loses a child bumps its revision: Bullet's algorithm then remakes its children's
+    // algorithms (and manifolds), which only the calling thread may do, in Bullet's order.
+    CompoundScene scene;
+    const std::unique_ptr<TestWorld> reference = makeReference();
+    TestWorld w(PipelineKind::Cullide, referenceFactory());
+    w.cullideDispatcher()->setNarrowPhaseThreads(2);
+    scene.populate(*reference);
+    scene.populate(w);
+    EXPECT_EQ(firstDivergingStep(*reference, w, 80), -1);
+    btCompoundShape& edited = *scene.compounds[1];  // shared by both worlds: the same edit in each
+    btCollisionShape* extra = scene.shapes.box(btVector3(0.2f, 0.2f, 0.2f));
+    edited.addChildShape(at(0, -0.25, 0), extra);
+    EXPECT_EQ(firstDivergingStep(*reference, w, 20), -1) << "after adding a child";
+    edited.removeChildShape(extra);
+    EXPECT_EQ(firstDivergingStep(*reference, w, 20), -1) << "after removing it";
+    // A child replaced: as many children as the algorithms hold, but a new revision.
+    const btTransform place = edited.getChildTransform(0);
+    edited.removeChildShapeByIndex(0);
+    edited.addChildShape(place, scene.shapes.hull(btVector3(0.3f, 0.35f, 0.3f), 20, 41));
+    const std::size_t before = threadedPairs(w);
+    EXPECT_EQ(firstDivergingStep(*reference, w, 20), -1) << "after replacing a child";
+    EXPECT_GT(threadedPairs(w), before) << "the other compounds' pairs still run on the workers";
+}
+
 /// Every thread that ran an application callback.
 struct CallbackThreads {
     static std::mutex mutex;
@@ -295,7 +385,8 @@ TEST(NarrowPhaseThreads, OnlyBulletsOwnAlgorithmsOnBulletsOwnShapesRunOnTheWorke
     EXPECT_EQ(bullet::algorithmKindOf(typeid(btConvexConvexAlgorithm)), K::ConvexConvex);
     EXPECT_EQ(bullet::algorithmKindOf(typeid(btBoxBoxCollisionAlgorithm)), K::Convex);
     EXPECT_EQ(bullet::algorithmKindOf(typeid(btConvexConcaveCollisionAlgorithm)), K::ConvexConcave);
-    EXPECT_EQ(bullet::algorithmKindOf(typeid(btCompoundCollisionAlgorithm)), K::Other);
+    EXPECT_EQ(bullet::algorithmKindOf(typeid(btCompoundCollisionAlgorithm)), K::Compound);
+    EXPECT_EQ(bullet::algorithmKindOf(typeid(btCompoundCompoundCollisionAlgorithm)), K::Compound);
     // Convex pairs: Bullet's shapes, Bullet's convex algorithm with GJK-EPA.
     EXPECT_TRUE(threadableAlgorithm(K::ConvexConvex, *hull, box, cf(config, hull, &box), nullptr));
     EXPECT_FALSE(threadableAlgorithm(K::ConvexConvex, *hull, box, cf(minkowski, hull, &box), nullptr))
