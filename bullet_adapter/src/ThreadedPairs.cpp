@@ -422,9 +422,7 @@ bool PairStream::push(btBroadphasePair* pair) {
     if (n >= m_pairs.size()) return false;
     m_pairs[n] = pair;
     m_published.store(n + 1);
-    // A sleeping consumer is woken per kWakeBatch pairs (and by close), not per pair: waking one costs a system call,
-    // several pairs' worth of work, which pairs scattered through the cache would pay one by one.
-    if ((n + 1) % kWakeBatch == 0) m_waiter.notify();
+    m_waiter.notify();
     return true;
 }
 

@@ -141,7 +141,6 @@ public:
     std::size_t size() const { return m_published.load(std::memory_order_relaxed); }
 
 private:
-    static constexpr std::size_t kWakeBatch = 8;
     std::vector<btBroadphasePair*> m_pairs;
     std::atomic<std::size_t> m_published{0};
     std::atomic<std::size_t> m_next{0};
