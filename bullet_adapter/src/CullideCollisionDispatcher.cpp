@@ -837,8 +837,8 @@ bullet::AlgorithmKind CullideCollisionDispatcher::threadablePair(btBroadphasePai
     const auto* object1 = static_cast<const btCollisionObject*>(pair.m_pProxy1->m_clientObject);
     if (!bullet::objectsMayThread(*object0, *object1) || !needsCollision(object0, object1))
         return bullet::AlgorithmKind::Other;
-    const bullet::CreateFuncLookup funcs = [this](int t0, int t1) { return m_doubleDispatchContactPoints[t0][t1]; };
-    return bullet::threadableKind(*pair.m_algorithm, *object0, *object1, funcs, m_manifoldScratch);
+    return bullet::threadableKind(*pair.m_algorithm, *object0, *object1, m_doubleDispatchContactPoints,
+                                  m_manifoldScratch);
 }
 
 btCollisionAlgorithm* CullideCollisionDispatcher::findAlgorithm(const btCollisionObjectWrapper* body0Wrap,

@@ -249,11 +249,11 @@ namespace {
 
 /// threadableKind for a non-compound algorithm on two shapes (the algorithm's first, then its second).
 AlgorithmKind threadableOnShapes(AlgorithmKind kind, btCollisionAlgorithm& algorithm, const btCollisionShape& shape0,
-                                 const btCollisionShape& shape1, const CreateFuncLookup& funcs,
+                                 const btCollisionShape& shape1, const CreateFuncTable& funcs,
                                  btManifoldArray& scratch) {
     const int t0 = shape0.getShapeType(), t1 = shape1.getShapeType();
     const int convexType = shape0.isConvex() ? t0 : t1;
-    if (!threadableAlgorithm(kind, shape0, shape1, funcs(t0, t1), funcs(convexType, TRIANGLE_SHAPE_PROXYTYPE)))
+    if (!threadableAlgorithm(kind, shape0, shape1, funcs[t0][t1], funcs[convexType][TRIANGLE_SHAPE_PROXYTYPE]))
         return AlgorithmKind::Other;
     if (kind != AlgorithmKind::ConvexConvex) return kind;
     scratch.resize(0);  // btConvexConvexAlgorithm makes its manifold on its first run
@@ -264,7 +264,7 @@ AlgorithmKind threadableOnShapes(AlgorithmKind kind, btCollisionAlgorithm& algor
 }  // namespace
 
 AlgorithmKind threadableKind(btCollisionAlgorithm& algorithm, const btCollisionObject& object0,
-                             const btCollisionObject& object1, const CreateFuncLookup& funcs,
+                             const btCollisionObject& object1, const CreateFuncTable& funcs,
                              btManifoldArray& scratch) {
     const AlgorithmKind kind = algorithmKindOf(typeid(algorithm));
     if (kind == AlgorithmKind::Other) return kind;

@@ -76,9 +76,10 @@ bool threadableAlgorithm(AlgorithmKind kind, const btCollisionShape& shape0, con
                          const btCollisionAlgorithmCreateFunc* pairFunc,
                          const btCollisionAlgorithmCreateFunc* triangleFunc);
 
-/// The dispatcher's creation function for two shape types in contact-point queries (btCollisionDispatcher's
+/// The dispatcher's creation functions for contact-point queries by the two shape types (btCollisionDispatcher's
 /// m_doubleDispatchContactPoints, which only the dispatcher reads).
-using CreateFuncLookup = std::function<const btCollisionAlgorithmCreateFunc*(int type0, int type1)>;
+using CreateFuncTable =
+    btCollisionAlgorithmCreateFunc* [MAX_BROADPHASE_COLLISION_TYPES][MAX_BROADPHASE_COLLISION_TYPES];
 
 /// The kind of the pair's existing algorithm if its next run, as Bullet's near callback runs it in a discrete
 /// dispatch, may happen on a narrow-phase thread, else Other: threadableAlgorithm's rules for the algorithm on the
@@ -86,7 +87,7 @@ using CreateFuncLookup = std::function<const btCollisionAlgorithmCreateFunc*(int
 /// rules for each child algorithm on the child's shape. The caller checks the objects (objectsMayThread,
 /// needsCollision) and the dispatch (dispatchMayThread). `scratch` is reused between calls.
 AlgorithmKind threadableKind(btCollisionAlgorithm& algorithm, const btCollisionObject& object0,
-                             const btCollisionObject& object1, const CreateFuncLookup& funcs,
+                             const btCollisionObject& object1, const CreateFuncTable& funcs,
                              btManifoldArray& scratch);
 
 /// Whether a child algorithm of a compound may run on a worker (threadableKind's rules, the child's shape as the
