@@ -337,9 +337,10 @@ bool compoundPairMayThread(btCollisionAlgorithm& algorithm, const btCollisionObj
         return false;
     const btSimplePairArray& cached = (pairAlgorithm.*memberPointer(ChildPairCache{}))->getOverlappingPairArray();
     bool worthIt = false;
-    for (int k = 0; k < cached.size() && !worthIt; ++k)
-        worthIt = cached[k].m_userPointer != nullptr &&
-                  worthHandingOff(algorithmKindOf(typeid(*static_cast<btCollisionAlgorithm*>(cached[k].m_userPointer))));
+    for (int k = 0; k < cached.size() && !worthIt; ++k) {
+        const auto* child = static_cast<const btCollisionAlgorithm*>(cached[k].m_userPointer);
+        worthIt = child != nullptr && worthHandingOff(algorithmKindOf(typeid(*child)));
+    }
     if (!worthIt) return false;
     btScalar extent = 0;
     ChildBoxes boxes0, boxes1;

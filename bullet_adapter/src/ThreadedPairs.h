@@ -97,12 +97,13 @@ using ChildThreadable = std::function<bool(btCollisionAlgorithm& child, const bt
 
 /// Whether a btCompoundCollisionAlgorithm's next run on these objects may happen on a worker: one of its child
 /// algorithms is worth handing off (worthHandingOff: compounds of boxes on boxes stay, as box pairs do), and the run
-/// makes or frees no child algorithm, so that it touches only what it holds. Bullet's algorithm (discrete dispatch: no closest-point distance) makes a child's
-/// algorithm when the child's world box, as it computes it, overlaps the other shape's world box and frees it when
-/// they no longer overlap; it remakes all of them when the compound's revision changed. So: the same revision, at
-/// most 16 children, all Bullet convex shapes, and each child holding an algorithm exactly when its box overlaps the
-/// other's — where an overlap is within a few ulps of the coordinates of being decided the other way (a box rounded
-/// differently than in Bullet's build), the pair stays on the calling thread.
+/// makes or frees no child algorithm, so that it touches only what it holds. Bullet's algorithm (discrete dispatch:
+/// no closest-point distance) makes a child's algorithm when the child's world box, as it computes it, overlaps the
+/// other shape's world box and frees it when they no longer overlap; it remakes all of them when the compound's
+/// revision changed. So: the same revision, at most 16 children, all Bullet convex shapes, and each child holding an
+/// algorithm exactly when its box overlaps the other's — where an overlap is within a few ulps of the coordinates of
+/// being decided the other way (a box rounded differently than in Bullet's build), the pair stays on the calling
+/// thread.
 bool compoundMayThread(btCollisionAlgorithm& algorithm, const btCollisionObject& object0,
                        const btCollisionObject& object1, const ChildThreadable& childThreadable);
 
