@@ -53,6 +53,30 @@ struct Heightfield {
     }
 };
 
+/// Drops bodies of `kinds` (in turn) in 3 layers of perRow x perRow over each of the two grounds, `spacing` apart,
+/// each turned a little more than the one before.
+struct Drop {
+    int perRow;
+    double spacing, layerHeight, turnStep;
+
+    void populate(TestWorld& w, btCollisionShape* landscape, const Heightfield& field,
+                  const std::vector<btCollisionShape*>& kinds) const {
+        w.addBody(landscape, 0, at(-6, 0, 0));
+        w.addBody(field.shape.get(), 0, at(14, 0, 0));
+        const double centre = 0.5 * (perRow - 1);
+        int k = 0;
+        for (int side = 0; side < 2; ++side)
+            for (int layer = 0; layer < 3; ++layer)
+                for (int i = 0; i < perRow; ++i)
+                    for (int j = 0; j < perRow; ++j, ++k) {
+                        const btQuaternion turn(btVector3(0.3f, 1, 0.2f).normalized(), btScalar(turnStep * k));
+                        w.addBody(kinds[static_cast<std::size_t>(k) % kinds.size()], 1,
+                                  at((side == 0 ? -6.0 : 14.0) + spacing * (i - centre) + 0.1 * layer,
+                                     2.5 + layerHeight * layer, spacing * (j - centre), turn));
+                    }
+    }
+};
+
 /// A pile of mixed convex bodies dropped on a BVH landscape (left) and a heightfield (right): convex-convex pairs
 /// of every algorithm Bullet's default configuration makes, and convex-mesh pairs of both kinds of ground.
 struct PileScene {
@@ -65,22 +89,7 @@ struct PileScene {
                                          shapes.capsule(btScalar(0.25), btScalar(0.6)),
                                          shapes.hull(btVector3(0.6f, 0.45f, 0.5f), 40, 11), cylinder.get(), cone.get()};
 
-    void populate(TestWorld& w) const {
-        w.addBody(landscape, 0, at(-6, 0, 0));
-        w.addBody(field.shape.get(), 0, at(14, 0, 0));
-        int k = 0;
-        for (int side = 0; side < 2; ++side)
-            for (int layer = 0; layer < 3; ++layer)
-                for (int i = 0; i < 6; ++i)
-                    for (int j = 0; j < 6; ++j, ++k) {
-                        const btQuaternion turn(btVector3(0.3f, 1, 0.2f).normalized(), btScalar(0.37 * k));
-                        btRigidBody* body = w.addBody(
-                            kinds[static_cast<std::size_t>(k) % kinds.size()], 1,
-                            at((side == 0 ? -6.0 : 14.0) + 1.3 * (i - 2.5) + 0.1 * layer, 2.5 + 1.2 * layer,
-                               1.3 * (j - 2.5), turn));
-                        (void)body;
-                    }
-    }
+    void populate(TestWorld& w) const { Drop{6, 1.3, 1.2, 0.37}.populate(w, landscape, field, kinds); }
 };
 
 /// Position, orientation and velocities of every body, then every manifold in the dispatcher's order (the order the
@@ -189,20 +198,7 @@ struct CompoundScene {
         for (const auto& c : compounds) kinds.push_back(c.get());
     }
 
-    void populate(TestWorld& w) const {
-        w.addBody(landscape, 0, at(-6, 0, 0));
-        w.addBody(field.shape.get(), 0, at(14, 0, 0));
-        int k = 0;
-        for (int side = 0; side < 2; ++side)
-            for (int layer = 0; layer < 3; ++layer)
-                for (int i = 0; i < 5; ++i)
-                    for (int j = 0; j < 5; ++j, ++k) {
-                        const btQuaternion turn(btVector3(0.3f, 1, 0.2f).normalized(), btScalar(0.41 * k));
-                        w.addBody(kinds[static_cast<std::size_t>(k) % kinds.size()], 1,
-                                  at((side == 0 ? -6.0 : 14.0) + 1.4 * (i - 2) + 0.1 * layer, 2.5 + 1.3 * layer,
-                                     1.4 * (j - 2), turn));
-                    }
-    }
+    void populate(TestWorld& w) const { Drop{5, 1.4, 1.3, 0.41}.populate(w, landscape, field, kinds); }
 };
 
 TEST(NarrowPhaseThreads, CompoundsMoveBitForBitAsInBulletForEveryThreadCount) {
