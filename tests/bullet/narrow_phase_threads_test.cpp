@@ -124,8 +124,19 @@ std::size_t threadedPairs(TestWorld& w) { return w.cullideDispatcher()->getTotal
 /// then sleeping pairs, which the dispatch must not collide, on any thread.
 constexpr int kSleepFrom = 150;
 
-/// The world the threaded swap must match bit for bit: Bullet's default pipeline.
-std::unique_ptr<TestWorld> makeReference() { return std::make_unique<TestWorld>(PipelineKind::Default); }
+/// The world the threaded swap must match bit for bit, Bullet's default pipeline (`reference`), and the swap with a
+/// number of narrow-phase threads (`swap`), both populated by a scene.
+struct SideBySide {
+    std::unique_ptr<TestWorld> reference = std::make_unique<TestWorld>(PipelineKind::Default);
+    TestWorld swap{PipelineKind::Cullide, referenceFactory()};
+
+    template <typename Scene>
+    SideBySide(const Scene& scene, unsigned threads) {
+        swap.cullideDispatcher()->setNarrowPhaseThreads(threads);
+        scene.populate(*reference);
+        scene.populate(swap);
+    }
+};
 
 /// Steps the reference and the swap side by side (not mirrored: each world runs on its own) for all `steps` and
 /// returns the first step whose states differ in any bit, or -1.
@@ -148,11 +159,9 @@ int firstDivergingStep(TestWorld& reference, TestWorld& w, int steps) {
 TEST(NarrowPhaseThreads, PileMovesBitForBitAsInBulletForEveryThreadCount) {
     PileScene scene;
     for (const unsigned threads : {1u, 2u, 5u}) {
-        const std::unique_ptr<TestWorld> reference = makeReference();
-        TestWorld w(PipelineKind::Cullide, referenceFactory());
-        w.cullideDispatcher()->setNarrowPhaseThreads(threads);
-        scene.populate(*reference);
-        scene.populate(w);
+        SideBySide worlds(scene, threads);
+        const std::unique_ptr<TestWorld>& reference = worlds.reference;
+        TestWorld& w = worlds.swap;
         EXPECT_EQ(firstDivergingStep(*reference, w, kSleepFrom + 150), -1) << threads << " threads";
         const std::size_t contacts = contactsOf(w.world()).size();
         int asleep = 0;
@@ -204,11 +213,9 @@ struct CompoundScene {
 TEST(NarrowPhaseThreads, CompoundsMoveBitForBitAsInBulletForEveryThreadCount) {
     CompoundScene scene;
     for (const unsigned threads : {1u, 2u, 5u}) {
-        const std::unique_ptr<TestWorld> reference = makeReference();
-        TestWorld w(PipelineKind::Cullide, referenceFactory());
-        w.cullideDispatcher()->setNarrowPhaseThreads(threads);
-        scene.populate(*reference);
-        scene.populate(w);
+        SideBySide worlds(scene, threads);
+        const std::unique_ptr<TestWorld>& reference = worlds.reference;
+        TestWorld& w = worlds.swap;
         EXPECT_EQ(firstDivergingStep(*reference, w, 200), -1) << threads << " threads";
         std::printf("[ measure  ] %u threads: %zu pair-steps on the workers, %d manifolds, %zu pairs in contact\n",
                     threads, threadedPairs(w), w.dispatcher().getNumManifolds(), contactsOf(w.world()).size());
@@ -224,11 +231,9 @@ TEST(NarrowPhaseThreads, CompoundsEditedWhileInContactStayBitForBit) {
     // A compound that gains and loses a child bumps its revision: Bullet's algorithm then remakes its children's
     // algorithms (and manifolds), which only the calling thread may do, in Bullet's order.
     CompoundScene scene;
-    const std::unique_ptr<TestWorld> reference = makeReference();
-    TestWorld w(PipelineKind::Cullide, referenceFactory());
-    w.cullideDispatcher()->setNarrowPhaseThreads(2);
-    scene.populate(*reference);
-    scene.populate(w);
+    SideBySide worlds(scene, 2);
+    const std::unique_ptr<TestWorld>& reference = worlds.reference;
+    TestWorld& w = worlds.swap;
     EXPECT_EQ(firstDivergingStep(*reference, w, 80), -1);
     btCompoundShape& edited = *scene.compounds[1];  // shared by both worlds: the same edit in each
     btCollisionShape* extra = scene.shapes.box(btVector3(0.2f, 0.2f, 0.2f));
@@ -272,11 +277,9 @@ bool onContactProcessed(btManifoldPoint&, void*, void*) {
 /// `remove`); returns the pair-steps that ran on the workers. The hook must have run on the calling thread only.
 std::size_t runWithHook(const PileScene& scene, const std::function<void(TestWorld&)>& install,
                         const std::function<void()>& remove, bool expectCalls) {
-    const std::unique_ptr<TestWorld> reference = makeReference();
-    TestWorld w(PipelineKind::Cullide, referenceFactory());
-    w.cullideDispatcher()->setNarrowPhaseThreads(4);
-    scene.populate(*reference);
-    scene.populate(w);
+    SideBySide worlds(scene, 4);
+    const std::unique_ptr<TestWorld>& reference = worlds.reference;
+    TestWorld& w = worlds.swap;
     install(w);
     CallbackThreads::ids.clear();
     const int diverged = firstDivergingStep(*reference, w, 60);
