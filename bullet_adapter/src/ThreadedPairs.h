@@ -19,11 +19,12 @@
 //   btTriangleMesh), its scaled form or a btHeightfieldTerrainShape, when the per-triangle algorithm is Bullet's
 //   convex or sphere-triangle one: the algorithm it makes and frees per triangle comes from the heap on a worker
 //   (CullideCollisionDispatcher::allocateCollisionAlgorithm), not from the pool;
-// - btCompoundCollisionAlgorithm (a btCompoundShape of Bullet's convex shapes against a shape above) when this run
-//   makes and frees no child algorithm (compoundMayThread below) and every child algorithm it holds may run on a
-//   worker by these rules.
+// - btCompoundCollisionAlgorithm and btCompoundCompoundCollisionAlgorithm (btCompoundShapes of Bullet's convex
+//   shapes, against a shape above or each other) when this run makes and frees no child algorithm
+//   (compoundMayThread, compoundPairMayThread below) and every child algorithm it holds may run on a worker by these
+//   rules.
 // Everything else — algorithms made this step, compounds whose children start or stop overlapping the other shape,
-// compound against compound, GImpact shapes, soft bodies, the adapter's own algorithms,
+// GImpact shapes, soft bodies, the adapter's own algorithms,
 // every pair while an application hook is installed — runs on the calling thread, in the pair cache's order, so the
 // manifolds are made in Bullet's order. Bullet's own multithreaded dispatcher (btCollisionDispatcherMt) runs these
 // algorithms concurrently too; it is not used here because its manifold order depends on scheduling.
@@ -108,9 +109,8 @@ bool compoundMayThread(btCollisionAlgorithm& algorithm, const btCollisionObject&
                        const btCollisionObject& object1, const ChildThreadable& childThreadable);
 
 /// The same for a btCompoundCompoundCollisionAlgorithm (two compounds, each with its box tree; a child pair's
-/// algorithm worth handing off): it makes a child
-/// pair's algorithm when the two children's world boxes overlap (and its trees find them) and frees it when they no
-/// longer do, and frees all when either revision changed. So: the same revisions, at most 16 children each, all
+/// algorithm worth handing off): it makes a child pair's algorithm when the two children's world boxes overlap (and
+/// its trees find them) and frees it when they no longer do, and frees all when either revision changed. So: the same revisions, at most 16 children each, all
 /// Bullet convex shapes, and its cache of child pairs holding exactly the clearly overlapping ones.
 bool compoundPairMayThread(btCollisionAlgorithm& algorithm, const btCollisionObject& object0,
                            const btCollisionObject& object1, const ChildThreadable& childThreadable);
