@@ -110,8 +110,9 @@ bool compoundMayThread(btCollisionAlgorithm& algorithm, const btCollisionObject&
 
 /// The same for a btCompoundCompoundCollisionAlgorithm (two compounds, each with its box tree; a child pair's
 /// algorithm worth handing off): it makes a child pair's algorithm when the two children's world boxes overlap (and
-/// its trees find them) and frees it when they no longer do, and frees all when either revision changed. So: the same revisions, at most 16 children each, all
-/// Bullet convex shapes, and its cache of child pairs holding exactly the clearly overlapping ones.
+/// its trees find them) and frees it when they no longer do, and frees all when either revision changed. So: the
+/// same revisions, at most 16 children each, all Bullet convex shapes, and its cache of child pairs holding exactly
+/// the clearly overlapping ones.
 bool compoundPairMayThread(btCollisionAlgorithm& algorithm, const btCollisionObject& object0,
                            const btCollisionObject& object1, const ChildThreadable& childThreadable);
 
