@@ -10,7 +10,8 @@
 // (CullideBroadphase::setObjectLevel, for applications that used btAxisSweep3) instead of the default btDbvtBroadphase.
 //
 // Scenes: rigid-body dynamics worlds of the kinds Bullet's own benchmarks use, and the paper's environments as
-// collision-only btCollisionWorlds (*-world; the first min(--steps, --env-frames) frames, default 40).
+// collision-only btCollisionWorlds (*-world; the first min(--steps, --env-frames) frames, default 40), and the
+// breakable demo's scene where its library is built (each world its own run; see runBreakable).
 //
 // The worlds run in lockstep: every step each world is stepped once (timed, the order rotating), then the default
 // world's body states are copied into the others, so all three detect collisions on identical states every step.
@@ -24,6 +25,9 @@
 #include "cullide/TriangleTest.h"
 #include "cullide_bullet/CullideBroadphase.h"
 #include "cullide_bullet/CullideCollisionDispatcher.h"
+#ifdef CULLIDE_SWAP_BENCH_BREAKABLE
+#include "cullide/demo/BreakableScene.h"
+#endif
 
 #include <BulletCollision/CollisionShapes/btConvexHullShape.h>
 #include <BulletCollision/CollisionShapes/btHeightfieldTerrainShape.h>
@@ -67,6 +71,11 @@ bool g_gimpactConvexCulling = false;
 unsigned g_narrowPhaseThreads = 0;
 /// The CULLIDE world's object level: btAxisSweep3 with the SAP world's bounds (--sap-object-level) or the default.
 bool g_sapObjectLevel = false;
+#ifdef CULLIDE_SWAP_BENCH_BREAKABLE
+constexpr bool kBreakable = true;  ///< the demo's breakable scene is built in (its library target exists)
+#else
+constexpr bool kBreakable = false;
+#endif
 
 /// Shapes and mesh data shared by the three worlds of a scene (one set, as an application would share them).
 struct Shapes {
@@ -569,8 +578,9 @@ struct Row {
 };
 
 /// Adds the CULLIDE world's last step (dispatcher and broadphase stages) to the row's per-step means.
-void addCullideStep(btCollisionDispatcher& dispatcher, btBroadphaseInterface& broadphase, int steps, Row& row) {
-    const auto& d = static_cast<cullide::CullideCollisionDispatcher&>(dispatcher).getLastStepStats();
+void addCullideStep(const cullide::CullideCollisionDispatcher& dispatcher, const cullide::CullideBroadphase& broadphase,
+                    int steps, Row& row) {
+    const auto& d = dispatcher.getLastStepStats();
     row.cullidePairs += double(d.cullidePairs) / steps;
     row.fallbackPairs += double(d.fallbackPairs) / steps;
     row.penetrationPairs += double(d.penetrationPairs) / steps;
@@ -578,10 +588,17 @@ void addCullideStep(btCollisionDispatcher& dispatcher, btBroadphaseInterface& br
     row.threadedPairs += double(d.threadedPairs) / steps;
     row.convexCandidates += double(d.convexCandidates) / steps;
     row.convexTriangles += double(d.convexTriangles) / steps;
-    const auto& b = static_cast<cullide::CullideBroadphase&>(broadphase).getLastFrameStats();
+    const auto& b = broadphase.getLastFrameStats();
     row.buildMs += b.buildMs / steps;
     row.cullMs += b.cullMs / steps;
     row.recordMs += b.recordMs / steps;
+}
+
+const cullide::CullideCollisionDispatcher& cullideOf(const btCollisionDispatcher& d) {
+    return static_cast<const cullide::CullideCollisionDispatcher&>(d);
+}
+const cullide::CullideBroadphase& cullideOf(const btBroadphaseInterface& b) {
+    return static_cast<const cullide::CullideBroadphase&>(b);
 }
 
 /// Adds one step's contact error (see Row).
@@ -698,7 +715,7 @@ Row runScene(const SceneFactory& factory, int steps) {
         }
         for (const auto& p : got) row.extra += want.count(p) ? 0 : 1;
         compareContacts(worlds[0]->contactPoints(), worlds[2]->contactPoints(), row);
-        addCullideStep(*worlds[2]->dispatcher, *worlds[2]->broadphase, steps, row);
+        addCullideStep(cullideOf(*worlds[2]->dispatcher), cullideOf(*worlds[2]->broadphase), steps, row);
         for (std::size_t k = 1; k < worlds.size(); ++k) worlds[k]->copyStatesFrom(*worlds[0]);
     }
     for (std::size_t k = 0; k < worlds.size(); ++k) {
@@ -803,7 +820,7 @@ Row runCollisionScene(const CollisionSceneSpec& spec, int frames) {
         for (const auto& p : want) row.lost += got.count(p) ? 0 : 1;
         for (const auto& p : got) row.extra += want.count(p) ? 0 : 1;
         compareContacts(contactPointsOf(*worlds[0]->dispatcher), contactPointsOf(*worlds[2]->dispatcher), row);
-        addCullideStep(*worlds[2]->dispatcher, *worlds[2]->broadphase, frames, row);
+        addCullideStep(cullideOf(*worlds[2]->dispatcher), cullideOf(*worlds[2]->broadphase), frames, row);
     }
     for (std::size_t k = 0; k < worlds.size(); ++k) {
         row.ms[k] = worlds[k]->stepMs / frames;
@@ -815,6 +832,73 @@ Row runCollisionScene(const CollisionSceneSpec& spec, int frames) {
     row.memory = static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get())->getMemoryStats();
     return row;
 }
+
+#ifdef CULLIDE_SWAP_BENCH_BREAKABLE
+/// A breakable-scene world's contact points by body pair, the bodies numbered by name in `ids` (shared by the worlds).
+ContactPoints contactPointsOf(const cullide::demo::BreakableScene& scene, std::map<std::string, int>& ids) {
+    const auto id = [&](const std::string& name) { return ids.emplace(name, int(ids.size())).first->second; };
+    ContactPoints out;
+    for (const cullide::demo::BreakableContact& c : scene.lastStepContacts())
+        out[{id(c.body0), id(c.body1)}].emplace_back(PointKey{c.part0, c.index0, c.part1, c.index1}, c.distance);
+    return out;
+}
+
+/// The breakable demo's scene (the bunny falls through the dragon, which breaks into pieces) with each pipeline,
+/// stepped in lockstep from the same start, the order rotating. Bodies appear as the dragon breaks, so states are not
+/// copied between worlds: each world runs its own simulation. The swap's world moves as the default's, bit for bit
+/// (checked every step: the body meshes, and the contacts as in the other scenes); btAxisSweep3's pair order changes
+/// its solve, so its run departs from the others' after the first contacts (same scene, same work). A step's time
+/// includes the scene's fracture work, which is the application's own.
+Row runBreakable(int steps) {
+    using cullide::demo::CollisionPipeline;
+    std::vector<std::unique_ptr<cullide::demo::BreakableScene>> worlds;
+    for (Pipeline p : kPipelines) {
+        cullide::demo::BreakableOptions o;
+        o.pipeline = p == Pipeline::Dbvt  ? CollisionPipeline::BulletDbvt
+                     : p == Pipeline::Sap ? CollisionPipeline::BulletAxisSweep
+                                          : CollisionPipeline::Cullide;
+        o.deepPenetrationFallback = g_penetrationFallback;
+        o.gimpactPairCulling = g_gimpactPairCulling;
+        o.narrowPhaseThreads = g_narrowPhaseThreads;
+        o.recordContacts = p != Pipeline::Sap;
+        worlds.push_back(std::make_unique<cullide::demo::BreakableScene>(o));
+    }
+    Row row;
+    row.scene = "breakable";
+    row.what = "the breakable demo: the bunny falls through the dragon, which breaks into pieces";
+    row.steps = steps;
+    std::map<std::string, int> ids;
+    int departed = -1;  // the first step after which the swap's world differs from the default's
+    for (int s = 0; s < steps; ++s) {
+        for (std::size_t k = 0; k < worlds.size(); ++k) worlds[(k + static_cast<std::size_t>(s)) % worlds.size()]->step();
+        for (std::size_t k = 0; k < worlds.size(); ++k) {
+            const cullide::demo::BreakableFrame& f = worlds[k]->lastFrame();
+            row.ms[k] += f.totalMs / steps;
+            row.broadphaseMs[k] += f.broadphaseMs / steps;
+            row.narrowMs[k] += f.narrowphaseMs / steps;
+            row.pairs[k] += double(f.broadphasePairs) / steps;
+            row.bodies = std::max(row.bodies, f.bodies);
+        }
+        const ContactPoints want = contactPointsOf(*worlds[0], ids), got = contactPointsOf(*worlds[2], ids);
+        row.contactPairSteps += want.size();
+        for (const auto& p : want) row.lost += got.count(p.first) ? 0 : 1;
+        for (const auto& p : got) row.extra += want.count(p.first) ? 0 : 1;
+        compareContacts(want, got, row);
+        addCullideStep(*worlds[2]->cullideDispatcher(), *worlds[2]->cullideBroadphase(), steps, row);
+        if (departed < 0) {
+            const auto a = worlds[0]->worldMeshes(), b = worlds[2]->worldMeshes();
+            bool same = a.size() == b.size();
+            for (std::size_t i = 0; same && i < a.size(); ++i) same = a[i].vertices == b[i].vertices;
+            if (!same) departed = s;
+        }
+    }
+    if (departed >= 0)
+        std::fprintf(stderr, "breakable: the swap's world departed from the default pipeline's at step %d\n", departed);
+    row.last = worlds[2]->cullideBroadphase()->getLastFrameStats();
+    row.memory = worlds[2]->cullideBroadphase()->getMemoryStats();
+    return row;
+}
+#endif
 
 void printRow(const Row& r) {
     const double best = std::min(r.ms[0], r.ms[1]);
@@ -898,11 +982,13 @@ int main(int argc, char** argv) {
                                  "[--sap-object-level]\nscenes:");
             for (const SceneFactory& f : kScenes) std::fprintf(stderr, " %s", f.name);
             for (const CollisionSceneSpec& c : kCollisionScenes) std::fprintf(stderr, " %s", c.name);
+            if (kBreakable) std::fprintf(stderr, " breakable");
             std::fprintf(stderr, "\n");
             return 2;
         }
     }
     for (const std::string& name : only) {
+        if (name == "breakable" && kBreakable) continue;
         if (std::none_of(std::begin(kScenes), std::end(kScenes), [&](const SceneFactory& f) { return name == f.name; }) &&
             std::none_of(std::begin(kCollisionScenes), std::end(kCollisionScenes),
                          [&](const CollisionSceneSpec& c) { return name == c.name; })) {
@@ -923,6 +1009,13 @@ int main(int argc, char** argv) {
         rows.push_back(runCollisionScene(c, std::min(steps, envFrames)));
         printRow(rows.back());
     }
+#ifdef CULLIDE_SWAP_BENCH_BREAKABLE
+    // --steps steps (the default 120 covers the fall, the impact and the pieces).
+    if (only.empty() || std::find(only.begin(), only.end(), "breakable") != only.end()) {
+        rows.push_back(runBreakable(steps));
+        printRow(rows.back());
+    }
+#endif
     if (!json.empty()) writeJson(json, rows);
     return 0;
 }

@@ -17,6 +17,7 @@
 #include <cmath>
 #include <map>
 #include <stdexcept>
+#include <tuple>
 
 namespace cullide::demo {
 
@@ -116,6 +117,7 @@ struct BreakableScene::Impl {
     int frameIndex = 0;
     BreakableFrame frame;
     std::vector<std::pair<std::string, std::string>> stepPairs;
+    std::vector<BreakableContact> stepContacts;
 
     std::unique_ptr<btDefaultCollisionConfiguration> config;
     std::unique_ptr<btBroadphaseInterface> broadphase;
@@ -152,6 +154,7 @@ struct BreakableScene::Impl {
             cullideBp = bp.get();
             broadphase = std::move(bp);
             auto d = std::make_unique<CullideCollisionDispatcher>(config.get(), cullideBp);
+            d->setNarrowPhaseThreads(options.narrowPhaseThreads);
             cullideDisp = d.get();
             dispatcher = std::move(d);
             break;
@@ -331,6 +334,39 @@ struct BreakableScene::Impl {
         bodies.erase(std::find_if(bodies.begin(), bodies.end(), [&](const auto& p) { return p.get() == &b; }));
     }
 
+    static const std::string& nameOf(const btCollisionObject* o) {
+        static const std::string ground = "ground";
+        const auto* b = static_cast<const Body*>(o->getUserPointer());
+        return b ? b->name : ground;
+    }
+
+    /// The manifolds' points as BreakableContacts (bodies by name, first < second), sorted.
+    void recordContacts() {
+        stepContacts.clear();
+        for (int i = 0; i < dispatcher->getNumManifolds(); ++i) {
+            const btPersistentManifold* m = dispatcher->getManifoldByIndexInternal(i);
+            const std::string& n0 = nameOf(m->getBody0());
+            const std::string& n1 = nameOf(m->getBody1());
+            const bool swap = n1 < n0;
+            for (int c = 0; c < m->getNumContacts(); ++c) {
+                const btManifoldPoint& p = m->getContactPoint(c);
+                BreakableContact k;
+                k.body0 = swap ? n1 : n0;
+                k.body1 = swap ? n0 : n1;
+                k.part0 = swap ? p.m_partId1 : p.m_partId0;
+                k.index0 = swap ? p.m_index1 : p.m_index0;
+                k.part1 = swap ? p.m_partId0 : p.m_partId1;
+                k.index1 = swap ? p.m_index0 : p.m_index1;
+                k.distance = double(p.getDistance());
+                stepContacts.push_back(std::move(k));
+            }
+        }
+        std::sort(stepContacts.begin(), stepContacts.end(), [](const BreakableContact& a, const BreakableContact& b) {
+            return std::tie(a.body0, a.body1, a.part0, a.index0, a.part1, a.index1, a.distance) <
+                   std::tie(b.body0, b.body1, b.part0, b.index0, b.part1, b.index1, b.distance);
+        });
+    }
+
     const BreakableFrame& step() {
         double bp0 = 0, np0 = 0;
         if (dbvt) bp0 = dbvt->ms;
@@ -366,10 +402,16 @@ struct BreakableScene::Impl {
         std::sort(stepPairs.begin(), stepPairs.end());
         for (int i = 0; i < dispatcher->getNumManifolds(); ++i)
             f.contacts += std::size_t(dispatcher->getManifoldByIndexInternal(i)->getNumContacts());
+        double recordMs = 0;  // the comparison's, not the frame's: left out of totalMs
+        if (options.recordContacts) {
+            const Timer record;
+            recordContacts();
+            recordMs = record.ms();
+        }
         Timer fracture;
         f.brokenPieces = fractureWhatBroke();
         f.fractureMs = fracture.ms();
-        f.totalMs = total.ms();
+        f.totalMs = total.ms() - recordMs;
         f.bodies = bodies.size();
         for (const auto& b : bodies) f.triangles += b->local.triangles.size();
         frame = f;
@@ -399,8 +441,10 @@ std::vector<std::string> BreakableScene::bodyNames() const {
 const std::vector<std::pair<std::string, std::string>>& BreakableScene::lastStepPairs() const {
     return m_impl->stepPairs;
 }
+const std::vector<BreakableContact>& BreakableScene::lastStepContacts() const { return m_impl->stepContacts; }
 int BreakableScene::fractures() const { return m_impl->fractureCount; }
 bool BreakableScene::usedStandIns() const { return m_impl->standIns; }
 const CullideBroadphase* BreakableScene::cullideBroadphase() const { return m_impl->cullideBp; }
+const CullideCollisionDispatcher* BreakableScene::cullideDispatcher() const { return m_impl->cullideDisp; }
 
 }  // namespace cullide::demo

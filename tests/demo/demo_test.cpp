@@ -15,6 +15,7 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <tuple>
 
 namespace cullide::demo {
 namespace {
@@ -122,14 +123,24 @@ TEST(BreakableScene, CullidePipelineMovesAsBulletsDefaultPipeline) {
     CULLIDE_GPU_CULLER_OR_SKIP(probe, Settings{});
     BreakableOptions options;
     options.pipeline = CollisionPipeline::BulletDbvt;
+    options.recordContacts = true;
     BreakableScene bullet(options);
     options.pipeline = CollisionPipeline::Cullide;
     BreakableScene swapped(options);
     std::size_t contacts = 0;
+    const auto key = [](const BreakableContact& c) {
+        return std::make_tuple(c.body0, c.body1, c.part0, c.index0, c.part1, c.index1, c.distance);
+    };
     for (int frame = 0; frame < 45; ++frame) {
         bullet.step();
         swapped.step();
         ASSERT_EQ(swapped.lastFrame().contacts, bullet.lastFrame().contacts) << "frame " << frame;
+        // Every point recorded, each the same (bodies, triangle keys, distance) in both pipelines.
+        const auto& want = bullet.lastStepContacts();
+        const auto& got = swapped.lastStepContacts();
+        ASSERT_EQ(want.size(), bullet.lastFrame().contacts) << "frame " << frame;
+        ASSERT_EQ(got.size(), want.size()) << "frame " << frame;
+        for (std::size_t i = 0; i < want.size(); ++i) ASSERT_EQ(key(got[i]), key(want[i])) << "frame " << frame;
         const auto a = bullet.worldMeshes(), b = swapped.worldMeshes();
         ASSERT_EQ(a.size(), b.size()) << "frame " << frame;
         for (std::size_t i = 0; i < a.size(); ++i) ASSERT_EQ(b[i].vertices, a[i].vertices) << "frame " << frame;

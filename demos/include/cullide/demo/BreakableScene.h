@@ -7,6 +7,7 @@
 #include "cullide/Settings.h"
 #include "cullide/Types.h"
 #include "cullide_bullet/CullideBroadphase.h"
+#include "cullide_bullet/CullideCollisionDispatcher.h"
 
 #include <cstddef>
 #include <cstdint>
@@ -37,6 +38,18 @@ struct BreakableOptions {
     bool deepPenetrationFallback = true;
     /// Cullide pipeline: CullideBroadphase::setGImpactPairCulling (off: the pieces get Bullet's GImpact contacts).
     bool gimpactPairCulling = false;
+    /// Cullide pipeline: CullideCollisionDispatcher::setNarrowPhaseThreads (0: the dispatcher's default).
+    unsigned narrowPhaseThreads = 0;
+    /// Keep every step's contact points (lastStepContacts), for comparing pipelines; off: not collected.
+    bool recordContacts = false;
+};
+
+/// A contact point after a step's collision detection: the bodies by name ("ground" for the plane), first < second,
+/// and the point's triangle keys (part, triangle) on each side in that order, as the narrow phase set them.
+struct BreakableContact {
+    std::string body0, body1;
+    int part0 = 0, index0 = 0, part1 = 0, index1 = 0;
+    double distance = 0.0;
 };
 
 /// What one step did.
@@ -71,11 +84,16 @@ public:
     /// Body pairs (names, first < second) in Bullet's overlapping pair cache right after the last step's collision
     /// detection (before that step's fractures); pairs with the ground plane are left out. Sorted.
     const std::vector<std::pair<std::string, std::string>>& lastStepPairs() const;
+    /// Every contact point in the manifolds right after the last step's collision detection and solve (before that
+    /// step's fractures), sorted; empty unless BreakableOptions::recordContacts.
+    const std::vector<BreakableContact>& lastStepContacts() const;
     int fractures() const;
     /// True when a real mesh was missing and a procedural stand-in was used.
     bool usedStandIns() const;
     /// The CULLIDE broadphase (pipeline Cullide), else nullptr.
     const CullideBroadphase* cullideBroadphase() const;
+    /// The CULLIDE dispatcher (pipeline Cullide), else nullptr.
+    const CullideCollisionDispatcher* cullideDispatcher() const;
 
 private:
     struct Impl;
