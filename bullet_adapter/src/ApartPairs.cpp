@@ -1,4 +1,5 @@
 #include "ApartPairs.h"
+#include "ThreadedPairs.h"
 
 #include <BulletCollision/BroadphaseCollision/btCollisionAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btCollisionObject.h>
@@ -57,7 +58,7 @@ bool clearIfApart(btBroadphasePair& pair, btCollisionDispatcher& dispatcher, btM
     if (!(gap2 > 0)) return false;  // overlapping (or NaN) boxes: the algorithm decides
     if (!rigidOrPlain(*object0) || !rigidOrPlain(*object1) ||
         gimpact(*object0) || gimpact(*object1) || boxDeclared(*object0) || boxDeclared(*object1) ||
-        !dispatcher.needsCollision(object0, object1))
+        !dispatcher.needsCollision(object0, object1) || !freesNoManifoldWhenApart(*pair.m_algorithm))
         return false;
     const btScalar t = manifoldBreakingThreshold(dispatcher, *object0, *object1);
     if (!(t >= 0 && gap2 > t * t)) return false;

@@ -498,6 +498,11 @@ private:
         gimpact_vs_shape_find_pairs(meshWrap->getWorldTransform(), convexWrap->getWorldTransform(), &meshPart, convex,
                                     candidates);
         if (candidates.size() == 0) return;
+        // Bullet's loop makes the pair's manifold with its first candidate's algorithm (newAlgorithm's checkManifold,
+        // bodies in the order the algorithm gets them), whether a point follows or not: so does this one, also when
+        // every candidate is skipped, so that the dispatcher's manifolds (empty ones too, which the solver's island
+        // sort sees) stay Bullet's.
+        checkManifold(swapped ? convexWrap : meshWrap, swapped ? meshWrap : convexWrap);
         const ConvexReach reach = convexReach(*meshWrap, *convexWrap);
         int& face = swapped ? m_triface1 : m_triface0;
         meshPart.lockChildShapes();

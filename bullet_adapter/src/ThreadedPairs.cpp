@@ -197,6 +197,28 @@ AlgorithmKind algorithmKindOf(const std::type_info& algorithmClass) {
     return AlgorithmKind::Other;
 }
 
+bool freesNoManifoldWhenApart(const btCollisionAlgorithm& algorithm) {
+    const std::type_info& type = typeid(algorithm);
+    switch (algorithmKindOf(type)) {
+        case AlgorithmKind::Convex:
+        case AlgorithmKind::ConvexConvex:
+        case AlgorithmKind::ConvexConcave:
+            return true;
+        case AlgorithmKind::Compound:
+            if (type == typeid(btCompoundCollisionAlgorithm)) {
+                const auto& compound = static_cast<const btCompoundCollisionAlgorithm&>(algorithm);
+                for (int i = 0; i < CompoundAlgorithmState::childCount(compound); ++i)
+                    if (compound.getChildAlgorithm(i) != nullptr) return false;
+                return true;
+            }
+            return (static_cast<const btCompoundCompoundCollisionAlgorithm&>(algorithm).*
+                    memberPointer(ChildPairCache{}))->getOverlappingPairArray().size() == 0;
+        case AlgorithmKind::Other:
+            break;
+    }
+    return false;
+}
+
 bool worthHandingOff(AlgorithmKind kind) {
     return kind == AlgorithmKind::ConvexConvex || kind == AlgorithmKind::ConvexConcave ||
            kind == AlgorithmKind::Compound;

@@ -60,6 +60,13 @@ enum class AlgorithmKind : int {
 };
 AlgorithmKind algorithmKindOf(const std::type_info& algorithmClass);
 
+/// Whether running `algorithm` on a pair whose boxes are apart would make or free no manifold, so that skipping it
+/// (ApartPairs.h) leaves the dispatcher's manifolds as Bullet's: Bullet's convex, convex-convex and convex-mesh
+/// algorithms keep their manifold for their lifetime; a compound algorithm frees the algorithms (and manifolds) of
+/// the children whose boxes no longer overlap the other shape's, so it qualifies only while it holds none. Any
+/// other algorithm (the application's own, Bullet's for other shapes) may do anything: false.
+bool freesNoManifoldWhenApart(const btCollisionAlgorithm& algorithm);
+
 /// Whether handing a threadable pair of this kind to another thread pays: GJK and convex-mesh pairs do (~1-5 us on
 /// the 2-core machine); the closed-form convex algorithms (box-box ~0.2 us a pair) cost about what the hand-off costs
 /// (the pair's data then misses the other core's cache), so they stay on the calling thread.

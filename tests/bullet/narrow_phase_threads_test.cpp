@@ -16,6 +16,7 @@
 #include <BulletCollision/CollisionDispatch/btEmptyCollisionAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btSphereTriangleCollisionAlgorithm.h>
 #include <BulletCollision/CollisionShapes/btHeightfieldTerrainShape.h>
+#include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <BulletCollision/NarrowPhaseCollision/btMinkowskiPenetrationDepthSolver.h>
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpaPenetrationDepthSolver.h>
 
@@ -405,6 +406,92 @@ TEST(NarrowPhaseThreads, OnlyBulletsOwnAlgorithmsOnBulletsOwnShapesRunOnTheWorke
                                      tri(config, &compound)));
     btEmptyAlgorithm::CreateFunc custom;  // an application's registration for convex-triangle pairs
     EXPECT_FALSE(threadableAlgorithm(K::ConvexConcave, *hull, *landscape, cf(config, hull, landscape), &custom));
+}
+
+
+// Bullet's solver reads the manifolds in the dispatcher's order, empty ones included (the islands are sorted by an
+// unstable sort), so the swap must make and free every manifold, empty or not, where Bullet does. Two places where it
+// skips Bullet's work are guarded here: pairs whose boxes are apart (a compound algorithm run there frees its
+// children's manifolds), and GImpact against convex shapes and meshes, whose trimmed loops skip triangles that
+// cannot make a point (Bullet's loop makes the pair's manifold at its first candidate triangle, point or not).
+
+/// Compounds of one or two boxes bouncing (restitution 0.9) on a ground box and off each other: children stop
+/// touching the other shape from one step to the next, farther apart than the contact breaking threshold.
+struct BouncingCompoundScene {
+    ShapeStore shapes;
+    btCollisionShape* ground = shapes.box(btVector3(12, 0.5f, 12));
+    std::vector<std::unique_ptr<btCompoundShape>> compounds;
+
+    BouncingCompoundScene() {
+        for (int k = 0; k < 2; ++k) {
+            compounds.push_back(std::make_unique<btCompoundShape>());
+            compounds.back()->addChildShape(at(0, 0, 0), shapes.box(btVector3(0.4f, 0.2f, 0.3f)));
+            if (k == 1) compounds.back()->addChildShape(at(0.5, 0.3, 0), shapes.box(btVector3(0.15f, 0.3f, 0.15f)));
+        }
+    }
+
+    void populate(TestWorld& w) const {
+        w.addBody(ground, 0, at(0, -0.5, 0))->setRestitution(btScalar(0.9));
+        for (int i = 0; i < 8; ++i)
+            for (int j = 0; j < 8; ++j) {
+                const int k = i * 8 + j;
+                const btQuaternion turn(btVector3(0.2f, 1, 0.3f).normalized(), btScalar(0.43 * k));
+                w.addBody(compounds[std::size_t(k % 2)].get(), 1,
+                          at(1.1 * (i - 3.5), 1.0 + 0.7 * (k % 3), 1.1 * (j - 3.5), turn))
+                    ->setRestitution(btScalar(0.9));
+            }
+    }
+};
+
+TEST(BitForBit, BouncingCompoundsKeepBulletsManifolds) {
+    BouncingCompoundScene scene;
+    for (const unsigned threads : {1u, 2u}) {
+        SideBySide worlds(scene, threads);
+        TestWorld& w = worlds.swap;
+        EXPECT_EQ(firstDivergingStep(*worlds.reference, w, 150), -1) << threads << " threads";
+        EXPECT_GT(w.cullideDispatcher()->getTotalStats().apartPairs, 100u) << "pairs apart are skipped";
+    }
+}
+
+/// GImpact tori dropped among spheres, capsules, boxes and hulls onto a BVH landscape and a plane: GImpact pairs
+/// against convex shapes and against the landscape whose candidate triangles are often all out of reach.
+struct GImpactMixScene {
+    ShapeStore shapes;
+    btCollisionShape* landscape = shapes.landscape(16, 1, btScalar(0.6));
+    btCollisionShape* plane = shapes.plane(btVector3(0, 1, 0), btScalar(-1.5));
+    std::vector<btCollisionShape*> kinds{shapes.gimpactTorus(btScalar(0.5), btScalar(0.15), 12, 6, btScalar(0.01)),
+                                         shapes.sphere(btScalar(0.3)),
+                                         shapes.gimpactTorus(btScalar(0.4), btScalar(0.12), 10, 6, btScalar(0.01)),
+                                         shapes.capsule(btScalar(0.2), btScalar(0.5)),
+                                         shapes.box(btVector3(0.3f, 0.25f, 0.35f)),
+                                         shapes.hull(btVector3(0.4f, 0.3f, 0.35f), 24, 5)};
+
+    void populate(TestWorld& w) const {
+        btGImpactCollisionAlgorithm::registerAlgorithm(&w.dispatcher());
+        w.addBody(landscape, 0, at(-8, 0, -8));
+        w.addBody(plane, 0, at(0, 0, 0));
+        int k = 0;
+        for (int layer = 0; layer < 3; ++layer)
+            for (int i = 0; i < 6; ++i)
+                for (int j = 0; j < 6; ++j, ++k) {
+                    const btQuaternion turn(btVector3(0.5f, 1, 0.2f).normalized(), btScalar(0.53 * k));
+                    w.addBody(kinds[std::size_t(k) % kinds.size()], 1,
+                              at(1.2 * (i - 2.5), 2.0 + 1.1 * layer, 1.2 * (j - 2.5), turn));
+                }
+    }
+};
+
+TEST(BitForBit, GImpactAgainstConvexAndMeshKeepsBulletsManifolds) {
+    GImpactMixScene scene;
+    for (const unsigned threads : {1u, 2u}) {
+        SideBySide worlds(scene, threads);
+        TestWorld& w = worlds.swap;
+        EXPECT_EQ(firstDivergingStep(*worlds.reference, w, 150), -1) << threads << " threads";
+        const CullideDispatchStats& stats = w.cullideDispatcher()->getTotalStats();
+        EXPECT_GT(stats.convexPairs, 500u);
+        EXPECT_GT(stats.concavePairs, 100u);
+        EXPECT_LT(stats.convexTriangles, stats.convexCandidates) << "candidate triangles out of reach are skipped";
+    }
 }
 
 }  // namespace
