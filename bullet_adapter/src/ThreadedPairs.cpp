@@ -27,6 +27,7 @@
 #include <BulletCollision/CollisionShapes/btScaledBvhTriangleMeshShape.h>
 #include <BulletCollision/CollisionShapes/btSphereShape.h>
 #include <BulletCollision/CollisionShapes/btStaticPlaneShape.h>
+#include <BulletCollision/CollisionShapes/btConvexTriangleMeshShape.h>
 #include <BulletCollision/CollisionShapes/btTetrahedronShape.h>
 #include <BulletCollision/CollisionShapes/btTriangleMesh.h>
 #include <BulletCollision/CollisionShapes/btTriangleShape.h>
@@ -43,6 +44,12 @@ namespace {
 template <typename... T>
 bool isOneOf(const std::type_info& type) {
     return ((type == typeid(T)) || ...);
+}
+
+/// Bullet's own vertex arrays, whose triangle queries read the arrays only (an application's btStridingMeshInterface
+/// may lock).
+bool bulletMeshInterface(const btStridingMeshInterface* mesh) {
+    return mesh != nullptr && isOneOf<btTriangleIndexVertexArray, btTriangleMesh>(typeid(*mesh));
 }
 
 /// Bullet's convex shape classes: support functions that read the shape only. The proxy type narrows the class down
@@ -70,6 +77,9 @@ bool bulletConvex(const btCollisionShape& shape) {
             return type == typeid(btBU_Simplex1to4);
         case TRIANGLE_SHAPE_PROXYTYPE:
             return type == typeid(btTriangleShape);
+        case CONVEX_TRIANGLEMESH_SHAPE_PROXYTYPE:  // its support function walks the mesh's triangles
+            return type == typeid(btConvexTriangleMeshShape) &&
+                   bulletMeshInterface(static_cast<const btConvexTriangleMeshShape&>(shape).getMeshInterface());
         default:
             return false;
     }
@@ -81,10 +91,8 @@ bool bulletConcave(const btCollisionShape& shape) {
     const std::type_info& type = typeid(shape);
     if (type == typeid(btScaledBvhTriangleMeshShape))
         return bulletConcave(*static_cast<const btScaledBvhTriangleMeshShape&>(shape).getChildShape());
-    if (type == typeid(btBvhTriangleMeshShape)) {
-        const btStridingMeshInterface* mesh = static_cast<const btBvhTriangleMeshShape&>(shape).getMeshInterface();
-        return mesh != nullptr && isOneOf<btTriangleIndexVertexArray, btTriangleMesh>(typeid(*mesh));
-    }
+    if (type == typeid(btBvhTriangleMeshShape))
+        return bulletMeshInterface(static_cast<const btBvhTriangleMeshShape&>(shape).getMeshInterface());
     return type == typeid(btHeightfieldTerrainShape);
 }
 
@@ -269,6 +277,15 @@ bool threadableAlgorithm(AlgorithmKind kind, const btCollisionShape& shape0, con
 
 namespace {
 
+/// Pairs btConvexConvexAlgorithm collides in closed form, without GJK (capsule-capsule, capsule-sphere; unless
+/// Bullet was built with BT_DISABLE_CAPSULE_CAPSULE_COLLIDER, where they cost a GJK run but stay correct): about a
+/// box-box pair's cost, less than handing them to another thread.
+bool closedFormConvexPair(int type0, int type1) {
+    const auto capsuleOrSphere = [](int t) { return t == CAPSULE_SHAPE_PROXYTYPE || t == SPHERE_SHAPE_PROXYTYPE; };
+    return capsuleOrSphere(type0) && capsuleOrSphere(type1) &&
+           (type0 == CAPSULE_SHAPE_PROXYTYPE || type1 == CAPSULE_SHAPE_PROXYTYPE);
+}
+
 /// threadableKind for a non-compound algorithm on two shapes (the algorithm's first, then its second).
 AlgorithmKind threadableOnShapes(AlgorithmKind kind, btCollisionAlgorithm& algorithm, const btCollisionShape& shape0,
                                  const btCollisionShape& shape1, const CreateFuncTable& funcs,
@@ -278,6 +295,7 @@ AlgorithmKind threadableOnShapes(AlgorithmKind kind, btCollisionAlgorithm& algor
     if (!threadableAlgorithm(kind, shape0, shape1, funcs[t0][t1], funcs[convexType][TRIANGLE_SHAPE_PROXYTYPE]))
         return AlgorithmKind::Other;
     if (kind != AlgorithmKind::ConvexConvex) return kind;
+    if (closedFormConvexPair(t0, t1)) return AlgorithmKind::Convex;
     scratch.resize(0);  // btConvexConvexAlgorithm makes its manifold on its first run
     algorithm.getAllContactManifolds(scratch);
     return scratch.size() > 0 ? kind : AlgorithmKind::Other;

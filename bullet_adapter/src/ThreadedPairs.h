@@ -91,7 +91,8 @@ using CreateFuncTable =
 
 /// The kind of the pair's existing algorithm if its next run, as Bullet's near callback runs it in a discrete
 /// dispatch, may happen on a narrow-phase thread, else Other: threadableAlgorithm's rules for the algorithm on the
-/// objects' shapes, a ConvexConvex algorithm that holds its manifold, and for a compound (compoundMayThread) the same
+/// objects' shapes, a ConvexConvex algorithm that holds its manifold (Convex where btConvexConvexAlgorithm collides
+/// the pair in closed form: capsule-capsule, capsule-sphere), and for a compound (compoundMayThread) the same
 /// rules for each child algorithm on the child's shape. The caller checks the objects (objectsMayThread,
 /// needsCollision) and the dispatch (dispatchMayThread). `scratch` is reused between calls.
 AlgorithmKind threadableKind(btCollisionAlgorithm& algorithm, const btCollisionObject& object0,

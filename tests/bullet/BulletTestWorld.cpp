@@ -3,6 +3,7 @@
 
 #include "cullide/Culler.h"
 
+#include <BulletCollision/CollisionShapes/btConvexTriangleMeshShape.h>
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <BulletCollision/Gimpact/btGImpactShape.h>
 
@@ -115,6 +116,41 @@ btCollisionShape* ShapeStore::hull(const btVector3& radii, int points, std::uint
     }
     shape->recalcLocalAabb();
     m_shapes.push_back(std::move(shape));
+    return m_shapes.back().get();
+}
+
+namespace {
+/// An application's own vertex-array class (Bullet's, derived): the adapter cannot know that its locks are safe.
+struct OwnVertexArray final : btTriangleIndexVertexArray {
+    using btTriangleIndexVertexArray::btTriangleIndexVertexArray;
+};
+}  // namespace
+
+btCollisionShape* ShapeStore::convexMesh(const btVector3& radii, int rings, int segments, bool ownInterface) {
+    auto mesh = std::make_unique<Mesh>();
+    const double pi = 3.141592653589793;
+    const auto vertex = [&](int ring, int segment) {
+        const double theta = pi * ring / rings, phi = 2 * pi * segment / segments;
+        mesh->vertices.insert(mesh->vertices.end(), {btScalar(radii.x() * std::sin(theta) * std::cos(phi)),
+                                                     btScalar(radii.y() * std::cos(theta)),
+                                                     btScalar(radii.z() * std::sin(theta) * std::sin(phi))});
+    };
+    for (int ring = 0; ring <= rings; ++ring)
+        for (int segment = 0; segment < segments; ++segment) vertex(ring, segment);
+    for (int ring = 0; ring < rings; ++ring)
+        for (int segment = 0; segment < segments; ++segment) {
+            const int a = ring * segments + segment, b = ring * segments + (segment + 1) % segments;
+            const int c = a + segments, d = b + segments;
+            mesh->indices.insert(mesh->indices.end(), {a, c, b, b, c, d});
+        }
+    if (ownInterface)
+        mesh->array = std::make_unique<OwnVertexArray>(
+            static_cast<int>(mesh->indices.size() / 3), mesh->indices.data(), static_cast<int>(3 * sizeof(int)),
+            static_cast<int>(mesh->vertices.size() / 3), mesh->vertices.data(), static_cast<int>(3 * sizeof(btScalar)));
+    else
+        mesh->finish();
+    m_shapes.push_back(std::make_unique<btConvexTriangleMeshShape>(mesh->array.get()));
+    m_meshes.push_back(std::move(mesh));
     return m_shapes.back().get();
 }
 

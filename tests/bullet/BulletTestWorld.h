@@ -34,6 +34,10 @@ public:
     btCollisionShape* capsule(btScalar radius, btScalar height);
     /// An irregular convex hull (btConvexHullShape) of `points` points on an ellipsoid with the given radii.
     btCollisionShape* hull(const btVector3& radii, int points, std::uint32_t seed);
+    /// A closed convex mesh (a UV ellipsoid of `rings` x `segments` quads, split in triangles, with the given radii)
+    /// as a btConvexTriangleMeshShape over a btTriangleIndexVertexArray, or over a btStridingMeshInterface of the
+    /// application's own class (`ownInterface`).
+    btCollisionShape* convexMesh(const btVector3& radii, int rings, int segments, bool ownInterface = false);
     /// Static landscape: cells x cells grid of `cellSize`, rolling hills, as a btBvhTriangleMeshShape.
     btCollisionShape* landscape(int cells, btScalar cellSize, btScalar amplitude);
     /// btGImpactMeshShape torus (updateBound() called), major radius R, minor r, its vertices around `centre`.

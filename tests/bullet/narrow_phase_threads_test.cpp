@@ -16,6 +16,7 @@
 #include <BulletCollision/CollisionDispatch/btEmptyCollisionAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btSphereTriangleCollisionAlgorithm.h>
 #include <BulletCollision/CollisionShapes/btHeightfieldTerrainShape.h>
+#include <BulletCollision/CollisionShapes/btMultiSphereShape.h>
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <BulletCollision/NarrowPhaseCollision/btMinkowskiPenetrationDepthSolver.h>
 #include <BulletCollision/NarrowPhaseCollision/btGjkEpaPenetrationDepthSolver.h>
@@ -406,6 +407,73 @@ TEST(NarrowPhaseThreads, OnlyBulletsOwnAlgorithmsOnBulletsOwnShapesRunOnTheWorke
                                      tri(config, &compound)));
     btEmptyAlgorithm::CreateFunc custom;  // an application's registration for convex-triangle pairs
     EXPECT_FALSE(threadableAlgorithm(K::ConvexConcave, *hull, *landscape, cf(config, hull, landscape), &custom));
+    // A convex triangle mesh walks its mesh interface's triangles: Bullet's vertex arrays only.
+    btCollisionShape* convexMesh = shapes.convexMesh(btVector3(1, 1, 1), 4, 6);
+    btCollisionShape* ownConvexMesh = shapes.convexMesh(btVector3(1, 1, 1), 4, 6, true);
+    EXPECT_TRUE(threadableAlgorithm(K::ConvexConvex, *convexMesh, box, cf(config, convexMesh, &box), nullptr));
+    EXPECT_TRUE(threadableAlgorithm(K::ConvexConcave, *convexMesh, *landscape, cf(config, convexMesh, landscape),
+                                    tri(config, convexMesh)));
+    EXPECT_FALSE(threadableAlgorithm(K::ConvexConvex, *ownConvexMesh, box, cf(config, ownConvexMesh, &box), nullptr));
+}
+
+/// Capsules and spheres on a plane: every pair is one Bullet collides in closed form (capsule-capsule and
+/// capsule-sphere inside btConvexConvexAlgorithm, sphere-sphere, convex-plane), cheaper than a hand-off.
+struct CapsulePileScene {
+    ShapeStore shapes;
+    btCollisionShape* plane = shapes.plane(btVector3(0, 1, 0), 0);
+    std::vector<btCollisionShape*> kinds{shapes.capsule(btScalar(0.2), btScalar(0.6)), shapes.sphere(btScalar(0.25)),
+                                         shapes.capsule(btScalar(0.15), btScalar(0.4))};
+
+    void populate(TestWorld& w) const {
+        w.addBody(plane, 0, at(0, 0, 0));
+        for (int k = 0; k < 300; ++k) {
+            const btQuaternion turn(btVector3(1, 0.3f, 0.2f).normalized(), btScalar(0.7 * k));
+            w.addBody(kinds[std::size_t(k) % kinds.size()], 1,
+                      at(0.45 * (k % 10 - 4.5), 0.5 + 0.35 * (k / 100), 0.45 * ((k / 10) % 10 - 4.5), turn));
+        }
+    }
+};
+
+TEST(NarrowPhaseThreads, ClosedFormPairsStayOnTheCallingThread) {
+    CapsulePileScene scene;
+    SideBySide worlds(scene, 2);
+    EXPECT_EQ(firstDivergingStep(*worlds.reference, worlds.swap, 120), -1);
+    EXPECT_GT(contactsOf(worlds.swap.world()).size(), 300u) << "the capsules must touch each other";
+    EXPECT_EQ(threadedPairs(worlds.swap), 0u) << "no capsule or sphere pair is handed to a worker";
+}
+
+/// Convex triangle meshes, multi-sphere shapes and hulls dropped on the landscape and the heightfield: GJK pairs
+/// whose support functions walk a mesh's triangles or a sphere list.
+struct ConvexMeshScene {
+    ShapeStore shapes;
+    Heightfield field;
+    btCollisionShape* landscape = shapes.landscape(24, 1, btScalar(0.8));
+    std::unique_ptr<btMultiSphereShape> multiSphere;
+    std::vector<btCollisionShape*> kinds;
+
+    ConvexMeshScene() {
+        const btVector3 centres[] = {btVector3(-0.3f, 0, 0), btVector3(0.3f, 0.1f, 0), btVector3(0, -0.2f, 0.2f)};
+        const btScalar radii[] = {btScalar(0.3), btScalar(0.25), btScalar(0.2)};
+        multiSphere = std::make_unique<btMultiSphereShape>(centres, radii, 3);
+        kinds = {shapes.convexMesh(btVector3(0.5f, 0.4f, 0.45f), 6, 8), multiSphere.get(),
+                 shapes.convexMesh(btVector3(0.35f, 0.5f, 0.35f), 5, 7),
+                 shapes.hull(btVector3(0.45f, 0.4f, 0.4f), 30, 9)};
+    }
+
+    void populate(TestWorld& w) const { Drop{5, 1.3, 1.2, 0.29}.populate(w, landscape, field, kinds); }
+};
+
+TEST(NarrowPhaseThreads, ConvexMeshesAndMultiSpheresMoveBitForBitOnTheWorkers) {
+    ConvexMeshScene scene;
+    for (const unsigned threads : {1u, 2u}) {
+        SideBySide worlds(scene, threads);
+        TestWorld& w = worlds.swap;
+        EXPECT_EQ(firstDivergingStep(*worlds.reference, w, 200), -1) << threads << " threads";
+        EXPECT_GT(contactsOf(w.world()).size(), 100u) << "the bodies must rest in contact";
+        if (threads > 1) {
+            EXPECT_GT(threadedPairs(w), 10000u) << "their pairs run on the narrow-phase threads";
+        }
+    }
 }
 
 
