@@ -870,7 +870,8 @@ Row runBreakable(int steps) {
     std::map<std::string, int> ids;
     int departed = -1;  // the first step after which the swap's world differs from the default's
     for (int s = 0; s < steps; ++s) {
-        for (std::size_t k = 0; k < worlds.size(); ++k) worlds[(k + static_cast<std::size_t>(s)) % worlds.size()]->step();
+        for (std::size_t k = 0; k < worlds.size(); ++k)
+            worlds[(k + static_cast<std::size_t>(s)) % worlds.size()]->step();
         for (std::size_t k = 0; k < worlds.size(); ++k) {
             const cullide::demo::BreakableFrame& f = worlds[k]->lastFrame();
             row.ms[k] += f.totalMs / steps;

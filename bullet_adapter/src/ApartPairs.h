@@ -17,9 +17,9 @@
 // (their box is the height range the application declares, which its data may exceed), algorithms whose run there
 // could make or free a manifold (freesNoManifoldWhenApart: a compound algorithm that still holds child algorithms
 // frees them, and with them their manifolds, which reorders the dispatcher's manifolds as the solver reads them;
-// algorithms other than Bullet's convex ones), and every pair when the application installed its own near callback. A shape that otherwise lies outside its own box (a compound with a
-// heightfield child whose data exceeds its range, vertices changed without a refit) gets no points where it does,
-// as with btAxisSweep3.
+// algorithms other than Bullet's convex ones), and every pair when the application installed its own near callback.
+// A shape that otherwise lies outside its own box (a compound with a heightfield child whose data exceeds its range,
+// vertices changed without a refit) gets no points where it does, as with btAxisSweep3.
 #pragma once
 
 #include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
@@ -40,11 +40,11 @@ btScalar manifoldBreakingThreshold(const btCollisionDispatcher& dispatcher, cons
                                    const btCollisionObject& object1);
 
 /// If the pair's algorithm can be skipped — both objects rigid bodies or plain collision objects, neither with a
-/// GImpact shape, an algorithm already made that would make or free no manifold there, and their boxes more than the breaking threshold of the pair (and of
-/// every manifold its algorithm holds) apart — clears the points of its manifolds (Bullet's contact-destroyed
-/// callbacks run as for a refresh) and returns true. Otherwise changes nothing. `scratch` is reused between calls.
-/// Pairs the dispatch would not collide (`needsCollision`) are left alone. The caller checks the rest: discrete
-/// dispatch, Bullet's own near callback.
+/// GImpact shape, an algorithm already made that would make or free no manifold there, and their boxes more than
+/// the breaking threshold of the pair (and of every manifold its algorithm holds) apart — clears the points of its
+/// manifolds (Bullet's contact-destroyed callbacks run as for a refresh) and returns true. Otherwise changes
+/// nothing. `scratch` is reused between calls. Pairs the dispatch would not collide (`needsCollision`) are left
+/// alone. The caller checks the rest: discrete dispatch, Bullet's own near callback.
 bool clearIfApart(btBroadphasePair& pair, btCollisionDispatcher& dispatcher, btManifoldArray& scratch);
 
 }  // namespace cullide::bullet
