@@ -25,6 +25,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <set>
@@ -463,17 +464,25 @@ struct ConvexMeshScene {
     void populate(TestWorld& w) const { Drop{5, 1.3, 1.2, 0.29}.populate(w, landscape, field, kinds); }
 };
 
-TEST(NarrowPhaseThreads, ConvexMeshesAndMultiSpheresMoveBitForBitOnTheWorkers) {
-    ConvexMeshScene scene;
+/// Runs the scene side by side with Bullet's pipeline for `steps` steps with 1 and with 2 narrow-phase threads,
+/// expects no bit to differ, then hands the swap's world and its thread count to `check`.
+template <typename Scene>
+void expectBitForBitWithOneAndTwoThreads(const Scene& scene, int steps,
+                                         const std::function<void(TestWorld&, unsigned)>& check) {
     for (const unsigned threads : {1u, 2u}) {
         SideBySide worlds(scene, threads);
-        TestWorld& w = worlds.swap;
-        EXPECT_EQ(firstDivergingStep(*worlds.reference, w, 200), -1) << threads << " threads";
+        EXPECT_EQ(firstDivergingStep(*worlds.reference, worlds.swap, steps), -1) << threads << " threads";
+        check(worlds.swap, threads);
+    }
+}
+
+TEST(NarrowPhaseThreads, ConvexMeshesAndMultiSpheresMoveBitForBitOnTheWorkers) {
+    expectBitForBitWithOneAndTwoThreads(ConvexMeshScene{}, 200, [](TestWorld& w, unsigned threads) {
         EXPECT_GT(contactsOf(w.world()).size(), 100u) << "the bodies must rest in contact";
         if (threads > 1) {
             EXPECT_GT(threadedPairs(w), 10000u) << "their pairs run on the narrow-phase threads";
         }
-    }
+    });
 }
 
 
@@ -512,13 +521,9 @@ struct BouncingCompoundScene {
 };
 
 TEST(BitForBit, BouncingCompoundsKeepBulletsManifolds) {
-    BouncingCompoundScene scene;
-    for (const unsigned threads : {1u, 2u}) {
-        SideBySide worlds(scene, threads);
-        TestWorld& w = worlds.swap;
-        EXPECT_EQ(firstDivergingStep(*worlds.reference, w, 150), -1) << threads << " threads";
+    expectBitForBitWithOneAndTwoThreads(BouncingCompoundScene{}, 150, [](TestWorld& w, unsigned) {
         EXPECT_GT(w.cullideDispatcher()->getTotalStats().apartPairs, 100u) << "pairs apart are skipped";
-    }
+    });
 }
 
 /// GImpact tori dropped among spheres, capsules, boxes and hulls onto a BVH landscape and a plane: GImpact pairs
@@ -550,16 +555,12 @@ struct GImpactMixScene {
 };
 
 TEST(BitForBit, GImpactAgainstConvexAndMeshKeepsBulletsManifolds) {
-    GImpactMixScene scene;
-    for (const unsigned threads : {1u, 2u}) {
-        SideBySide worlds(scene, threads);
-        TestWorld& w = worlds.swap;
-        EXPECT_EQ(firstDivergingStep(*worlds.reference, w, 150), -1) << threads << " threads";
+    expectBitForBitWithOneAndTwoThreads(GImpactMixScene{}, 150, [](TestWorld& w, unsigned) {
         const CullideDispatchStats& stats = w.cullideDispatcher()->getTotalStats();
         EXPECT_GT(stats.convexPairs, 500u);
         EXPECT_GT(stats.concavePairs, 100u);
         EXPECT_LT(stats.convexTriangles, stats.convexCandidates) << "candidate triangles out of reach are skipped";
-    }
+    });
 }
 
 }  // namespace
