@@ -26,6 +26,7 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <initializer_list>
 #include <memory>
 #include <mutex>
 #include <set>
@@ -159,13 +160,20 @@ int firstDivergingStep(TestWorld& reference, TestWorld& w, int steps) {
     return first;
 }
 
-TEST(NarrowPhaseThreads, PileMovesBitForBitAsInBulletForEveryThreadCount) {
-    PileScene scene;
-    for (const unsigned threads : {1u, 2u, 5u}) {
+/// Runs the scene side by side with Bullet's pipeline for `steps` steps with each of the thread counts, expects no
+/// bit to differ, then hands the swap's world and its thread count to `check`.
+template <typename Scene>
+void expectBitForBit(const Scene& scene, std::initializer_list<unsigned> threadCounts, int steps,
+                     const std::function<void(TestWorld&, unsigned)>& check) {
+    for (const unsigned threads : threadCounts) {
         SideBySide worlds(scene, threads);
-        const std::unique_ptr<TestWorld>& reference = worlds.reference;
-        TestWorld& w = worlds.swap;
-        EXPECT_EQ(firstDivergingStep(*reference, w, kSleepFrom + 150), -1) << threads << " threads";
+        EXPECT_EQ(firstDivergingStep(*worlds.reference, worlds.swap, steps), -1) << threads << " threads";
+        check(worlds.swap, threads);
+    }
+}
+
+TEST(NarrowPhaseThreads, PileMovesBitForBitAsInBulletForEveryThreadCount) {
+    expectBitForBit(PileScene{}, {1u, 2u, 5u}, kSleepFrom + 150, [](TestWorld& w, unsigned threads) {
         const std::size_t contacts = contactsOf(w.world()).size();
         int asleep = 0;
         for (btCollisionObject* o : w.objects()) asleep += o->getActivationState() == ISLAND_SLEEPING ? 1 : 0;
@@ -178,7 +186,7 @@ TEST(NarrowPhaseThreads, PileMovesBitForBitAsInBulletForEveryThreadCount) {
             EXPECT_EQ(threadedPairs(w), 0u);
         else
             EXPECT_GT(threadedPairs(w), 20000u) << "most pairs of a resting pile run on the narrow-phase threads";
-    }
+    });
 }
 
 /// Compounds as convex decompositions give them (2-4 hulls) and as furniture is built (boxes and a sphere), dropped
@@ -214,12 +222,7 @@ struct CompoundScene {
 };
 
 TEST(NarrowPhaseThreads, CompoundsMoveBitForBitAsInBulletForEveryThreadCount) {
-    CompoundScene scene;
-    for (const unsigned threads : {1u, 2u, 5u}) {
-        SideBySide worlds(scene, threads);
-        const std::unique_ptr<TestWorld>& reference = worlds.reference;
-        TestWorld& w = worlds.swap;
-        EXPECT_EQ(firstDivergingStep(*reference, w, 200), -1) << threads << " threads";
+    expectBitForBit(CompoundScene{}, {1u, 2u, 5u}, 200, [](TestWorld& w, unsigned threads) {
         std::printf("[ measure  ] %u threads: %zu pair-steps on the workers, %d manifolds, %zu pairs in contact\n",
                     threads, threadedPairs(w), w.dispatcher().getNumManifolds(), contactsOf(w.world()).size());
         EXPECT_GT(contactsOf(w.world()).size(), 100u) << "the bodies must rest in contact";
@@ -227,7 +230,7 @@ TEST(NarrowPhaseThreads, CompoundsMoveBitForBitAsInBulletForEveryThreadCount) {
             EXPECT_EQ(threadedPairs(w), 0u);
         else
             EXPECT_GT(threadedPairs(w), 10000u) << "compound pairs run on the narrow-phase threads";
-    }
+    });
 }
 
 TEST(NarrowPhaseThreads, CompoundsEditedWhileInContactStayBitForBit) {
@@ -464,20 +467,8 @@ struct ConvexMeshScene {
     void populate(TestWorld& w) const { Drop{5, 1.3, 1.2, 0.29}.populate(w, landscape, field, kinds); }
 };
 
-/// Runs the scene side by side with Bullet's pipeline for `steps` steps with 1 and with 2 narrow-phase threads,
-/// expects no bit to differ, then hands the swap's world and its thread count to `check`.
-template <typename Scene>
-void expectBitForBitWithOneAndTwoThreads(const Scene& scene, int steps,
-                                         const std::function<void(TestWorld&, unsigned)>& check) {
-    for (const unsigned threads : {1u, 2u}) {
-        SideBySide worlds(scene, threads);
-        EXPECT_EQ(firstDivergingStep(*worlds.reference, worlds.swap, steps), -1) << threads << " threads";
-        check(worlds.swap, threads);
-    }
-}
-
 TEST(NarrowPhaseThreads, ConvexMeshesAndMultiSpheresMoveBitForBitOnTheWorkers) {
-    expectBitForBitWithOneAndTwoThreads(ConvexMeshScene{}, 200, [](TestWorld& w, unsigned threads) {
+    expectBitForBit(ConvexMeshScene{}, {1u, 2u}, 200, [](TestWorld& w, unsigned threads) {
         EXPECT_GT(contactsOf(w.world()).size(), 100u) << "the bodies must rest in contact";
         if (threads > 1) {
             EXPECT_GT(threadedPairs(w), 10000u) << "their pairs run on the narrow-phase threads";
@@ -521,7 +512,7 @@ struct BouncingCompoundScene {
 };
 
 TEST(BitForBit, BouncingCompoundsKeepBulletsManifolds) {
-    expectBitForBitWithOneAndTwoThreads(BouncingCompoundScene{}, 150, [](TestWorld& w, unsigned) {
+    expectBitForBit(BouncingCompoundScene{}, {1u, 2u}, 150, [](TestWorld& w, unsigned) {
         EXPECT_GT(w.cullideDispatcher()->getTotalStats().apartPairs, 100u) << "pairs apart are skipped";
     });
 }
@@ -555,7 +546,7 @@ struct GImpactMixScene {
 };
 
 TEST(BitForBit, GImpactAgainstConvexAndMeshKeepsBulletsManifolds) {
-    expectBitForBitWithOneAndTwoThreads(GImpactMixScene{}, 150, [](TestWorld& w, unsigned) {
+    expectBitForBit(GImpactMixScene{}, {1u, 2u}, 150, [](TestWorld& w, unsigned) {
         const CullideDispatchStats& stats = w.cullideDispatcher()->getTotalStats();
         EXPECT_GT(stats.convexPairs, 500u);
         EXPECT_GT(stats.concavePairs, 100u);
