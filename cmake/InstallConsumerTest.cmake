@@ -1,6 +1,7 @@
 # ctest driver for the installed package, as a user meets it (issue 14):
 #  1. cmake --install into a scratch prefix, then move the prefix elsewhere (a relocatable install must not care);
-#  2. every installed ELF file carries only $ORIGIN-relative run paths (no build or install paths);
+#  2. every installed ELF file carries only $ORIGIN-relative run paths (no build or install paths), and the
+#     installed CMake files name no absolute path (Bullet is found on the consumer's machine);
 #  3. the installed cullide-pairs runs from the moved prefix on a two-cube scene, without LD_LIBRARY_PATH;
 #  4. a separate CMake project finds the package with find_package, builds the culler and the two-line-swap
 #     applications and runs them, without LD_LIBRARY_PATH;
@@ -30,6 +31,18 @@ foreach(path ${prefix}/bin/cullide-pairs ${prefix}/include/cullide/Culler.h
   if(NOT EXISTS ${path})
     message(FATAL_ERROR "not installed: ${path}")
   endif()
+endforeach()
+
+# The installed CMake files name no path of the build machine: the package's own paths are relative to the
+# prefix, Bullet's come from the consumer's own find (CullideBullet::Bullet, made by the config).
+file(GLOB cmakes ${libdir}/cmake/CullideBullet/*.cmake)
+foreach(f ${cmakes})
+  file(STRINGS ${f} lines REGEX "INTERFACE_|IMPORTED_LOCATION|IMPORTED_SONAME")
+  foreach(line ${lines})
+    if(line MATCHES "[\";]/")
+      message(FATAL_ERROR "${f} names an absolute path: ${line}")
+    endif()
+  endforeach()
 endforeach()
 
 # Run paths: only $ORIGIN-relative entries.
