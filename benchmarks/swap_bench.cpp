@@ -11,7 +11,8 @@
 //
 // Scenes: rigid-body dynamics worlds of the kinds Bullet's own benchmarks use, and the paper's environments as
 // collision-only btCollisionWorlds (*-world; the first min(--steps, --env-frames) frames, default 40), and the
-// breakable demo's scene where its library is built (each world its own run; see runBreakable).
+// breakable demo's scene and a soft-body scene where the demo's library is built (each world its own run; see
+// runBreakable, runSoftBodies).
 //
 // The worlds run in lockstep: every step each world is stepped once (timed, the order rotating), then the default
 // world's body states are copied into the others, so all three detect collisions on identical states every step.
@@ -25,8 +26,13 @@
 #include "cullide/TriangleTest.h"
 #include "cullide_bullet/CullideBroadphase.h"
 #include "cullide_bullet/CullideCollisionDispatcher.h"
-#ifdef CULLIDE_SWAP_BENCH_BREAKABLE
+#ifdef CULLIDE_SWAP_BENCH_DEMO_SCENES
 #include "cullide/demo/BreakableScene.h"
+#include "cullide/demo/SoftToriScene.h"
+
+#include <BulletSoftBody/btSoftBodyHelpers.h>
+#include <BulletSoftBody/btSoftBodyRigidBodyCollisionConfiguration.h>
+#include <BulletSoftBody/btSoftRigidDynamicsWorld.h>
 #endif
 
 #include <BulletCollision/CollisionShapes/btConvexHullShape.h>
@@ -71,10 +77,10 @@ bool g_gimpactConvexCulling = false;
 unsigned g_narrowPhaseThreads = 0;
 /// The CULLIDE world's object level: btAxisSweep3 with the SAP world's bounds (--sap-object-level) or the default.
 bool g_sapObjectLevel = false;
-#ifdef CULLIDE_SWAP_BENCH_BREAKABLE
-constexpr bool kBreakable = true;  ///< the demo's breakable scene is built in (its library target exists)
+#ifdef CULLIDE_SWAP_BENCH_DEMO_SCENES
+constexpr bool kDemoScenes = true;  ///< the demo's breakable and soft scenes are built in (their library exists)
 #else
-constexpr bool kBreakable = false;
+constexpr bool kDemoScenes = false;
 #endif
 
 /// Shapes and mesh data shared by the three worlds of a scene (one set, as an application would share them).
@@ -833,7 +839,7 @@ Row runCollisionScene(const CollisionSceneSpec& spec, int frames) {
     return row;
 }
 
-#ifdef CULLIDE_SWAP_BENCH_BREAKABLE
+#ifdef CULLIDE_SWAP_BENCH_DEMO_SCENES
 /// A breakable-scene world's contact points by body pair, the bodies numbered by name in `ids` (shared by the worlds).
 ContactPoints contactPointsOf(const cullide::demo::BreakableScene& scene, std::map<std::string, int>& ids) {
     const auto id = [&](const std::string& name) { return ids.emplace(name, int(ids.size())).first->second; };
@@ -897,6 +903,113 @@ Row runBreakable(int steps) {
         std::fprintf(stderr, "breakable: the swap's world departed from the default pipeline's at step %d\n", departed);
     row.last = worlds[2]->cullideBroadphase()->getLastFrameStats();
     row.memory = worlds[2]->cullideBroadphase()->getMemoryStats();
+    return row;
+}
+/// One pipeline's soft-body world: Bullet's soft-rigid world with a cloth patch falling on a static sphere beside a
+/// resting box, and the demo's two soft tori (VF_SS faces, SDF_RS) falling on each other onto a floor.
+struct SoftWorld {
+    btSoftBodyRigidBodyCollisionConfiguration config;
+    std::unique_ptr<btBroadphaseInterface> broadphase;
+    std::unique_ptr<btCollisionDispatcher> dispatcher;
+    btSequentialImpulseConstraintSolver solver;
+    std::unique_ptr<btSoftRigidDynamicsWorld> world;
+    btSphereShape sphereShape{btScalar(0.8)};
+    btBoxShape boxShape{btVector3(btScalar(0.5), btScalar(0.5), btScalar(0.5))};
+    std::unique_ptr<btRigidBody> sphere, box;
+    std::unique_ptr<btSoftBody> cloth;
+    std::unique_ptr<cullide::demo::SoftToriScene> tori;
+    double stepMs = 0, narrowMs = 0;
+    std::size_t pairs = 0;
+
+    explicit SoftWorld(Pipeline p) {
+        makePipeline(p, config, btVector3(-50, -50, -50), btVector3(50, 50, 50), broadphase, dispatcher);
+        world = std::make_unique<btSoftRigidDynamicsWorld>(dispatcher.get(), broadphase.get(), &solver, &config);
+        world->setGravity(btVector3(0, -10, 0));
+        btSoftBodyWorldInfo& info = world->getWorldInfo();
+        info.m_broadphase = broadphase.get();
+        info.m_dispatcher = dispatcher.get();
+        info.m_gravity = world->getGravity();
+        info.m_sparsesdf.Initialize();
+        tori = std::make_unique<cullide::demo::SoftToriScene>(*world);  // its floor's top at y = 0, around x = 0
+        const btTransform at = btTransform(btQuaternion::getIdentity(), btVector3(8, btScalar(0.8), 0));
+        sphere = std::make_unique<btRigidBody>(0, nullptr, &sphereShape);
+        sphere->setWorldTransform(at);
+        world->addRigidBody(sphere.get());
+        btVector3 inertia;
+        boxShape.calculateLocalInertia(1, inertia);
+        box = std::make_unique<btRigidBody>(1, nullptr, &boxShape, inertia);
+        box->setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(btScalar(9.3), btScalar(0.5), 0)));
+        world->addRigidBody(box.get());
+        cloth.reset(btSoftBodyHelpers::CreatePatch(info, btVector3(6, 3, -2), btVector3(10, 3, -2), btVector3(6, 3, 2),
+                                                   btVector3(10, 3, 2), 32, 32, 0, true));
+        cloth->getCollisionShape()->setMargin(btScalar(0.05));
+        cloth->setTotalMass(1);
+        world->addSoftBody(cloth.get());
+    }
+    ~SoftWorld() {
+        world->removeSoftBody(cloth.get());
+        world->removeRigidBody(box.get());
+        world->removeRigidBody(sphere.get());
+        tori.reset();
+    }
+
+    void step() {
+        Timer t;
+        world->stepSimulation(btScalar(1.0 / 60.0), 0);
+        stepMs += t.ms();
+        pairs += static_cast<std::size_t>(broadphase->getOverlappingPairCache()->getNumOverlappingPairs());
+    }
+
+    /// Every soft node's position and the box's transform, as bits.
+    std::vector<btScalar> state() const {
+        std::vector<btScalar> out;
+        for (const btSoftBody* b : {cloth.get(), &tori->torus(0), &tori->torus(1)})
+            for (int i = 0; i < b->m_nodes.size(); ++i)
+                for (int k = 0; k < 3; ++k) out.push_back(b->m_nodes[i].m_x[k]);
+        const btTransform& t = box->getWorldTransform();
+        for (int k = 0; k < 3; ++k) out.push_back(t.getOrigin()[k]);
+        return out;
+    }
+    /// Soft contacts of the last step: rigid contacts of every soft body, then soft-soft contacts.
+    std::size_t softContacts() const {
+        std::size_t n = 0;
+        for (const btSoftBody* b : {cloth.get(), &tori->torus(0), &tori->torus(1)})
+            n += std::size_t(b->m_rcontacts.size()) + std::size_t(b->m_scontacts.size());
+        return n;
+    }
+};
+
+/// Soft bodies through the swap (issue #12: they stay Bullet's, with no per-step overhead above Bullet's own): the
+/// three pipelines' soft worlds from the same start, stepped in lockstep, the order rotating. Soft bodies carry their
+/// own state (nodes), so each world runs its own simulation; the swap's world is checked every step against the
+/// default's (every node and the box as bits: a departure is reported on stderr, with the first step). "Lost" and
+/// "extra" count soft contacts (rigid and soft-soft) the swap's world has fewer or more of than the default's.
+Row runSoftBodies(int steps) {
+    std::vector<std::unique_ptr<SoftWorld>> worlds;
+    for (Pipeline p : kPipelines) worlds.push_back(std::make_unique<SoftWorld>(p));
+    Row row;
+    row.scene = "soft-bodies";
+    row.what = "a cloth (32 x 32) on a sphere and a box, two soft tori (VF_SS) falling on each other";
+    row.steps = steps;
+    row.bodies = 6;
+    int departed = -1;
+    for (int s = 0; s < steps; ++s) {
+        for (std::size_t k = 0; k < worlds.size(); ++k) worlds[(k + static_cast<std::size_t>(s)) % worlds.size()]->step();
+        const std::size_t want = worlds[0]->softContacts(), got = worlds[2]->softContacts();
+        row.contactPairSteps += want;
+        row.lost += want > got ? want - got : 0;
+        row.extra += got > want ? got - want : 0;
+        if (departed < 0 && worlds[0]->state() != worlds[2]->state()) departed = s;
+        addCullideStep(cullideOf(*worlds[2]->dispatcher), cullideOf(*worlds[2]->broadphase), steps, row);
+    }
+    if (departed >= 0)
+        std::fprintf(stderr, "soft-bodies: the swap's world departed from the default pipeline's at step %d\n", departed);
+    for (std::size_t k = 0; k < worlds.size(); ++k) {
+        row.ms[k] = worlds[k]->stepMs / steps;
+        row.pairs[k] = double(worlds[k]->pairs) / steps;
+    }
+    row.last = cullideOf(*worlds[2]->broadphase).getLastFrameStats();
+    row.memory = cullideOf(*worlds[2]->broadphase).getMemoryStats();
     return row;
 }
 #endif
@@ -983,13 +1096,13 @@ int main(int argc, char** argv) {
                                  "[--sap-object-level]\nscenes:");
             for (const SceneFactory& f : kScenes) std::fprintf(stderr, " %s", f.name);
             for (const CollisionSceneSpec& c : kCollisionScenes) std::fprintf(stderr, " %s", c.name);
-            if (kBreakable) std::fprintf(stderr, " breakable");
+            if (kDemoScenes) std::fprintf(stderr, " breakable soft-bodies");
             std::fprintf(stderr, "\n");
             return 2;
         }
     }
     for (const std::string& name : only) {
-        if (name == "breakable" && kBreakable) continue;
+        if ((name == "breakable" || name == "soft-bodies") && kDemoScenes) continue;
         if (std::none_of(std::begin(kScenes), std::end(kScenes), [&](const SceneFactory& f) { return name == f.name; }) &&
             std::none_of(std::begin(kCollisionScenes), std::end(kCollisionScenes),
                          [&](const CollisionSceneSpec& c) { return name == c.name; })) {
@@ -1010,10 +1123,14 @@ int main(int argc, char** argv) {
         rows.push_back(runCollisionScene(c, std::min(steps, envFrames)));
         printRow(rows.back());
     }
-#ifdef CULLIDE_SWAP_BENCH_BREAKABLE
+#ifdef CULLIDE_SWAP_BENCH_DEMO_SCENES
     // --steps steps (the default 120 covers the fall, the impact and the pieces).
     if (only.empty() || std::find(only.begin(), only.end(), "breakable") != only.end()) {
         rows.push_back(runBreakable(steps));
+        printRow(rows.back());
+    }
+    if (only.empty() || std::find(only.begin(), only.end(), "soft-bodies") != only.end()) {
+        rows.push_back(runSoftBodies(steps));
         printRow(rows.back());
     }
 #endif
