@@ -994,7 +994,8 @@ Row runSoftBodies(int steps) {
     row.bodies = 6;
     int departed = -1;
     for (int s = 0; s < steps; ++s) {
-        for (std::size_t k = 0; k < worlds.size(); ++k) worlds[(k + static_cast<std::size_t>(s)) % worlds.size()]->step();
+        for (std::size_t k = 0; k < worlds.size(); ++k)
+            worlds[(k + static_cast<std::size_t>(s)) % worlds.size()]->step();
         const std::size_t want = worlds[0]->softContacts(), got = worlds[2]->softContacts();
         row.contactPairSteps += want;
         row.lost += want > got ? want - got : 0;
@@ -1003,7 +1004,8 @@ Row runSoftBodies(int steps) {
         addCullideStep(cullideOf(*worlds[2]->dispatcher), cullideOf(*worlds[2]->broadphase), steps, row);
     }
     if (departed >= 0)
-        std::fprintf(stderr, "soft-bodies: the swap's world departed from the default pipeline's at step %d\n", departed);
+        std::fprintf(stderr, "soft-bodies: the swap's world departed from the default pipeline's at step %d\n",
+                     departed);
     for (std::size_t k = 0; k < worlds.size(); ++k) {
         row.ms[k] = worlds[k]->stepMs / steps;
         row.pairs[k] = double(worlds[k]->pairs) / steps;
