@@ -70,12 +70,7 @@ Measurement measure(int segments, int sides, int steps, int repeats) {
     btDbvtBroadphase broadphase;
     btSequentialImpulseConstraintSolver solver;
     btSoftRigidDynamicsWorld world(&dispatcher, &broadphase, &solver, &config);
-    world.setGravity(btVector3(0, -10, 0));
-    btSoftBodyWorldInfo& info = world.getWorldInfo();
-    info.m_broadphase = &broadphase;
-    info.m_dispatcher = &dispatcher;
-    info.m_gravity = world.getGravity();
-    info.m_sparsesdf.Initialize();
+    cullide::demo::prepareSoftWorld(world);
 
     const cullide::demo::SoftToriScene scene(world, segments, sides);
     for (int s = 0; s < steps; ++s) world.stepSimulation(btScalar(1.0 / 60.0), 1, btScalar(1.0 / 60.0));

@@ -924,12 +924,8 @@ struct SoftWorld {
     explicit SoftWorld(Pipeline p) {
         makePipeline(p, config, btVector3(-50, -50, -50), btVector3(50, 50, 50), broadphase, dispatcher);
         world = std::make_unique<btSoftRigidDynamicsWorld>(dispatcher.get(), broadphase.get(), &solver, &config);
-        world->setGravity(btVector3(0, -10, 0));
+        cullide::demo::prepareSoftWorld(*world);
         btSoftBodyWorldInfo& info = world->getWorldInfo();
-        info.m_broadphase = broadphase.get();
-        info.m_dispatcher = dispatcher.get();
-        info.m_gravity = world->getGravity();
-        info.m_sparsesdf.Initialize();
         tori = std::make_unique<cullide::demo::SoftToriScene>(*world);  // its floor's top at y = 0, around x = 0
         const btTransform at = btTransform(btQuaternion::getIdentity(), btVector3(8, btScalar(0.8), 0));
         sphere = std::make_unique<btRigidBody>(0, nullptr, &sphereShape);

@@ -8,6 +8,15 @@
 
 namespace cullide::demo {
 
+void prepareSoftWorld(btSoftRigidDynamicsWorld& world) {
+    world.setGravity(btVector3(0, -10, 0));
+    btSoftBodyWorldInfo& info = world.getWorldInfo();
+    info.m_broadphase = world.getBroadphase();
+    info.m_dispatcher = world.getDispatcher();
+    info.m_gravity = world.getGravity();
+    info.m_sparsesdf.Initialize();
+}
+
 SoftToriScene::SoftToriScene(btSoftRigidDynamicsWorld& world, int segments, int sides) : m_world(world) {
     m_groundShape = std::make_unique<btBoxShape>(btVector3(10, 1, 10));
     m_ground = std::make_unique<btRigidBody>(0, nullptr, m_groundShape.get());

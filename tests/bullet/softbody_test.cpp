@@ -36,12 +36,7 @@ struct SoftWorld {
             broadphase = std::move(bp);
         }
         world = std::make_unique<btSoftRigidDynamicsWorld>(dispatcher.get(), broadphase.get(), &solver, &config);
-        world->setGravity(btVector3(0, -10, 0));
-        btSoftBodyWorldInfo& info = world->getWorldInfo();
-        info.m_broadphase = broadphase.get();
-        info.m_dispatcher = dispatcher.get();
-        info.m_gravity = world->getGravity();
-        info.m_sparsesdf.Initialize();
+        demo::prepareSoftWorld(*world);
     }
 };
 

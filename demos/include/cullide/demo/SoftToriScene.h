@@ -12,6 +12,10 @@ class btSoftRigidDynamicsWorld;
 
 namespace cullide::demo {
 
+/// Sets `world`'s gravity to (0, -10, 0) and its soft-body info as Bullet's soft bodies need it before they are made:
+/// the world's broadphase and dispatcher, the same gravity, the sparse SDF initialized.
+void prepareSoftWorld(btSoftRigidDynamicsWorld& world);
+
 class SoftToriScene {
 public:
     /// Adds a static box floor (top at y = 0) and two tori of `segments` x `sides` quads (major radius 1, minor
