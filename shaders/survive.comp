@@ -17,7 +17,9 @@ uint orderedBits(float f) {
     return (u & 0x80000000u) != 0u ? ~u : (u | 0x80000000u);
 }
 
-// Per work group first (shared-memory atomics), then one global atomic per counter and group.
+// Per work group first (shared-memory atomics), then one global atomic per counter and group. The three axes are
+// written out: NVIDIA's GLSL compiler (driver 580.159) crashes the process linking this program when they are a
+// loop over shared and global counters indexed by the loop variable (found on an H100; docs/benchmarks.md).
 shared uint s_counters[CULLIDE_COUNTER_COUNT];
 
 void main() {
@@ -37,10 +39,12 @@ void main() {
             atomicAdd(s_counters[CULLIDE_COUNTER_ALIVE], 1u);
             atomicMin(s_counters[CULLIDE_COUNTER_OWNER_MIN], owners[i]);
             atomicMax(s_counters[CULLIDE_COUNTER_OWNER_MAX], owners[i]);
-            for (uint k = 0u; k < 3u; ++k) {
-                atomicMin(s_counters[CULLIDE_COUNTER_LO + k], orderedBits(bounds[6u * i + k]));
-                atomicMax(s_counters[CULLIDE_COUNTER_HI + k], orderedBits(bounds[6u * i + 3u + k]));
-            }
+            atomicMin(s_counters[CULLIDE_COUNTER_LO + 0], orderedBits(bounds[6u * i + 0u]));
+            atomicMin(s_counters[CULLIDE_COUNTER_LO + 1], orderedBits(bounds[6u * i + 1u]));
+            atomicMin(s_counters[CULLIDE_COUNTER_LO + 2], orderedBits(bounds[6u * i + 2u]));
+            atomicMax(s_counters[CULLIDE_COUNTER_HI + 0], orderedBits(bounds[6u * i + 3u]));
+            atomicMax(s_counters[CULLIDE_COUNTER_HI + 1], orderedBits(bounds[6u * i + 4u]));
+            atomicMax(s_counters[CULLIDE_COUNTER_HI + 2], orderedBits(bounds[6u * i + 5u]));
         }
     }
     barrier();
@@ -48,9 +52,11 @@ void main() {
         atomicAdd(counters[CULLIDE_COUNTER_ALIVE], s_counters[CULLIDE_COUNTER_ALIVE]);
         atomicMin(counters[CULLIDE_COUNTER_OWNER_MIN], s_counters[CULLIDE_COUNTER_OWNER_MIN]);
         atomicMax(counters[CULLIDE_COUNTER_OWNER_MAX], s_counters[CULLIDE_COUNTER_OWNER_MAX]);
-        for (uint k = 0u; k < 3u; ++k) {
-            atomicMin(counters[CULLIDE_COUNTER_LO + k], s_counters[CULLIDE_COUNTER_LO + k]);
-            atomicMax(counters[CULLIDE_COUNTER_HI + k], s_counters[CULLIDE_COUNTER_HI + k]);
-        }
+        atomicMin(counters[CULLIDE_COUNTER_LO + 0], s_counters[CULLIDE_COUNTER_LO + 0]);
+        atomicMin(counters[CULLIDE_COUNTER_LO + 1], s_counters[CULLIDE_COUNTER_LO + 1]);
+        atomicMin(counters[CULLIDE_COUNTER_LO + 2], s_counters[CULLIDE_COUNTER_LO + 2]);
+        atomicMax(counters[CULLIDE_COUNTER_HI + 0], s_counters[CULLIDE_COUNTER_HI + 0]);
+        atomicMax(counters[CULLIDE_COUNTER_HI + 1], s_counters[CULLIDE_COUNTER_HI + 1]);
+        atomicMax(counters[CULLIDE_COUNTER_HI + 2], s_counters[CULLIDE_COUNTER_HI + 2]);
     }
 }
