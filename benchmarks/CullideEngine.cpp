@@ -57,7 +57,7 @@ void CullideEngine::run(const BenchFrame& frame, FrameOutput& out) {
     out.levels = nlohmann::json::array();
     for (const LevelStats& l : s.levels) {
         nlohmann::json level = {{"name", l.name}, {"items", l.itemsPerIteration}, {"draws", l.draws},
-                                {"cpu_ms", l.cpuMs}};
+                                {"cpu_ms", l.cpuMs}, {"setup_ms", l.setupMs}, {"wait_ms", l.waitMs}};
         if (l.gpuTimingValid) level["gpu_ms"] = l.gpuMs;
         out.levels.push_back(level);
     }

@@ -69,12 +69,36 @@ void addTriangleItem(LevelRun& run, std::uint32_t object, const std::uint32_t* t
     run.items.bounds.push_back(run.geometry.relative(worldBox));
 }
 
+/// One item per triangle, as addTriangleItem would add them one by one (the same owner ids, in the same order),
+/// filled on the workers: a triangle level has tens of thousands.
+void addTriangleItems(LevelRun& run, const std::vector<FrameTriangle>& triangles) {
+    for (const FrameTriangle& t : triangles) ownerOf(run, t.object);  // compact ids in order of first appearance
+    LevelItems& items = run.items;
+    const std::size_t first = items.size();
+    const std::size_t n = triangles.size();
+    items.owner.resize(first + n);
+    items.prims.resize(items.prims.size() + n);
+    items.primBegin.resize(first + n + 1);
+    items.bounds.resize(first + n);
+    const std::uint32_t firstPrim = items.primBegin[first];
+    run.pool.parallelFor(n, 4096, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t k = begin; k < end; ++k) {
+            const FrameTriangle& t = triangles[k];
+            items.owner[first + k] = run.ownerId[t.object];
+            items.prims[firstPrim + k] = run.geometry.baseTriangle(t.object) + t.triangle;
+            items.primBegin[first + k + 1] = firstPrim + static_cast<std::uint32_t>(k + 1);
+            items.bounds[first + k] = run.geometry.relative((*run.frame.boxesOf[t.object])[t.triangle]);
+        }
+    });
+}
+
 /// Runs the level built since beginLevel; run.survivors says which items survive.
 void prune(LevelRun& run, const char* name) {
     run.stats.levels.push_back(LevelStats{});
     LevelStats& level = run.stats.levels.back();
     level.name = name;
-    pruneLevel(run.backend, run.items, run.settings, run.geometry.coordinateBound(), run.survivors, level, run.stats);
+    pruneLevel(run.backend, run.items, run.settings, run.geometry.coordinateBound(), run.pool, run.survivors, level,
+               run.stats);
 }
 
 std::vector<std::uint32_t> clusterProxies(const LevelRun& run) {
@@ -97,8 +121,7 @@ void keepSurvivors(const std::vector<std::uint8_t>& survivors, std::size_t first
 /// frame.surviving.
 void runTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
     beginLevel(run);
-    for (const FrameTriangle& t : run.triangles)
-        addTriangleItem(run, t.object, &t.triangle, 1, (*run.frame.boxesOf[t.object])[t.triangle]);
+    addTriangleItems(run, run.triangles);
     for (std::uint32_t o : proxies) addObjectBoxItem(run, o);
     prune(run, "triangles");
     addSurvivingTriangles(run.frame, run.triangles, run.survivors);

@@ -183,12 +183,13 @@ ReferenceVisibility::ReferenceVisibility(const Settings& settings) : m_settings(
 
 void ReferenceVisibility::upload(const GpuGeometry& geometry, Stats&) { m_geometry = &geometry; }
 
-void ReferenceVisibility::beginLevel(const LevelItems& items, const View&, Stats&) {
+void ReferenceVisibility::beginLevel(const LevelItems& items, const View&, TaskPool&, LevelStats&, Stats&) {
     m_items = &items;
     m_alive.assign(items.size(), 1);
 }
 
-IterationResult ReferenceVisibility::iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) {
+IterationResult ReferenceVisibility::iterate(const View& view, std::uint32_t idBits, TaskPool&, LevelStats& level,
+                                             Stats& stats) {
     const LevelItems& items = *m_items;
     const GpuGeometry& geometry = *m_geometry;
     const int res = m_settings.resolution;
@@ -260,7 +261,7 @@ IterationResult ReferenceVisibility::iterate(const View& view, std::uint32_t idB
     return r;
 }
 
-void ReferenceVisibility::readAlive(std::vector<std::uint8_t>& alive, Stats&) { alive = m_alive; }
+void ReferenceVisibility::readAlive(std::vector<std::uint8_t>& alive, LevelStats&, Stats&) { alive = m_alive; }
 
 std::unique_ptr<PruningBackend> createReferencePruningBackend(const Settings& settings) {
     return std::make_unique<ReferenceVisibility>(settings);

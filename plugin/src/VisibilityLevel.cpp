@@ -75,7 +75,7 @@ Aabb floatBoundsOf(const LevelItems& items, std::size_t i) {
 }
 
 void pruneLevel(PruningBackend& backend, const LevelItems& items, const Settings& settings, double coordinateBound,
-                std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats) {
+                TaskPool& pool, std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats) {
     const Timer timer;
     const std::size_t n = items.size();
     survivors.assign(n, 1);
@@ -92,11 +92,11 @@ void pruneLevel(PruningBackend& backend, const LevelItems& items, const Settings
     for (const Aabb& b : items.bounds) bounds.grow(b);
     View view = fitView(bounds, settings, coordinateBound);
     std::uint32_t maxOwner = *std::max_element(items.owner.begin(), items.owner.end());
-    backend.beginLevel(items, view, stats);
+    backend.beginLevel(items, view, pool, level, stats);
     std::size_t alive = n;
     bool allPruned = false;
     for (int iteration = 0; iteration < settings.maxIterations; ++iteration) {
-        const IterationResult r = backend.iterate(view, idBitsFor(maxOwner), level, stats);
+        const IterationResult r = backend.iterate(view, idBitsFor(maxOwner), pool, level, stats);
         if (r.overflows != 0) break;  // some footprint was not scanned: the iteration pruned nothing
         if (r.alive == alive) break;  // the set only shrinks: the same size is the same set
         alive = r.alive;
@@ -113,7 +113,7 @@ void pruneLevel(PruningBackend& backend, const LevelItems& items, const Settings
     if (allPruned)
         std::fill(survivors.begin(), survivors.end(), 0);
     else
-        backend.readAlive(survivors, stats);
+        backend.readAlive(survivors, level, stats);
     level.cpuMs += timer.ms();
 }
 

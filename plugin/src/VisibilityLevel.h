@@ -37,8 +37,9 @@ Aabb floatBoundsOf(const LevelItems& items, std::size_t i);
 /// Runs one level on `backend`: survivors[i] is 1 when item i may intersect an item of another owner. At most
 /// Settings::maxIterations iterations, each fitted to the items still alive; the loop stops when the set stops
 /// changing, when one owner is left (nothing to collide with: all pruned) or when an iteration overflowed (it pruned
-/// nothing). `coordinateBound`: GpuGeometry::coordinateBound of the upload the items refer to.
+/// nothing). `coordinateBound`: GpuGeometry::coordinateBound of the upload the items refer to; `pool`: the
+/// culler's workers, which the backend may use for its per-item set-up.
 void pruneLevel(PruningBackend& backend, const LevelItems& items, const Settings& settings, double coordinateBound,
-                std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats);
+                TaskPool& pool, std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats);
 
 }  // namespace cullide

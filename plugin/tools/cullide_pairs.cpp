@@ -176,6 +176,8 @@ nlohmann::ordered_json statsToJson(const cullide::Stats& s) {
         lj["primitives_drawn"] = l.primitivesDrawn;
         lj["draws"] = l.draws;
         lj["cpu_ms"] = l.cpuMs;
+        lj["setup_ms"] = l.setupMs;
+        lj["wait_ms"] = l.waitMs;
         lj["gpu_ms"] = gpuTime(l.gpuMs, l.gpuTimingValid);
         levels.push_back(std::move(lj));
     }

@@ -24,26 +24,29 @@ public:
     std::string renderer() const override { return m_tested->renderer(); }
     std::string device() const override { return m_tested->device(); }
 
-    void beginLevel(const LevelItems& items, const View& view, Stats& stats) override {
-        m_tested->beginLevel(items, view, stats);
-        m_reference->beginLevel(items, view, m_scratch);
+    void beginLevel(const LevelItems& items, const View& view, TaskPool& pool, LevelStats& level,
+                    Stats& stats) override {
+        m_tested->beginLevel(items, view, pool, level, stats);
+        m_reference->beginLevel(items, view, pool, m_scratchLevel, m_scratch);
         ++m_log->levels;
         m_iteration = 0;
         m_aliveBefore = items.size();
     }
 
-    IterationResult iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) override {
-        const IterationResult got = m_tested->iterate(view, idBits, level, stats);
-        LevelStats scratchLevel;
-        const IterationResult expected = m_reference->iterate(view, idBits, scratchLevel, m_scratch);
-        m_tested->readAlive(m_gotAlive, m_scratch);
-        m_reference->readAlive(m_expectedAlive, m_scratch);
+    IterationResult iterate(const View& view, std::uint32_t idBits, TaskPool& pool, LevelStats& level,
+                            Stats& stats) override {
+        const IterationResult got = m_tested->iterate(view, idBits, pool, level, stats);
+        const IterationResult expected = m_reference->iterate(view, idBits, pool, m_scratchLevel, m_scratch);
+        m_tested->readAlive(m_gotAlive, m_scratchLevel, m_scratch);
+        m_reference->readAlive(m_expectedAlive, m_scratchLevel, m_scratch);
         compare(got, expected);
         ++m_iteration;
         return got;
     }
 
-    void readAlive(std::vector<std::uint8_t>& alive, Stats& stats) override { m_tested->readAlive(alive, stats); }
+    void readAlive(std::vector<std::uint8_t>& alive, LevelStats& level, Stats& stats) override {
+        m_tested->readAlive(alive, level, stats);
+    }
 
 private:
     void compare(const IterationResult& got, const IterationResult& expected) {
@@ -83,6 +86,7 @@ private:
     std::unique_ptr<PruningBackend> m_reference;
     std::shared_ptr<LockstepLog> m_log;
     Stats m_scratch;  ///< what the checks cost is not the culler's
+    LevelStats m_scratchLevel;
     std::size_t m_iteration = 0;
     std::size_t m_aliveBefore = 0;
     std::vector<std::uint8_t> m_gotAlive;

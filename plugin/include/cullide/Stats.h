@@ -15,6 +15,12 @@ struct LevelStats {
     std::size_t primitivesDrawn = 0;        ///< primitives submitted (all passes, all axes)
     std::size_t draws = 0;
     double cpuMs = 0.0;                     ///< wall time spent on the CPU side of the level (incl. waiting)
+    /// Of cpuMs, GL back-end: building and sending the level's item data and records (at its start, and again where
+    /// the view shrank enough to refit the records' bands).
+    double setupMs = 0.0;
+    /// Of cpuMs, GL back-end: blocked in read-backs (each iteration's counters, the level's alive set), i.e. waiting
+    /// for the device to finish the work submitted before. The rest of cpuMs is issuing commands and the level loop.
+    double waitMs = 0.0;
     /// GPU time of the level's iterations from timer queries. Only meaningful with gpuTimingValid; 0 otherwise.
     double gpuMs = 0.0;
     /// true when every iteration of the level was timed by an available, plausible timer-query result (at most

@@ -74,6 +74,9 @@ double pixelsPerInvocation(double footprintPixels, bool software) {
                       double{CULLIDE_PIXELS_PER_INVOCATION});
 }
 
+/// Items per task of the level set-up (item boxes, records): a task outweighs its hand-off to a worker.
+constexpr std::size_t kSetupChunk = 4096;
+
 enum Buffer {
     kPositions,
     kIndices,
@@ -118,6 +121,9 @@ struct VisibilityPass::Impl {
     std::size_t maxGroups = 65535;  ///< GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]
     std::vector<std::uint32_t> primScratch;
     std::vector<double> footprintScratch;  ///< compute back-end: pixels of each alive primitive's largest footprint
+    std::vector<std::uint32_t> bandScratch;  ///< bands (records) of each alive primitive
+    std::vector<double> chunkSums;           ///< footprint pixels per chunk of items
+    std::vector<std::size_t> chunkFirst;     ///< first record of each chunk of items (and the total)
     std::vector<float> boundsScratch;
     std::vector<std::uint32_t> aliveScratch;
     std::vector<std::uint8_t> recordAlive;  ///< the alive set the records are built from (all at a level's start)
@@ -233,16 +239,18 @@ struct VisibilityPass::Impl {
 
     /// Sends what the survivor pass needs of the level's items: their owners, float boxes (rounded outwards) and
     /// the alive set (every item).
-    void uploadItems(const LevelItems& items, Stats& stats) {
+    void uploadItems(const LevelItems& items, TaskPool& pool, Stats& stats) {
         const std::size_t n = items.size();
         uploadBuffer(buffers[kOwners], capacity[kOwners], items.owner.data(), n * 4);
         boundsScratch.resize(6 * n);
-        for (std::size_t i = 0; i < n; ++i) {
-            for (int a = 0; a < 3; ++a) {
-                boundsScratch[6 * i + static_cast<std::size_t>(a)] = floatDown(items.bounds[i].min[a]);
-                boundsScratch[6 * i + 3 + static_cast<std::size_t>(a)] = floatUp(items.bounds[i].max[a]);
+        pool.parallelFor(n, kSetupChunk, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t i = begin; i < end; ++i) {
+                for (int a = 0; a < 3; ++a) {
+                    boundsScratch[6 * i + static_cast<std::size_t>(a)] = floatDown(items.bounds[i].min[a]);
+                    boundsScratch[6 * i + 3 + static_cast<std::size_t>(a)] = floatUp(items.bounds[i].max[a]);
+                }
             }
-        }
+        });
         uploadBuffer(buffers[kItemBounds], capacity[kItemBounds], boundsScratch.data(), boundsScratch.size() * 4);
         stats.bytesUploaded += n * 4 + boundsScratch.size() * 4;
         reserveBuffer(buffers[kFlags], capacity[kFlags], n * 4);
@@ -252,48 +260,69 @@ struct VisibilityPass::Impl {
                                   GL_UNSIGNED_INT, &one);
     }
 
+    /// Pixels of primitive `ref`'s largest footprint over the three views of `view` (its bounding rectangle grown
+    /// by the tested square and a pixel of rounding on each side).
+    double footprintPixels(std::uint32_t ref, const View& view) const {
+        const Vec3 size = primExtent(ref);
+        double pixels = 0.0;
+        for (int a = 0; a < 3; ++a) {
+            const int u = (a + 1) % 3, v = (a + 2) % 3;
+            pixels = std::max(pixels, (size[u] * view.pixelScale[u] + 2.0 * view.halfSize[u] + 3.0) *
+                                          (size[v] * view.pixelScale[v] + 2.0 * view.halfSize[v] + 3.0));
+        }
+        return pixels;
+    }
+
     /// The records of the alive items' primitives for `view`; on the compute back-end each primitive is split into
     /// bands of at most pixelsPerInvocation() pixels of its largest footprint over the three views. Returns the
-    /// record count. Records of items that die later stay: the shaders skip them.
+    /// record count. Records of items that die later stay: the shaders skip them. Built on the workers in fixed
+    /// chunks of items (the same records, in the same order, for any number of threads): footprints, then bands
+    /// and each chunk's record count, then the records at each chunk's offset.
     std::size_t buildRecords(const LevelItems& items, const std::vector<std::uint8_t>& alive, const View& view,
-                             Stats& stats) {
+                             TaskPool& pool, Stats& stats) {
         const bool split = settings.backend == Backend::Compute;
-        footprintScratch.clear();
-        double footprintPixels = 0.0;
-        for (std::size_t i = 0; split && i < items.size(); ++i) {
-            if (!alive[i]) continue;
+        const std::size_t chunks = (items.size() + kSetupChunk - 1) / kSetupChunk;
+        auto forChunks = [&](auto&& perItem) {
+            pool.parallelFor(chunks, 1, [&](std::size_t begin, std::size_t end) {
+                for (std::size_t c = begin; c < end; ++c)
+                    for (std::size_t i = c * kSetupChunk, last = std::min(items.size(), i + kSetupChunk); i < last; ++i)
+                        if (alive[i]) perItem(c, i);
+            });
+        };
+        chunkSums.assign(chunks, 0.0);
+        footprintScratch.resize(split ? items.prims.size() : 0);
+        if (split) forChunks([&](std::size_t c, std::size_t i) {
             for (std::uint32_t p = items.primBegin[i]; p < items.primBegin[i + 1]; ++p) {
-                const Vec3 size = primExtent(items.prims[p]);
-                double pixels = 0.0;
-                for (int a = 0; a < 3; ++a) {
-                    const int u = (a + 1) % 3, v = (a + 2) % 3;
-                    pixels = std::max(pixels, (size[u] * view.pixelScale[u] + 2.0 * view.halfSize[u] + 3.0) *
-                                                  (size[v] * view.pixelScale[v] + 2.0 * view.halfSize[v] + 3.0));
-                }
-                footprintScratch.push_back(pixels);
-                footprintPixels += pixels;
+                footprintScratch[p] = footprintPixels(items.prims[p], view);
+                chunkSums[c] += footprintScratch[p];
             }
-        }
-        const double perInvocation = pixelsPerInvocation(footprintPixels, context.isSoftware());
-        primScratch.clear();
-        std::size_t footprint = 0;
-        for (std::size_t i = 0; i < items.size(); ++i) {
-            if (!alive[i]) continue;
+        });
+        double footprint = 0.0;
+        for (const double pixels : chunkSums) footprint += pixels;
+        const double perInvocation = pixelsPerInvocation(footprint, context.isSoftware());
+        bandScratch.resize(items.prims.size());
+        chunkFirst.assign(chunks + 1, 0);
+        forChunks([&](std::size_t c, std::size_t i) {
             for (std::uint32_t p = items.primBegin[i]; p < items.primBegin[i + 1]; ++p) {
-                std::uint32_t bands = 1;
-                if (split) {
-                    bands = static_cast<std::uint32_t>(
-                        std::min(1e6, std::ceil(footprintScratch[footprint++] / perInvocation)));
-                    bands = std::max(bands, 1u);
-                }
-                for (std::uint32_t band = 0; band < bands; ++band) {
-                    primScratch.push_back(items.prims[p]);
-                    primScratch.push_back(static_cast<std::uint32_t>(i));
-                    primScratch.push_back(band);
-                    primScratch.push_back(bands);
+                const double bands = split ? std::min(1e6, std::ceil(footprintScratch[p] / perInvocation)) : 1.0;
+                bandScratch[p] = std::max(static_cast<std::uint32_t>(bands), 1u);
+                chunkFirst[c + 1] += bandScratch[p];
+            }
+        });
+        for (std::size_t c = 0; c < chunks; ++c) chunkFirst[c + 1] += chunkFirst[c];
+        primScratch.resize(4 * chunkFirst[chunks]);
+        std::vector<std::size_t> next(chunkFirst.begin(), chunkFirst.end() - 1);
+        forChunks([&](std::size_t c, std::size_t i) {
+            for (std::uint32_t p = items.primBegin[i]; p < items.primBegin[i + 1]; ++p) {
+                for (std::uint32_t band = 0; band < bandScratch[p]; ++band) {
+                    std::uint32_t* record = &primScratch[4 * next[c]++];
+                    record[0] = items.prims[p];
+                    record[1] = static_cast<std::uint32_t>(i);
+                    record[2] = band;
+                    record[3] = bandScratch[p];
                 }
             }
-        }
+        });
         uploadBuffer(buffers[kPrims], capacity[kPrims], primScratch.data(), primScratch.size() * 4);
         stats.bytesUploaded += primScratch.size() * 4;
         return primScratch.size() / 4;
@@ -366,7 +395,9 @@ struct VisibilityPass::Impl {
         if (timer) glEndQuery(GL_TIME_ELAPSED);
         glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
         GLuint counters[CULLIDE_COUNTER_COUNT] = {};
+        const auto waitStart = Clock::now();
         glGetNamedBufferSubData(buffers[kCounters], 0, sizeof counters, counters);
+        level.waitMs += msSince(waitStart);
         stats.bytesReadBack += sizeof counters;
         recordGpuTime(timer ? timerResultMs(timer, msSince(timedSpan)) : -1.0, level, stats);
         checkGlError("a visibility iteration");
@@ -386,10 +417,12 @@ struct VisibilityPass::Impl {
     }
 
     /// The device's alive set, as 0/1 per item.
-    void readAlive(std::size_t itemCount, std::vector<std::uint8_t>& alive, Stats& stats) {
+    void readAlive(std::size_t itemCount, std::vector<std::uint8_t>& alive, LevelStats& level, Stats& stats) {
         aliveScratch.resize(itemCount);
         glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        const auto waitStart = Clock::now();
         glGetNamedBufferSubData(buffers[kAlive], 0, static_cast<GLsizeiptr>(itemCount * 4), aliveScratch.data());
+        level.waitMs += msSince(waitStart);
         stats.bytesReadBack += itemCount * 4;
         alive.resize(itemCount);
         for (std::size_t i = 0; i < itemCount; ++i) alive[i] = aliveScratch[i] != 0 ? 1 : 0;
@@ -474,31 +507,37 @@ bool recordsStale(const Aabb& view, const Aabb& recordedView) {
 
 }  // namespace
 
-void VisibilityPass::beginLevel(const LevelItems& items, const View& view, Stats& stats) {
+void VisibilityPass::beginLevel(const LevelItems& items, const View& view, TaskPool& pool, LevelStats& level,
+                                Stats& stats) {
     Impl& s = *m_impl;
     s.context.makeCurrent();
+    const auto t0 = Clock::now();
     s.levelItems = &items;
-    s.uploadItems(items, stats);
+    s.uploadItems(items, pool, stats);
     s.recordAlive.assign(items.size(), 1);
-    s.recordCount = s.buildRecords(items, s.recordAlive, view, stats);
+    s.recordCount = s.buildRecords(items, s.recordAlive, view, pool, stats);
     s.recordedView = view.box;
+    level.setupMs += msSince(t0);
 }
 
-IterationResult VisibilityPass::iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) {
+IterationResult VisibilityPass::iterate(const View& view, std::uint32_t idBits, TaskPool& pool, LevelStats& level,
+                                        Stats& stats) {
     Impl& s = *m_impl;
     s.context.makeCurrent();
     if (recordsStale(view.box, s.recordedView)) {
-        s.readAlive(s.levelItems->size(), s.recordAlive, stats);
-        s.recordCount = s.buildRecords(*s.levelItems, s.recordAlive, view, stats);
+        s.readAlive(s.levelItems->size(), s.recordAlive, level, stats);
+        const auto t0 = Clock::now();
+        s.recordCount = s.buildRecords(*s.levelItems, s.recordAlive, view, pool, stats);
         s.recordedView = view.box;
+        level.setupMs += msSince(t0);
     }
     return s.runIteration(view, idBits, s.levelItems->size(), level, stats);
 }
 
-void VisibilityPass::readAlive(std::vector<std::uint8_t>& alive, Stats& stats) {
+void VisibilityPass::readAlive(std::vector<std::uint8_t>& alive, LevelStats& level, Stats& stats) {
     Impl& s = *m_impl;
     s.context.makeCurrent();
-    s.readAlive(s.levelItems->size(), alive, stats);
+    s.readAlive(s.levelItems->size(), alive, level, stats);
 }
 
 }  // namespace cullide::gl
