@@ -4,7 +4,6 @@
 #include "gl/EglContext.h"
 #include "gl/GlApi.h"
 #include "gl/GlProgram.h"
-#include "FloatRounding.h"
 #include "CullerBackends.h"
 #include "VisibilityLevel.h"
 
@@ -245,9 +244,10 @@ struct VisibilityPass::Impl {
         boundsScratch.resize(6 * n);
         pool.parallelFor(n, kSetupChunk, [&](std::size_t begin, std::size_t end) {
             for (std::size_t i = begin; i < end; ++i) {
+                const Aabb b = floatBoundsOf(items, i);  // exact floats: the casts below do not round
                 for (int a = 0; a < 3; ++a) {
-                    boundsScratch[6 * i + static_cast<std::size_t>(a)] = floatDown(items.bounds[i].min[a]);
-                    boundsScratch[6 * i + 3 + static_cast<std::size_t>(a)] = floatUp(items.bounds[i].max[a]);
+                    boundsScratch[6 * i + static_cast<std::size_t>(a)] = static_cast<float>(b.min[a]);
+                    boundsScratch[6 * i + 3 + static_cast<std::size_t>(a)] = static_cast<float>(b.max[a]);
                 }
             }
         });
@@ -311,11 +311,10 @@ struct VisibilityPass::Impl {
         });
         for (std::size_t c = 0; c < chunks; ++c) chunkFirst[c + 1] += chunkFirst[c];
         primScratch.resize(4 * chunkFirst[chunks]);
-        std::vector<std::size_t> next(chunkFirst.begin(), chunkFirst.end() - 1);
-        forChunks([&](std::size_t c, std::size_t i) {
+        forChunks([&](std::size_t c, std::size_t i) {  // chunkFirst[c] becomes chunk c's write cursor
             for (std::uint32_t p = items.primBegin[i]; p < items.primBegin[i + 1]; ++p) {
                 for (std::uint32_t band = 0; band < bandScratch[p]; ++band) {
-                    std::uint32_t* record = &primScratch[4 * next[c]++];
+                    std::uint32_t* record = &primScratch[4 * chunkFirst[c]++];
                     record[0] = items.prims[p];
                     record[1] = static_cast<std::uint32_t>(i);
                     record[2] = band;
