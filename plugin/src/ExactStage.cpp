@@ -21,11 +21,25 @@ struct ExactStage::Scratch {
 ExactStage::ExactStage(TaskPool& pool) : m_pool(pool), m_scratch(std::make_unique<Scratch>()) {}
 ExactStage::~ExactStage() = default;
 
+void ExactStage::buildTrees(const std::vector<const std::vector<std::uint32_t>*>& lists,
+                            const std::vector<const std::vector<Aabb>*>& listBoxes, std::vector<BoxTree>& trees) {
+    // One tree per task; but with fewer trees than workers (one or two large meshes on a many-core machine), a
+    // large tree is built with every worker on each step of its build instead of waiting for one thread.
+    constexpr std::size_t kLargeTree = 8192;
+    const bool spread = lists.size() < m_pool.size();
+    auto alone = [&](std::size_t i) { return spread && lists[i]->size() >= kLargeTree; };
+    m_pool.parallelFor(lists.size(), 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i)
+            if (!alone(i)) trees[i].build(*listBoxes[i], *lists[i]);
+    });
+    for (std::size_t i = 0; i < lists.size(); ++i)
+        if (alone(i)) trees[i].build(*listBoxes[i], *lists[i], &m_pool);
+}
+
 void ExactStage::run(const std::vector<Object>& objects, const std::vector<ExactJob>& jobs, double margin, bool exact,
                      std::vector<ExactJobResult>& results, Stats& stats, const std::vector<BoxJob>& boxJobs,
                      std::vector<std::uint8_t>* touches) {
     results.assign(jobs.size(), ExactJobResult{});
-    m_candidates.resize(jobs.size());
     // Phase 1: a box tree over each object's surviving triangles (once, however many pairs the object is in: a
     // landscape under many bodies), the two trees of each job descended together, split into tasks for every worker.
     std::vector<const std::vector<std::uint32_t>*> lists;
@@ -48,9 +62,7 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
     for (std::size_t j = 0; j < boxJobs.size(); ++j) boxJobList[j] = listIndex(boxJobs[j].triangles, boxJobs[j].boxes);
     std::vector<BoxTree>& trees = m_scratch->trees;
     if (trees.size() < lists.size()) trees.resize(lists.size());
-    m_pool.parallelFor(lists.size(), 1, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i) trees[i].build(*listBoxes[i], *lists[i]);
-    });
+    buildTrees(lists, listBoxes, trees);
     if (touches != nullptr) {
         touches->assign(boxJobs.size(), 0);
         m_pool.parallelFor(boxJobs.size(), 16, [&](std::size_t begin, std::size_t end) {
@@ -59,13 +71,20 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
                 (*touches)[j] = trees[boxJobList[j]].anyOverlap(boxJobs[j].box, stack) ? 1 : 0;
         });
     }
-    // Enough node pairs per job that one large pair (a bunny on a dragon) still feeds every worker.
-    const std::size_t target = 64 * std::size_t{m_pool.size()};
+    // Node pairs per job in proportion to its trees' size, 64 per worker in all: one large pair (a bunny on a
+    // dragon) still feeds every worker, and a thousand small pairs are not cut into a thousand tasks each.
+    std::size_t totalLeaves = 0;
+    for (std::size_t j = 0; j < jobs.size(); ++j) totalLeaves += trees[jobListA[j]].size() + trees[jobListB[j]].size();
+    const double perLeaf = 64.0 * m_pool.size() / static_cast<double>(std::max<std::size_t>(1, totalLeaves));
     std::vector<std::vector<BoxTree::NodePair>>& frontiers = m_scratch->frontiers;
     if (frontiers.size() < jobs.size()) frontiers.resize(jobs.size());
     m_pool.parallelFor(jobs.size(), 1, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t j = begin; j < end; ++j)
-            BoxTree::split(trees[jobListA[j]], trees[jobListB[j]], target, frontiers[j]);
+        for (std::size_t j = begin; j < end; ++j) {
+            const BoxTree& a = trees[jobListA[j]];
+            const BoxTree& b = trees[jobListB[j]];
+            const auto target = static_cast<std::size_t>(std::ceil(perLeaf * static_cast<double>(a.size() + b.size())));
+            BoxTree::split(a, b, target, frontiers[j]);
+        }
     });
     constexpr std::size_t kChunk = 16;  // node pairs per task
     std::vector<std::pair<std::size_t, std::size_t>> tasks;  // (job, first node pair)
@@ -87,24 +106,22 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
             taskOut[t].assign(pairs.begin(), pairs.end());
         }
     });
-    for (std::size_t j = 0; j < jobs.size(); ++j) m_candidates[j].clear();
-    for (std::size_t t = 0; t < tasks.size(); ++t) {
-        auto& c = m_candidates[tasks[t].first];
-        c.insert(c.end(), taskOut[t].begin(), taskOut[t].end());
-    }
-    for (std::size_t j = 0; j < jobs.size(); ++j) results[j].candidates = m_candidates[j].size();
-    // Phase 2: exact tests over all candidates, flattened so that one large pair still uses every worker.
-    std::vector<std::size_t> offsets(jobs.size() + 1, 0);
-    for (std::size_t j = 0; j < jobs.size(); ++j) offsets[j + 1] = offsets[j] + m_candidates[j].size();
+    // Phase 2: exact tests over all candidates, flattened so that one large pair still uses every worker. The
+    // candidates stay in the tasks' lists: a job's tasks are consecutive, its candidates those of its tasks in order.
+    std::vector<std::size_t> offsets(tasks.size() + 1, 0);  // first candidate of each task
+    for (std::size_t t = 0; t < tasks.size(); ++t) offsets[t + 1] = offsets[t] + taskOut[t].size();
     const std::size_t total = offsets.back();
+    std::vector<std::size_t> jobTasks(jobs.size() + 1, tasks.size());  // first task of each job
+    for (std::size_t t = tasks.size(); t-- > 0;) jobTasks[tasks[t].first] = t;
+    for (std::size_t j = jobs.size(); j-- > 0;) jobTasks[j] = std::min(jobTasks[j], jobTasks[j + 1]);
     std::vector<std::uint8_t> hit(total, exact ? 0 : 1);
     if (exact) m_pool.parallelFor(total, 2048, [&](std::size_t begin, std::size_t end) {
-        std::size_t j = static_cast<std::size_t>(std::upper_bound(offsets.begin(), offsets.end(), begin) -
+        std::size_t t = static_cast<std::size_t>(std::upper_bound(offsets.begin(), offsets.end(), begin) -
                                                  offsets.begin()) - 1;
         for (std::size_t k = begin; k < end; ++k) {
-            while (k >= offsets[j + 1]) ++j;
-            const ExactJob& job = jobs[j];
-            const TrianglePair& p = m_candidates[j][k - offsets[j]];
+            while (k >= offsets[t + 1]) ++t;
+            const ExactJob& job = jobs[tasks[t].first];
+            const TrianglePair& p = taskOut[t][k - offsets[t]];
             const TriangleMesh& ma = *objects[job.a].mesh;
             const TriangleMesh& mb = *objects[job.b].mesh;
             const auto& ta = ma.triangles[p.a];
@@ -113,13 +130,19 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
                                      mb.vertices[tb[1]], mb.vertices[tb[2]], margin);
         }
     });
-    for (std::size_t j = 0; j < jobs.size(); ++j) {
-        auto& out = results[j].triangles;
-        for (std::size_t k = 0; k < m_candidates[j].size(); ++k)
-            if (hit[offsets[j] + k]) out.push_back(m_candidates[j][k]);
-        std::sort(out.begin(), out.end());
-        if (exact) stats.intersectingTrianglePairs += out.size();
-    }
+    m_pool.parallelFor(jobs.size(), 16, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t j = begin; j < end; ++j) {
+            auto& out = results[j].triangles;
+            for (std::size_t t = jobTasks[j]; t < jobTasks[j + 1]; ++t) {
+                results[j].candidates += taskOut[t].size();
+                for (std::size_t k = 0; k < taskOut[t].size(); ++k)
+                    if (hit[offsets[t] + k]) out.push_back(taskOut[t][k]);
+            }
+            std::sort(out.begin(), out.end());
+        }
+    });
+    if (exact)
+        for (const ExactJobResult& r : results) stats.intersectingTrianglePairs += r.triangles.size();
     stats.candidateTrianglePairs += total;
     if (exact) stats.exactTests += total;
 }

@@ -12,6 +12,8 @@
 
 namespace cullide {
 
+class BoxTree;
+
 struct ExactJob {
     std::uint32_t a = 0;
     std::uint32_t b = 0;
@@ -49,9 +51,12 @@ public:
              std::vector<std::uint8_t>* touches = nullptr);
 
 private:
+    /// trees[i] over lists[i] (boxes listBoxes[i]).
+    void buildTrees(const std::vector<const std::vector<std::uint32_t>*>& lists,
+                    const std::vector<const std::vector<Aabb>*>& listBoxes, std::vector<BoxTree>& trees);
+
     struct Scratch;  ///< per-frame working memory, kept between frames: no allocation churn on large scenes
     TaskPool& m_pool;
-    std::vector<std::vector<TrianglePair>> m_candidates;
     std::unique_ptr<Scratch> m_scratch;
 };
 

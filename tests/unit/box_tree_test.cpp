@@ -162,6 +162,72 @@ TEST(BoxTree, RebuildReusesMemoryWithoutStaleNodes) {
     EXPECT_EQ(got, bruteForce(a, listA, b, listB));
 }
 
+TEST(BoxTree, BuiltOnWorkersTheSameTreeAsOnOneThread) {
+    // The build's steps run in fixed chunks of the list: any number of workers must give the same leaves in the
+    // same order, and the pairs of brute force, across chunk boundaries and for lists that skip boxes.
+    std::mt19937 rng(13);
+    TaskPool two(2), five(5);
+    for (const std::size_t n : {1u, 4095u, 4096u, 4097u, 12289u, 40000u}) {
+        const auto a = randomBoxes(rng, n, 10.0, 0.2, 0.0);
+        const auto listA = everyOther(a.size(), n > 5000 ? 3 : 1);
+        BoxTree serial, onTwo, onFive;
+        serial.build(a, listA);
+        onTwo.build(a, listA, &two);
+        onFive.build(a, listA, &five);
+        ASSERT_EQ(onTwo.leafTriangles(), serial.leafTriangles()) << n;
+        ASSERT_EQ(onFive.leafTriangles(), serial.leafTriangles()) << n;
+        const auto b = randomBoxes(rng, 200, 10.0, 1.0, 0.0);
+        const auto listB = everyOther(b.size(), 1);
+        BoxTree tb;
+        tb.build(b, listB, &two);
+        std::vector<BoxTree::NodePair> frontier, stack;
+        BoxTree::split(onFive, tb, 64, frontier);
+        std::vector<TrianglePair> got;
+        for (const BoxTree::NodePair& p : frontier) BoxTree::leafPairs(onFive, tb, p, stack, got);
+        std::sort(got.begin(), got.end());
+        EXPECT_EQ(got, bruteForce(a, listA, b, listB)) << n;
+    }
+}
+
+TEST(BoxTree, LeavesInMortonOrderTiesInListOrder) {
+    // Boxes along the x axis: their Morton order is their order along x. Each position holds three copies (equal
+    // codes), listed in different chunks: they must stay in list order, whatever the number of workers.
+    constexpr std::uint32_t kPositions = 3000;
+    std::vector<Aabb> boxes(3 * kPositions);
+    std::vector<std::uint32_t> list;
+    std::vector<std::uint32_t> position(boxes.size());
+    for (std::uint32_t copy = 0; copy < 3; ++copy) {
+        for (std::uint32_t i = 0; i < kPositions; ++i) {
+            const std::uint32_t at = kPositions - 1 - i;  // listed from +x to -x: the sort must reverse them
+            const std::uint32_t t = copy * kPositions + at;
+            boxes[t] = {Vec3(at, 0, 0), Vec3(at + 0.5, 1, 1)};
+            position[t] = at;
+            list.push_back(t);
+        }
+    }
+    TaskPool three(3);
+    for (TaskPool* pool : {static_cast<TaskPool*>(nullptr), &three}) {
+        BoxTree tree;
+        tree.build(boxes, list, pool);
+        const std::vector<std::uint32_t>& leaves = tree.leafTriangles();
+        ASSERT_EQ(leaves.size(), list.size());
+        // 1023 Morton cells over 3000 positions: positions share cells, so order by cell, then by list order. The
+        // centre is at + 0.25 and the bounds [0, kPositions - 0.5] along x.
+        auto cell = [&](std::uint32_t t) {
+            return static_cast<int>((position[t] + 0.25) * (1023.0 / (kPositions - 0.5)));
+        };
+        auto rank = [&](std::uint32_t t) { return (t / kPositions) * kPositions + (kPositions - 1 - position[t]); };
+        for (std::size_t i = 1; i < leaves.size(); ++i) {
+            const int before = cell(leaves[i - 1]);
+            const int after = cell(leaves[i]);
+            ASSERT_LE(before, after) << "leaf " << i;
+            if (before == after) {  // the same cell: list order (copy, then from +x to -x)
+                ASSERT_LT(rank(leaves[i - 1]), rank(leaves[i])) << "leaf " << i;
+            }
+        }
+    }
+}
+
 TEST(FloatRounding, OutwardForEveryMagnitude) {
     std::mt19937_64 rng(13);
     std::uniform_real_distribution<double> mantissa(-1.0, 1.0);

@@ -29,18 +29,55 @@ std::uint32_t blocksFor(std::size_t nodes) {
     return static_cast<std::uint32_t>((nodes + BoxTree::kFanout - 1) / BoxTree::kFanout);
 }
 
+/// The build's steps work on fixed chunks of the list (the same chunks for any number of workers).
+constexpr std::size_t kBuildChunk = 4096;
+std::size_t chunkCount(std::size_t n) { return (n + kBuildChunk - 1) / kBuildChunk; }
+
+/// The radix sort of the keys: 10 bits of the code (key bits 32..61) a pass.
+constexpr int kDigitBits = 10;
+constexpr std::size_t kDigits = std::size_t{1} << kDigitBits;
+std::size_t digit(std::uint64_t key, int shift) { return static_cast<std::size_t>(key >> shift) & (kDigits - 1); }
+
 }  // namespace
 
-void BoxTree::build(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles) {
+void BoxTree::forChunks(TaskPool* pool, std::size_t count, std::size_t grain, const RangeFn& fn) {
+    if (pool != nullptr)
+        pool->parallelFor(count, grain, fn);
+    else if (count > 0)
+        fn(0, count);
+}
+
+void BoxTree::build(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles, TaskPool* pool) {
     const std::size_t n = triangles.size();
     m_boxes = &boxes;
     m_leafTriangle.resize(n);
     m_levelCount = 0;
     if (n == 0) return;
+    computeKeys(boxes, triangles, pool);
+    sortKeys(pool);
+    fillLeaves(triangles, pool);
+    buildLevels(pool);
+}
 
+void BoxTree::computeKeys(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles,
+                          TaskPool* pool) {
     // Morton order of the box centres (10 bits per axis) over their common bounds.
+    const std::size_t n = triangles.size();
+    const std::size_t chunks = chunkCount(n);
+    m_chunkBounds.assign(chunks, Aabb{});
+    const Aabb* box = boxes.data();
+    const std::uint32_t* list = triangles.data();
+    Aabb* chunkBounds = m_chunkBounds.data();
+    forChunks(pool, chunks, 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t c = begin; c < end; ++c) {
+            Aabb bounds;
+            for (std::size_t i = c * kBuildChunk, last = std::min(n, i + kBuildChunk); i < last; ++i)
+                bounds.grow(box[list[i]]);
+            chunkBounds[c] = bounds;
+        }
+    });
     Aabb all;
-    for (std::uint32_t t : triangles) all.grow(boxes[t]);
+    for (const Aabb& b : m_chunkBounds) all.grow(b);
     double scale[3];
     for (int k = 0; k < 3; ++k) {
         const double extent = all.max[k] - all.min[k];
@@ -48,60 +85,118 @@ void BoxTree::build(const std::vector<Aabb>& boxes, const std::vector<std::uint3
     }
     m_keys.resize(n);
     m_floatBoxes.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        const Aabb& b = boxes[triangles[i]];
-        double c[3];
-        FloatBox& f = m_floatBoxes[i];
-        for (int k = 0; k < 3; ++k) {
-            c[k] = (0.5 * b.min[k] + 0.5 * b.max[k] - all.min[k]) * scale[k];  // no overflow near 1e308
-            f.lo[k] = floatBelow(b.min[k]);
-            f.hi[k] = floatAbove(b.max[k]);
+    std::uint64_t* keys = m_keys.data();
+    FloatBox* floatBoxes = m_floatBoxes.data();
+    forChunks(pool, chunks, 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin * kBuildChunk, last = std::min(n, end * kBuildChunk); i < last; ++i) {
+            const Aabb& b = box[list[i]];
+            double c[3];
+            FloatBox f;
+            for (int k = 0; k < 3; ++k) {
+                c[k] = (0.5 * b.min[k] + 0.5 * b.max[k] - all.min[k]) * scale[k];  // no overflow near 1e308
+                f.lo[k] = floatBelow(b.min[k]);
+                f.hi[k] = floatAbove(b.max[k]);
+            }
+            floatBoxes[i] = f;
+            keys[i] = morton::key(morton::code(c[0], c[1], c[2]), static_cast<std::uint32_t>(i));
         }
-        m_keys[i] = morton::key(morton::code(c[0], c[1], c[2]), static_cast<std::uint32_t>(i));
-    }
-    morton::sortByCode(m_keys, m_keysTmp);
+    });
+}
 
-    // Leaves, then each level the union of eight nodes below, until a single root.
+void BoxTree::sortKeys(TaskPool* pool) {
+    // Stable LSD radix sort by the code, 10 bits a pass: each chunk counts its digits, then scatters its keys to its
+    // own run of each digit's range (in chunk order), so the order is that of a serial stable sort.
+    const std::size_t n = m_keys.size();
+    const std::size_t chunks = chunkCount(n);
+    m_keysTmp.resize(n);
+    m_histogram.resize(chunks * kDigits);
+    std::uint32_t* histogram = m_histogram.data();  // digit-major: [d * chunks + c], so the prefix sum runs in order
+    for (int shift = 32; shift < 62; shift += kDigitBits) {
+        const std::uint64_t* from = m_keys.data();
+        std::uint64_t* to = m_keysTmp.data();
+        forChunks(pool, chunks, 1, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t c = begin; c < end; ++c) {
+                std::array<std::uint32_t, kDigits> count{};
+                for (std::size_t i = c * kBuildChunk, last = std::min(n, i + kBuildChunk); i < last; ++i)
+                    ++count[digit(from[i], shift)];
+                for (std::size_t d = 0; d < kDigits; ++d) histogram[d * chunks + c] = count[d];
+            }
+        });
+        std::uint32_t sum = 0;
+        for (std::size_t i = 0; i < kDigits * chunks; ++i) {
+            const std::uint32_t here = histogram[i];
+            histogram[i] = sum;  // from now on: where chunk c writes its first key with digit d
+            sum += here;
+        }
+        forChunks(pool, chunks, 1, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t c = begin; c < end; ++c) {
+                std::array<std::uint32_t, kDigits> cursor;
+                for (std::size_t d = 0; d < kDigits; ++d) cursor[d] = histogram[d * chunks + c];
+                for (std::size_t i = c * kBuildChunk, last = std::min(n, i + kBuildChunk); i < last; ++i)
+                    to[cursor[digit(from[i], shift)]++] = from[i];
+            }
+        });
+        m_keys.swap(m_keysTmp);
+    }
+}
+
+void BoxTree::fillLeaves(const std::vector<std::uint32_t>& triangles, TaskPool* pool) {
+    const std::size_t n = m_keys.size();
     if (m_levels.empty()) m_levels.emplace_back();
     std::vector<Block>& leaves = m_levels[0];
     leaves.resize(blocksFor(n));
-    for (std::size_t i = 0; i < n; ++i) {
-        const auto at = static_cast<std::uint32_t>(m_keys[i]);
-        m_leafTriangle[i] = triangles[at];
-        const FloatBox& f = m_floatBoxes[at];
-        Block& block = leaves[i / kFanout];
-        const auto slot = static_cast<std::uint32_t>(i % kFanout);
-        for (int k = 0; k < 3; ++k) {
-            block.lo[k][slot] = f.lo[k];
-            block.hi[k][slot] = f.hi[k];
+    const std::uint64_t* keys = m_keys.data();
+    const FloatBox* floatBoxes = m_floatBoxes.data();
+    const std::uint32_t* list = triangles.data();
+    std::uint32_t* leafTriangle = m_leafTriangle.data();
+    Block* blocks = leaves.data();
+    forChunks(pool, leaves.size(), kBuildChunk / kFanout, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin * kFanout, last = std::min(n, end * kFanout); i < last; ++i) {
+            const auto at = static_cast<std::uint32_t>(keys[i]);
+            leafTriangle[i] = list[at];
+            const FloatBox& f = floatBoxes[at];
+            Block& block = blocks[i / kFanout];
+            const auto slot = static_cast<std::uint32_t>(i % kFanout);
+            for (int k = 0; k < 3; ++k) {
+                block.lo[k][slot] = f.lo[k];
+                block.hi[k][slot] = f.hi[k];
+            }
         }
-    }
+    });
     for (auto slot = static_cast<std::uint32_t>(n % kFanout); slot != 0 && slot < kFanout; ++slot)
         clearSlot(leaves.back(), slot);
     m_levelCount = 1;
     m_nodeCount.assign(1, n);
-    std::size_t nodes = n;
+}
+
+void BoxTree::buildLevels(TaskPool* pool) {
+    // Each level the union of eight nodes below, until a single root.
+    std::size_t nodes = m_nodeCount[0];
     while (nodes > 1) {
         const std::size_t parents = blocksFor(nodes);
         if (m_levels.size() == m_levelCount) m_levels.emplace_back();
         const std::vector<Block>& below = m_levels[m_levelCount - 1];
         std::vector<Block>& level = m_levels[m_levelCount];
         level.resize(blocksFor(parents));
-        for (std::size_t p = 0; p < parents; ++p) {
-            const Block& c = below[p];
-            Block& block = level[p / kFanout];
-            const auto slot = static_cast<std::uint32_t>(p % kFanout);
-            for (int k = 0; k < 3; ++k) {
-                float lo = c.lo[k][0];
-                float hi = c.hi[k][0];
-                for (std::uint32_t i = 1; i < kFanout; ++i) {
-                    lo = std::min(lo, c.lo[k][i]);
-                    hi = std::max(hi, c.hi[k][i]);
+        // Whole blocks per task: no two tasks write one block. Small levels on this thread (no dispatch).
+        TaskPool* levelPool = parents >= kBuildChunk ? pool : nullptr;
+        forChunks(levelPool, level.size(), kBuildChunk / kFanout, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t p = begin * kFanout; p < std::min(parents, end * kFanout); ++p) {
+                const Block& c = below[p];
+                Block& block = level[p / kFanout];
+                const auto slot = static_cast<std::uint32_t>(p % kFanout);
+                for (int k = 0; k < 3; ++k) {
+                    float lo = c.lo[k][0];
+                    float hi = c.hi[k][0];
+                    for (std::uint32_t i = 1; i < kFanout; ++i) {
+                        lo = std::min(lo, c.lo[k][i]);
+                        hi = std::max(hi, c.hi[k][i]);
+                    }
+                    block.lo[k][slot] = lo;
+                    block.hi[k][slot] = hi;
                 }
-                block.lo[k][slot] = lo;
-                block.hi[k][slot] = hi;
             }
-        }
+        });
         for (auto slot = static_cast<std::uint32_t>(parents % kFanout); slot != 0 && slot < kFanout; ++slot)
             clearSlot(level.back(), slot);
         ++m_levelCount;

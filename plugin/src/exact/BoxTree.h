@@ -3,9 +3,11 @@
 #pragma once
 
 #include "cullide/Result.h"
+#include "cullide/TaskPool.h"
 #include "cullide/Types.h"
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace cullide {
@@ -37,11 +39,16 @@ public:
         std::uint32_t nodeB;
     };
 
-    /// Leaves: `boxes[t]` for each t of `triangles`, in Morton order of their centres (the order only affects
-    /// speed, never the result). `boxes` must stay alive and unchanged until the last query. Boxes must be finite.
-    void build(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles);
+    /// Leaves: `boxes[t]` for each t of `triangles`, in Morton order of their centres, ties in list order (the
+    /// order only affects speed, never the result). `boxes` must stay alive and unchanged until the last query.
+    /// Boxes must be finite. With `pool`, each step of the build runs on its workers in fixed chunks: the same tree
+    /// for any number of workers (for large lists; a small one is cheaper built on one thread). `pool` must not be
+    /// running a parallelFor already (it is not re-entrant).
+    void build(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles, TaskPool* pool = nullptr);
 
     bool empty() const { return m_leafTriangle.empty(); }
+    /// The mesh triangle of each leaf, in leaf order.
+    const std::vector<std::uint32_t>& leafTriangles() const { return m_leafTriangle; }
     std::size_t size() const { return m_leafTriangle.size(); }
 
     /// The overlapping node pairs of `a` and `b` after descending breadth first until there are at least `target`
@@ -59,6 +66,14 @@ public:
     bool anyOverlap(const Aabb& query, std::vector<NodePair>& stack) const;
 
 private:
+    /// Calls fn(begin, end) over [0, count) in chunks of `grain`: on `pool`'s workers, or here when it is null.
+    using RangeFn = std::function<void(std::size_t, std::size_t)>;
+    static void forChunks(TaskPool* pool, std::size_t count, std::size_t grain, const RangeFn& fn);
+    /// Build steps (see build()): m_keys sorted by (Morton code, list position), m_floatBoxes by list position.
+    void computeKeys(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles, TaskPool* pool);
+    void sortKeys(TaskPool* pool);
+    void fillLeaves(const std::vector<std::uint32_t>& triangles, TaskPool* pool);
+    void buildLevels(TaskPool* pool);
     FloatBox box(std::uint32_t level, std::uint32_t node) const;
     /// Bit i set when child i of `node` (at `level` > 0) overlaps `q`.
     unsigned childMask(std::uint32_t level, std::uint32_t node, const FloatBox& q) const;
@@ -75,6 +90,8 @@ private:
     std::vector<std::uint64_t> m_keys;           ///< build scratch: Morton code << 32 | position
     std::vector<std::uint64_t> m_keysTmp;
     std::vector<FloatBox> m_floatBoxes;          ///< build scratch: leaf boxes in input order
+    std::vector<Aabb> m_chunkBounds;             ///< build scratch: bounds of each chunk of the list
+    std::vector<std::uint32_t> m_histogram;      ///< build scratch: digit counts of each chunk, then its cursors
 };
 
 }  // namespace cullide
