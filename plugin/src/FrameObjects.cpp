@@ -1,5 +1,6 @@
 #include "FrameObjects.h"
 
+#include "PoolOrHere.h"
 #include "WorldMeshes.h"
 
 #include <algorithm>
@@ -106,10 +107,7 @@ std::vector<ValidatedObject> validateObjects(const std::vector<Object>& objects,
                 checkIndices(*objects[r.object].mesh, r);
         }
     };
-    if (pool != nullptr)
-        pool->parallelFor(ranges.size(), 1, check);
-    else
-        check(0, ranges.size());
+    parallelForOrHere(pool, ranges.size(), 1, check);
 
     std::size_t next = 0;  // ranges are in object order
     for (std::size_t i = 0; i < objects.size(); ++i) {

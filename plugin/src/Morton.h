@@ -2,7 +2,8 @@
 // of the pre-pass's groups and of the exact stage's box trees, rebuilt every frame in O(n).
 #pragma once
 
-#include <array>
+#include "cullide/TaskPool.h"
+
 #include <cstdint>
 #include <vector>
 
@@ -30,24 +31,11 @@ inline std::uint64_t key(std::uint32_t code, std::uint32_t item) {
     return (static_cast<std::uint64_t>(code) << 32) | item;
 }
 
-/// Stable LSD radix sort of keys by their code (bits 32..61); items with equal codes keep their input order.
-inline void sortByCode(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& tmp) {
-    constexpr int kBits = 10;
-    constexpr std::size_t kBuckets = std::size_t{1} << kBits;
-    tmp.resize(keys.size());
-    std::array<std::uint32_t, kBuckets> count{};
-    for (int shift = 32; shift < 62; shift += kBits) {
-        count.fill(0);
-        for (std::uint64_t k : keys) ++count[(k >> shift) & (kBuckets - 1)];
-        std::uint32_t sum = 0;
-        for (std::uint32_t& c : count) {
-            const std::uint32_t n = c;
-            c = sum;
-            sum += n;
-        }
-        for (std::uint64_t k : keys) tmp[count[(k >> shift) & (kBuckets - 1)]++] = k;
-        keys.swap(tmp);
-    }
-}
+/// Stable LSD radix sort of keys by their code (bits 32..61), 10 bits a pass: items with equal codes keep their
+/// input order. Each pass counts the digits of fixed chunks of keys, then each chunk scatters to its own run of each
+/// digit's range; with `pool` the chunks of a pass run on its workers. The chunks do not depend on the number of
+/// workers, so neither does the order. `tmp` and `counts` are working memory.
+void sortByCode(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& tmp, std::vector<std::uint32_t>& counts,
+                TaskPool* pool = nullptr);
 
 }  // namespace cullide::morton

@@ -12,6 +12,7 @@ namespace {
 void spatialOrder(const TriangleMesh& mesh, const Aabb& box, std::vector<std::uint32_t>& order) {
     thread_local std::vector<std::uint64_t> keys;  // per worker: objects are ordered in parallel
     thread_local std::vector<std::uint64_t> tmp;
+    thread_local std::vector<std::uint32_t> counts;
     const Vec3 scale = (box.extent().array().max(1e-300)).inverse() * 1023.0;
     keys.clear();
     for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
@@ -20,7 +21,7 @@ void spatialOrder(const TriangleMesh& mesh, const Aabb& box, std::vector<std::ui
             ((mesh.vertices[tri[0]] + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]) / 3.0 - box.min).cwiseProduct(scale);
         keys.push_back(morton::key(morton::code(c[0], c[1], c[2]), t));
     }
-    morton::sortByCode(keys, tmp);
+    morton::sortByCode(keys, tmp, counts);
     order.resize(keys.size());
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(keys[i]);
 }

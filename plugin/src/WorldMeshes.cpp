@@ -1,5 +1,6 @@
 #include "WorldMeshes.h"
 
+#include "PoolOrHere.h"
 
 namespace cullide {
 
@@ -58,10 +59,7 @@ const std::vector<Object>& WorldMeshes::resolve(const std::vector<Object>& objec
             world.triangles = in.mesh->triangles;
         }
     };
-    if (pool != nullptr)
-        pool->parallelFor(todo.size(), 1, build);
-    else
-        build(0, todo.size());
+    parallelForOrHere(pool, todo.size(), 1, build);
     for (const std::uint32_t i : todo) {
         m_objects[i].mesh = &m_meshes[i];
         m_objects[i].transform = nullptr;

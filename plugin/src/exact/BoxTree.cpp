@@ -2,6 +2,7 @@
 
 #include "FloatRounding.h"
 #include "Morton.h"
+#include "PoolOrHere.h"
 
 #include <algorithm>
 #include <array>
@@ -33,19 +34,7 @@ std::uint32_t blocksFor(std::size_t nodes) {
 constexpr std::size_t kBuildChunk = 4096;
 std::size_t chunkCount(std::size_t n) { return (n + kBuildChunk - 1) / kBuildChunk; }
 
-/// The radix sort of the keys: 10 bits of the code (key bits 32..61) a pass.
-constexpr int kDigitBits = 10;
-constexpr std::size_t kDigits = std::size_t{1} << kDigitBits;
-std::size_t digit(std::uint64_t key, int shift) { return static_cast<std::size_t>(key >> shift) & (kDigits - 1); }
-
 }  // namespace
-
-void BoxTree::forChunks(TaskPool* pool, std::size_t count, std::size_t grain, const RangeFn& fn) {
-    if (pool != nullptr)
-        pool->parallelFor(count, grain, fn);
-    else if (count > 0)
-        fn(0, count);
-}
 
 void BoxTree::build(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles, TaskPool* pool) {
     const std::size_t n = triangles.size();
@@ -54,7 +43,7 @@ void BoxTree::build(const std::vector<Aabb>& boxes, const std::vector<std::uint3
     m_levelCount = 0;
     if (n == 0) return;
     computeKeys(boxes, triangles, pool);
-    sortKeys(pool);
+    morton::sortByCode(m_keys, m_keysTmp, m_histogram, pool);
     fillLeaves(triangles, pool);
     buildLevels(pool);
 }
@@ -68,7 +57,7 @@ void BoxTree::computeKeys(const std::vector<Aabb>& boxes, const std::vector<std:
     const Aabb* box = boxes.data();
     const std::uint32_t* list = triangles.data();
     Aabb* chunkBounds = m_chunkBounds.data();
-    forChunks(pool, chunks, 1, [&](std::size_t begin, std::size_t end) {
+    parallelForOrHere(pool, chunks, 1, [&](std::size_t begin, std::size_t end) {
         for (std::size_t c = begin; c < end; ++c) {
             Aabb bounds;
             for (std::size_t i = c * kBuildChunk, last = std::min(n, i + kBuildChunk); i < last; ++i)
@@ -87,7 +76,7 @@ void BoxTree::computeKeys(const std::vector<Aabb>& boxes, const std::vector<std:
     m_floatBoxes.resize(n);
     std::uint64_t* keys = m_keys.data();
     FloatBox* floatBoxes = m_floatBoxes.data();
-    forChunks(pool, chunks, 1, [&](std::size_t begin, std::size_t end) {
+    parallelForOrHere(pool, chunks, 1, [&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin * kBuildChunk, last = std::min(n, end * kBuildChunk); i < last; ++i) {
             const Aabb& b = box[list[i]];
             double c[3];
@@ -103,43 +92,6 @@ void BoxTree::computeKeys(const std::vector<Aabb>& boxes, const std::vector<std:
     });
 }
 
-void BoxTree::sortKeys(TaskPool* pool) {
-    // Stable LSD radix sort by the code, 10 bits a pass: each chunk counts its digits, then scatters its keys to its
-    // own run of each digit's range (in chunk order), so the order is that of a serial stable sort.
-    const std::size_t n = m_keys.size();
-    const std::size_t chunks = chunkCount(n);
-    m_keysTmp.resize(n);
-    m_histogram.resize(chunks * kDigits);
-    std::uint32_t* histogram = m_histogram.data();  // digit-major: [d * chunks + c], so the prefix sum runs in order
-    for (int shift = 32; shift < 62; shift += kDigitBits) {
-        const std::uint64_t* from = m_keys.data();
-        std::uint64_t* to = m_keysTmp.data();
-        forChunks(pool, chunks, 1, [&](std::size_t begin, std::size_t end) {
-            for (std::size_t c = begin; c < end; ++c) {
-                std::array<std::uint32_t, kDigits> count{};
-                for (std::size_t i = c * kBuildChunk, last = std::min(n, i + kBuildChunk); i < last; ++i)
-                    ++count[digit(from[i], shift)];
-                for (std::size_t d = 0; d < kDigits; ++d) histogram[d * chunks + c] = count[d];
-            }
-        });
-        std::uint32_t sum = 0;
-        for (std::size_t i = 0; i < kDigits * chunks; ++i) {
-            const std::uint32_t here = histogram[i];
-            histogram[i] = sum;  // from now on: where chunk c writes its first key with digit d
-            sum += here;
-        }
-        forChunks(pool, chunks, 1, [&](std::size_t begin, std::size_t end) {
-            for (std::size_t c = begin; c < end; ++c) {
-                std::array<std::uint32_t, kDigits> cursor;
-                for (std::size_t d = 0; d < kDigits; ++d) cursor[d] = histogram[d * chunks + c];
-                for (std::size_t i = c * kBuildChunk, last = std::min(n, i + kBuildChunk); i < last; ++i)
-                    to[cursor[digit(from[i], shift)]++] = from[i];
-            }
-        });
-        m_keys.swap(m_keysTmp);
-    }
-}
-
 void BoxTree::fillLeaves(const std::vector<std::uint32_t>& triangles, TaskPool* pool) {
     const std::size_t n = m_keys.size();
     if (m_levels.empty()) m_levels.emplace_back();
@@ -150,7 +102,7 @@ void BoxTree::fillLeaves(const std::vector<std::uint32_t>& triangles, TaskPool* 
     const std::uint32_t* list = triangles.data();
     std::uint32_t* leafTriangle = m_leafTriangle.data();
     Block* blocks = leaves.data();
-    forChunks(pool, leaves.size(), kBuildChunk / kFanout, [&](std::size_t begin, std::size_t end) {
+    parallelForOrHere(pool, leaves.size(), kBuildChunk / kFanout, [&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin * kFanout, last = std::min(n, end * kFanout); i < last; ++i) {
             const auto at = static_cast<std::uint32_t>(keys[i]);
             leafTriangle[i] = list[at];
@@ -180,7 +132,7 @@ void BoxTree::buildLevels(TaskPool* pool) {
         level.resize(blocksFor(parents));
         // Whole blocks per task: no two tasks write one block. Small levels on this thread (no dispatch).
         TaskPool* levelPool = parents >= kBuildChunk ? pool : nullptr;
-        forChunks(levelPool, level.size(), kBuildChunk / kFanout, [&](std::size_t begin, std::size_t end) {
+        parallelForOrHere(levelPool, level.size(), kBuildChunk / kFanout, [&](std::size_t begin, std::size_t end) {
             for (std::size_t p = begin * kFanout; p < std::min(parents, end * kFanout); ++p) {
                 const Block& c = below[p];
                 Block& block = level[p / kFanout];

@@ -7,7 +7,6 @@
 #include "cullide/Types.h"
 
 #include <cstdint>
-#include <functional>
 #include <vector>
 
 namespace cullide {
@@ -66,12 +65,8 @@ public:
     bool anyOverlap(const Aabb& query, std::vector<NodePair>& stack) const;
 
 private:
-    /// Calls fn(begin, end) over [0, count) in chunks of `grain`: on `pool`'s workers, or here when it is null.
-    using RangeFn = std::function<void(std::size_t, std::size_t)>;
-    static void forChunks(TaskPool* pool, std::size_t count, std::size_t grain, const RangeFn& fn);
-    /// Build steps (see build()): m_keys sorted by (Morton code, list position), m_floatBoxes by list position.
+    /// Build steps (see build()): m_keys (Morton code, list position) and m_floatBoxes by list position.
     void computeKeys(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles, TaskPool* pool);
-    void sortKeys(TaskPool* pool);
     void fillLeaves(const std::vector<std::uint32_t>& triangles, TaskPool* pool);
     void buildLevels(TaskPool* pool);
     FloatBox box(std::uint32_t level, std::uint32_t node) const;
