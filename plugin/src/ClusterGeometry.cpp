@@ -1,6 +1,7 @@
 #include "ClusterGeometry.h"
 
 #include "FloatRounding.h"
+#include "KeptCapacity.h"
 
 #include <algorithm>
 
@@ -54,8 +55,8 @@ void ClusterGeometry::placeMeshes(const FrameState& frame, const Cluster& cluste
         vertices += frame.meshOf(o).vertices.size();
         triangles += frame.meshOf(o).triangles.size();
     }
-    m_geometry.positions.resize(3 * vertices);  // the region's front is kept as it is
-    m_geometry.indices.resize(3 * triangles);
+    resizeKeeping(m_geometry.positions, 3 * vertices);  // the region's front is kept as it is
+    resizeKeeping(m_geometry.indices, 3 * triangles);
 }
 
 /// A mesh's vertices (relative to the origin, as floats) and its triangles' global vertex indices.

@@ -1,6 +1,7 @@
 #include "ExactStage.h"
 
 #include "FrameObjects.h"
+#include "KeptCapacity.h"
 #include "exact/BoxTree.h"
 #include "cullide/TriangleTest.h"
 
@@ -16,6 +17,7 @@ struct ExactStage::Scratch {
     std::vector<BoxTree> trees;  ///< one per distinct surviving-triangle list
     std::vector<std::vector<BoxTree::NodePair>> frontiers;  ///< per job
     std::vector<std::vector<TrianglePair>> taskOut;
+    std::vector<std::uint8_t> hit;  ///< per candidate: the triangle test's answer
 };
 
 ExactStage::ExactStage(TaskPool& pool) : m_pool(pool), m_scratch(std::make_unique<Scratch>()) {}
@@ -103,7 +105,7 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
             pairs.clear();
             for (std::size_t i = tasks[t].second, last = std::min(frontier.size(), i + kChunk); i < last; ++i)
                 BoxTree::leafPairs(trees[jobListA[j]], trees[jobListB[j]], frontier[i], stack, pairs);
-            taskOut[t].assign(pairs.begin(), pairs.end());
+            assignKeeping(taskOut[t], pairs.begin(), pairs.end());
         }
     });
     // Phase 2: exact tests over all candidates, flattened so that one large pair still uses every worker. The
@@ -114,7 +116,8 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
     std::vector<std::size_t> jobTasks(jobs.size() + 1, tasks.size());  // first task of each job
     for (std::size_t t = tasks.size(); t-- > 0;) jobTasks[tasks[t].first] = t;
     for (std::size_t j = jobs.size(); j-- > 0;) jobTasks[j] = std::min(jobTasks[j], jobTasks[j + 1]);
-    std::vector<std::uint8_t> hit(total, exact ? 0 : 1);
+    std::vector<std::uint8_t>& hit = m_scratch->hit;
+    assignKeeping(hit, total, static_cast<std::uint8_t>(exact ? 0 : 1));
     if (exact) m_pool.parallelFor(total, 2048, [&](std::size_t begin, std::size_t end) {
         std::size_t t = static_cast<std::size_t>(std::upper_bound(offsets.begin(), offsets.end(), begin) -
                                                  offsets.begin()) - 1;

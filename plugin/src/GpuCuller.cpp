@@ -6,6 +6,7 @@
 #include "ExactStage.h"
 #include "FrameObjects.h"
 #include "FrameState.h"
+#include "KeptCapacity.h"
 #include "LevelPipelines.h"
 #include "MeshCache.h"
 #include "PairAssembly.h"
@@ -54,6 +55,7 @@ private:
     /// One frame: every overlapping pair, or only those listed in `only`.
     void runFrame(const std::vector<Object>& objects, const std::vector<ObjectIndexPair>* only, Result& result) {
         Timer total;
+        m_frame.surviving.swap(result.pcsTriangles);  // the lists handed out last frame: reused, capacity and all
         result.clear();
         Stats& stats = result.stats;
         stats.renderer = m_backend ? m_backend->renderer() : std::string();
@@ -100,7 +102,7 @@ private:
             if (frame.valid[i].valid) ++stats.prepassObjectsIn;
         }
         frame.pairs = only != nullptr ? listedOverlappingPairs(frame.valid, *only) : overlappingPairs(frame.valid);
-        frame.partners.assign(objects.size(), {});
+        clearLists(frame.partners, objects.size());
         for (const auto& [a, b] : frame.pairs) {
             frame.partners[a].push_back(b);
             frame.partners[b].push_back(a);
@@ -113,7 +115,7 @@ private:
             stats.prepassObjectsOut += frame.active[i];
         }
         frame.objects = &m_world.resolve(objects, frame.active, &m_pool);
-        frame.surviving.assign(objects.size(), {});
+        clearLists(frame.surviving, objects.size());
     }
 
     /// Sets frame.gpuLevels: whether this frame runs the visibility levels (a backend is there): always in the
@@ -150,7 +152,7 @@ private:
             ++stats.gpuFallbacks;
             stats.gpuError = e.what();
             m_backend->forgetUploads();  // what the device holds is no longer trusted
-            frame.surviving.assign(frame.valid.size(), {});
+            clearLists(frame.surviving, frame.valid.size());
             collectTriangles(frame, frame.groups, m_settings.pipeline != Pipeline::Paper, m_pool, m_scratch,
                              m_fallbackTriangles);
             addSurvivingTriangles(frame, m_fallbackTriangles, {});

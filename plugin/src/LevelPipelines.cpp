@@ -1,5 +1,6 @@
 #include "LevelPipelines.h"
 
+#include "KeptCapacity.h"
 #include "VisibilityLevel.h"
 #include "bindings.h"
 #include "cullide/Timer.h"
@@ -76,10 +77,10 @@ void addTriangleItems(LevelRun& run, const std::vector<FrameTriangle>& triangles
     LevelItems& items = run.items;
     const std::size_t first = items.size();
     const std::size_t n = triangles.size();
-    items.owner.resize(first + n);
-    items.prims.resize(items.prims.size() + n);
-    items.primBegin.resize(first + n + 1);
-    items.bounds.resize(first + n);
+    resizeKeeping(items.owner, first + n);
+    resizeKeeping(items.prims, items.prims.size() + n);
+    resizeKeeping(items.primBegin, first + n + 1);
+    resizeKeeping(items.bounds, first + n);
     const std::uint32_t firstPrim = items.primBegin[first];
     run.pool.parallelFor(n, 4096, [&](std::size_t begin, std::size_t end) {
         for (std::size_t k = begin; k < end; ++k) {

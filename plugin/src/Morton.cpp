@@ -1,5 +1,6 @@
 #include "Morton.h"
 
+#include "KeptCapacity.h"
 #include "PoolOrHere.h"
 
 #include <algorithm>
@@ -20,8 +21,8 @@ void sortByCode(std::vector<std::uint64_t>& keys, std::vector<std::uint64_t>& tm
                 TaskPool* pool) {
     const std::size_t n = keys.size();
     const std::size_t chunks = (n + kChunk - 1) / kChunk;
-    tmp.resize(n);
-    counts.resize(chunks * kDigits);
+    resizeKeeping(tmp, n);
+    resizeKeeping(counts, chunks * kDigits);
     std::uint32_t* count = counts.data();  // digit-major: [d * chunks + c], so the prefix sum runs in order
     for (int shift = 32; shift < 62; shift += kDigitBits) {
         const std::uint64_t* from = keys.data();

@@ -1,5 +1,6 @@
 #include "TriangleSets.h"
 
+#include "KeptCapacity.h"
 #include "Morton.h"
 
 #include <algorithm>
@@ -22,7 +23,7 @@ void spatialOrder(const TriangleMesh& mesh, const Aabb& box, std::vector<std::ui
         keys.push_back(morton::key(morton::code(c[0], c[1], c[2]), t));
     }
     morton::sortByCode(keys, tmp, counts);
-    order.resize(keys.size());
+    resizeKeeping(order, keys.size());
     for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(keys[i]);
 }
 
@@ -55,7 +56,7 @@ void assignBoxStorage(FrameState& frame, TriangleScratch& scratch) {
             e->boxes.resize(triangles);
             e->boxesReady = true;  // filled by the caller
         } else {
-            frame.ownBoxes[o].resize(triangles);
+            resizeKeeping(frame.ownBoxes[o], triangles);
             frame.boxesOf[o] = &frame.ownBoxes[o];
             if (!frame.gpuLevels) continue;  // collectDirect computes them
         }
@@ -74,7 +75,7 @@ void buildGroups(FrameState& frame, std::uint32_t k, bool prepass, TaskPool& poo
         const auto n = static_cast<std::uint32_t>(frame.meshOf(o).triangles.size());
         for (std::uint32_t first = 0; first < n; first += k) candidates.push_back({o, first, std::min(k, n - first), {}});
     }
-    scratch.groupKept.resize(candidates.size());
+    resizeKeeping(scratch.groupKept, candidates.size());
     pool.parallelFor(candidates.size(), 256, [&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin; i < end; ++i) {
             Group& g = candidates[i];
@@ -139,7 +140,7 @@ void collectTriangles(const FrameState& frame, const std::vector<Group>& groups,
                     kept.push_back({g.object, t});
                 }
             }
-            scratch.taskTriangles[task].assign(kept.begin(), kept.end());
+            assignKeeping(scratch.taskTriangles[task], kept.begin(), kept.end());
         }
     });
     triangles.clear();
@@ -188,7 +189,7 @@ void collectDirect(FrameState& frame, std::uint32_t groupSize, double margin, Ta
                     for (std::uint32_t t = first; t < last; ++t) kept.push_back(t);
                 }
             }
-            scratch.rangeKept[r].assign(kept.begin(), kept.end());
+            assignKeeping(scratch.rangeKept[r], kept.begin(), kept.end());
         }
     });
     for (std::size_t r = 0; r < scratch.ranges.size(); ++r) {  // ranges in object and triangle order: sorted lists

@@ -1,6 +1,7 @@
 #include "VisibilityLevel.h"
 
 #include "FloatRounding.h"
+#include "KeptCapacity.h"
 #include "cullide/Timer.h"
 
 #include <algorithm>
@@ -78,7 +79,7 @@ void pruneLevel(PruningBackend& backend, const LevelItems& items, const Settings
                 TaskPool& pool, std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats) {
     const Timer timer;
     const std::size_t n = items.size();
-    survivors.assign(n, 1);
+    assignKeeping(survivors, n, std::uint8_t{1});
     if (n == 0) return;
     level.itemsPerIteration.push_back(n);
     const std::size_t owners = distinctOwners(items);

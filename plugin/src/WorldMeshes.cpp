@@ -1,5 +1,6 @@
 #include "WorldMeshes.h"
 
+#include "KeptCapacity.h"
 #include "PoolOrHere.h"
 
 namespace cullide {
@@ -53,7 +54,7 @@ const std::vector<Object>& WorldMeshes::resolve(const std::vector<Object>& objec
             const std::uint32_t i = todo[k];
             const Object& in = objects[i];
             TriangleMesh& world = m_meshes[i];
-            world.vertices.resize(in.mesh->vertices.size());
+            resizeKeeping(world.vertices, in.mesh->vertices.size());
             for (std::size_t v = 0; v < world.vertices.size(); ++v)
                 world.vertices[v] = transformPoint(*in.transform, in.mesh->vertices[v]);
             world.triangles = in.mesh->triangles;

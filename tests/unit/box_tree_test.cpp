@@ -257,5 +257,27 @@ TEST(FloatRounding, OutwardForEveryMagnitude) {
     }
 }
 
+TEST(BoxTree, RebuildsIntoTheMemoryOfEarlierFrames) {
+    // Rebuilt every frame: after a small frame (a GPU frame's few survivors, a contact that shrank) a slightly larger
+    // one than ever before must not get a fresh exact-fit buffer (a page fault per 4 KiB of it, every time).
+    std::mt19937 rng(5);
+    const std::vector<Aabb> boxes = randomBoxes(rng, 70000, 1.0, 0.01, 0.0);
+    auto firstN = [](std::size_t n) {
+        std::vector<std::uint32_t> list(n);
+        std::iota(list.begin(), list.end(), 0u);
+        return list;
+    };
+    BoxTree tree;
+    tree.build(boxes, firstN(60000));
+    const std::uint32_t* leaves = tree.leafTriangles().data();
+    tree.build(boxes, firstN(3000));
+    tree.build(boxes, firstN(62000));
+    EXPECT_EQ(tree.leafTriangles().data(), leaves);
+    EXPECT_EQ(tree.size(), 62000u);
+    std::vector<std::uint32_t> sorted = tree.leafTriangles();
+    std::sort(sorted.begin(), sorted.end());
+    EXPECT_EQ(sorted, firstN(62000));
+}
+
 }  // namespace
 }  // namespace cullide

@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstddef>
 #include <memory>
 #include <stdexcept>
@@ -61,6 +62,35 @@ TEST(NoGl, NeverOpensNoContextAndMatchesTheReference) {
         EXPECT_NE(r.stats.gpuUnavailable.find("Never"), std::string::npos) << r.stats.gpuUnavailable;
     }
     EXPECT_EQ(testing::internal::GetCapturedStderr(), "") << "GpuLevels::Never is no reason for a notice";
+}
+
+TEST(NoGl, RefillsTheSurvivorListsOfTheResultItIsGiven) {
+    // A Result reused frame after frame lends its survivor lists back to the culler: a frame with fewer survivors
+    // keeps the capacity of a larger one, so the next larger frame writes into memory already mapped (a fresh exact-fit
+    // list per frame cost a page fault per 4 KiB on large meshes).
+    const auto culler = createGpuCuller(withoutDevice(GpuLevels::Never));
+    std::vector<TriangleMesh> meshes = randomSoups(7, 1, 400, 0.5);
+    meshes.push_back(meshes[0]);
+    double lo = meshes[0].vertices[0].x(), hi = lo;
+    for (const Vec3& v : meshes[0].vertices) {
+        lo = std::min(lo, v.x());
+        hi = std::max(hi, v.x());
+    }
+    const double width = hi - lo;
+    for (Vec3& v : meshes[1].vertices) v.x() += 0.05 * width;  // nearly on top of each other: most triangles survive
+    Result result;
+    culler->run(asObjects(meshes), result);
+    ASSERT_EQ(result.pcsTriangles.size(), 2u);
+    const std::size_t before = result.pcsTriangles[0].size();
+    for (Vec3& v : meshes[1].vertices) v.x() += 0.8 * width;  // a sliver of overlap: few survivors
+    culler->run(asObjects(meshes), result);
+    const std::vector<std::uint32_t>& after = result.pcsTriangles[0];
+    ASSERT_GT(after.size(), 0u) << "the objects must still overlap";
+    ASSERT_LT(2 * after.size(), before) << "the second frame must have far fewer survivors";
+    EXPECT_GE(after.capacity(), before);
+    Result reference;  // and the lists are right: the same as a fresh Result's
+    createGpuCuller(withoutDevice(GpuLevels::Never))->run(asObjects(meshes), reference);
+    EXPECT_EQ(result.pcsTriangles, reference.pcsTriangles);
 }
 
 /// The notice lines ("cullide: ...") in captured standard error; lines of the EGL/Mesa libraries are not counted.

@@ -1,6 +1,7 @@
 #include "BoxTree.h"
 
 #include "FloatRounding.h"
+#include "KeptCapacity.h"
 #include "Morton.h"
 #include "PoolOrHere.h"
 
@@ -39,7 +40,7 @@ std::size_t chunkCount(std::size_t n) { return (n + kBuildChunk - 1) / kBuildChu
 void BoxTree::build(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles, TaskPool* pool) {
     const std::size_t n = triangles.size();
     m_boxes = &boxes;
-    m_leafTriangle.resize(n);
+    resizeKeeping(m_leafTriangle, n);
     m_levelCount = 0;
     if (n == 0) return;
     computeKeys(boxes, triangles, pool);
@@ -53,7 +54,7 @@ void BoxTree::computeKeys(const std::vector<Aabb>& boxes, const std::vector<std:
     // Morton order of the box centres (10 bits per axis) over their common bounds.
     const std::size_t n = triangles.size();
     const std::size_t chunks = chunkCount(n);
-    m_chunkBounds.assign(chunks, Aabb{});
+    assignKeeping(m_chunkBounds, chunks, Aabb{});
     const Aabb* box = boxes.data();
     const std::uint32_t* list = triangles.data();
     Aabb* chunkBounds = m_chunkBounds.data();
@@ -72,8 +73,8 @@ void BoxTree::computeKeys(const std::vector<Aabb>& boxes, const std::vector<std:
         const double extent = all.max[k] - all.min[k];
         scale[k] = extent > 0.0 && std::isfinite(extent) ? 1023.0 / extent : 0.0;
     }
-    m_keys.resize(n);
-    m_floatBoxes.resize(n);
+    resizeKeeping(m_keys, n);
+    resizeKeeping(m_floatBoxes, n);
     std::uint64_t* keys = m_keys.data();
     FloatBox* floatBoxes = m_floatBoxes.data();
     parallelForOrHere(pool, chunks, 1, [&](std::size_t begin, std::size_t end) {
@@ -96,7 +97,7 @@ void BoxTree::fillLeaves(const std::vector<std::uint32_t>& triangles, TaskPool* 
     const std::size_t n = m_keys.size();
     if (m_levels.empty()) m_levels.emplace_back();
     std::vector<Block>& leaves = m_levels[0];
-    leaves.resize(blocksFor(n));
+    resizeKeeping(leaves, blocksFor(n));
     const std::uint64_t* keys = m_keys.data();
     const FloatBox* floatBoxes = m_floatBoxes.data();
     const std::uint32_t* list = triangles.data();
@@ -129,7 +130,7 @@ void BoxTree::buildLevels(TaskPool* pool) {
         if (m_levels.size() == m_levelCount) m_levels.emplace_back();
         const std::vector<Block>& below = m_levels[m_levelCount - 1];
         std::vector<Block>& level = m_levels[m_levelCount];
-        level.resize(blocksFor(parents));
+        resizeKeeping(level, blocksFor(parents));
         // Whole blocks per task: no two tasks write one block. Small levels on this thread (no dispatch).
         TaskPool* levelPool = parents >= kBuildChunk ? pool : nullptr;
         parallelForOrHere(levelPool, level.size(), kBuildChunk / kFanout, [&](std::size_t begin, std::size_t end) {
