@@ -26,10 +26,11 @@ std::unique_ptr<Engine> makeEngine(const std::string& name, const EngineOptions&
     s.resolution = options.resolution;
     s.groupSize = options.groupSize;
     s.maxIterations = options.maxIterations;
+    if (options.threads >= 0) s.threads = static_cast<unsigned>(options.threads);
     if (name == "exact") return std::make_unique<CullideEngine>(s, CullideEngine::Kind::Exact);
     if (name == "cullide") return std::make_unique<CullideEngine>(s, CullideEngine::Kind::Gpu);
     if (name == "cullide-1t") {
-        s.threads = 1;
+        s.threads = 1;  // whatever --threads says: the engine's name is its thread count
         return std::make_unique<CullideEngine>(s, CullideEngine::Kind::Gpu);
     }
     if (name == "cullide-cpu") {  // the CPU path alone: what Auto weighs the GPU levels against

@@ -33,6 +33,7 @@ struct FrameOutput {
     std::size_t draws = 0;           ///< GL draws and dispatches (CULLIDE)
     std::optional<double> gpuTimerMs;  ///< GPU time of the levels from timer queries, where valid (CULLIDE)
     nlohmann::json levels;           ///< per GPU level: items per iteration, draws, CPU and GPU ms (CULLIDE)
+    long minorFaults = 0;  ///< the process's minor page faults during the frame (set by the harness, frame scenes)
 
     void clear() { *this = FrameOutput{}; }
 };
@@ -41,6 +42,7 @@ struct EngineOptions {
     int resolution = 256;  ///< CULLIDE image resolution (GPU levels)
     int groupSize = 32;
     int maxIterations = 4;  ///< Settings::maxIterations
+    int threads = -1;  ///< Settings::threads of the CULLIDE engines (0: every core); -1: the engine's own
 };
 
 class Engine {

@@ -1,6 +1,7 @@
 #include "RunRecord.h"
 
 #include <algorithm>
+#include <cmath>
 
 namespace cullide::bench {
 
@@ -13,6 +14,7 @@ double median(std::vector<double> v) {
 
 void RunRecord::add(const FrameOutput& out, const PairSet* exact) {
     m_total.push_back(out.totalMs);
+    m_faults.push_back(out.minorFaults);
     for (const StageTime& s : out.stages) {
         if (!m_stages.count(s.name)) m_stageOrder.push_back(s.name);
         m_stages[s.name].push_back(s.ms);
@@ -75,6 +77,19 @@ void RunRecord::write(nlohmann::json& r) const {
     // GPU timer: only when every timed frame had a valid one (a median of some frames would read as all).
     if (!m_gpuTimerMs.empty() && m_gpuTimerMs.size() == m_total.size()) r["gpu_timer_ms_median"] = median(m_gpuTimerMs);
     if (!m_lastLevels.is_null() && !m_lastLevels.empty()) r["levels_last_frame"] = m_lastLevels;
+}
+
+void RunRecord::writeFrames(nlohmann::json& r) const {
+    auto rounded = [](const std::vector<double>& ms) {
+        nlohmann::json a = nlohmann::json::array();
+        for (double v : ms) a.push_back(std::round(v * 1000.0) / 1000.0);  // microseconds: enough, and short
+        return a;
+    };
+    r["frame_ms"] = rounded(m_total);
+    nlohmann::json stages = nlohmann::json::object();
+    for (const std::string& name : m_stageOrder) stages[name] = rounded(m_stages.at(name));
+    r["stage_frame_ms"] = stages;
+    r["frame_minor_faults"] = m_faults;
 }
 
 }  // namespace cullide::bench

@@ -18,10 +18,15 @@ public:
     void add(const FrameOutput& out, const PairSet* exact);
     /// Fills ms, stages, pair counts, errors, costs and bytes into `record`.
     void write(nlohmann::json& record) const;
+    /// Adds each timed frame's ms, stage ms and minor page faults ("frame_ms", "stage_frame_ms": {stage: [ms, ...]},
+    /// "frame_minor_faults"), in frame order: which frames were slow and where (GpuLevels::Auto's trial frames are the
+    /// ones with "gpu levels" > 0).
+    void writeFrames(nlohmann::json& record) const;
     std::size_t frames() const { return m_total.size(); }
 
 private:
     std::vector<double> m_total;
+    std::vector<long> m_faults;
     std::vector<std::string> m_stageOrder;
     std::map<std::string, std::vector<double>> m_stages;
     Comparison m_triangles, m_objects;

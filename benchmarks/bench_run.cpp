@@ -3,14 +3,17 @@
 //
 //   cullide-bench-run --scene env1|env2|env3|env3-deform|stack|landscape|breakable --engine NAME
 //                     [--objects N] [--tris N] [--frames N] [--warmup N] [--resolution N] [--group K]
-//                     [--iterations N]
+//                     [--iterations N] [--threads N]
 //                     [--truth FILE] [--tag TAG] [--out FILE] [--sample-every N]
 //   cullide-bench-run --list-engines | --list-scenes   what this build can run
 //   cullide-bench-run --probe          prints the GL renderer and device CULLIDE picks, as JSON
 //
 // Frame scenes: the first --warmup frames run untimed, the next --frames are timed. With --engine exact the exact
 // answer (the brute-force reference) of the timed frames is written to --truth; other engines read it from there
-// and count missed and extra pairs. Exit status: 0 ok, 2 bad arguments, 3 no GL, 4 scene or engine not built.
+// and count missed and extra pairs. Frame scenes' records also hold each timed frame's ms and stage ms; every record
+// lists the process's threads at the end (CPU time and allowed CPUs, grouped by name: the culler's workers are
+// "cullide-worker", a GL driver's threads show up beside them) and the CPUs the main thread was allowed at the start.
+// --threads N sets the CULLIDE engines' worker count (0: every core). Exit status: 0 ok, 2 bad arguments, 3 no GL, 4 scene or engine not built.
 #include "BenchScene.h"
 #include "Engine.h"
 #include "PairSet.h"
@@ -28,6 +31,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -35,6 +39,8 @@
 #include <iostream>
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace {
 
@@ -43,10 +49,31 @@ using namespace cullide::bench;
 int usage(const std::string& why) {
     std::fprintf(stderr,
                  "cullide-bench-run: %s\nusage: cullide-bench-run --scene SCENE --engine ENGINE [--objects N] "
-                 "[--tris N] [--frames N] [--warmup N] [--resolution N] [--group K] [--iterations N] [--truth FILE] [--tag TAG] "
+                 "[--tris N] [--frames N] [--warmup N] [--resolution N] [--group K] [--iterations N] [--threads N] "
+                 "[--truth FILE] [--tag TAG] "
                  "[--out FILE] [--sample-every N] | --list-engines | --list-scenes | --probe\n",
                  why.c_str());
     return 2;
+}
+
+/// The process's threads grouped by (name, allowed CPUs): [{name, threads, cpu_ms, cpu_ms_max, cpus}], the most
+/// CPU time first.
+nlohmann::json threadsByName(const std::vector<ThreadUse>& threads) {
+    std::vector<std::pair<std::pair<std::string, std::string>, std::vector<double>>> groups;
+    for (const ThreadUse& t : threads) {
+        const auto key = std::make_pair(t.name, t.cpus);
+        auto it = std::find_if(groups.begin(), groups.end(), [&](const auto& g) { return g.first == key; });
+        if (it == groups.end()) it = groups.insert(groups.end(), {key, {}});
+        it->second.push_back(t.cpuMs);
+    }
+    nlohmann::json out = nlohmann::json::array();
+    for (const auto& [key, ms] : groups) {  // threads come most CPU first, so groups do too (by their busiest)
+        double sum = 0.0;
+        for (double v : ms) sum += v;
+        out.push_back({{"name", key.first}, {"threads", ms.size()}, {"cpu_ms", sum}, {"cpu_ms_max", ms.front()},
+                       {"cpus", key.second}});
+    }
+    return out;
 }
 
 int toInt(const std::string& s, const std::string& flag) {
@@ -98,6 +125,7 @@ void runFrames(const RunArgs& args, nlohmann::json& record) {
     options.resolution = args.resolution;
     options.groupSize = args.groupSize;
     options.maxIterations = args.maxIterations;
+    options.threads = args.threads;
     auto engine = makeEngine(args.engine, options);
     const bool exactEngine = args.engine == "exact";
 
@@ -116,7 +144,9 @@ void runFrames(const RunArgs& args, nlohmann::json& record) {
     for (int f = 0; f < args.warmup + args.frames; ++f) {
         const BenchFrame frame = scene.frame(f);
         if (f < args.warmup && exactEngine) continue;  // the oracle needs no warm-up
+        const long faults = minorFaults();
         engine->run(frame, out);
+        out.minorFaults = minorFaults() - faults;
         if (f < args.warmup) {
             warmupMs += out.totalMs;
             continue;
@@ -127,6 +157,8 @@ void runFrames(const RunArgs& args, nlohmann::json& record) {
     }
     record["warmup_ms"] = warmupMs;
     run.write(record);
+    run.writeFrames(record);
+    record["process_threads"] = threadsByName(threadUse());  // while the engine's workers (and GL's threads) live
     if (exactEngine && !args.truthPath.empty()) writeTruth(args.truthPath, written);
     if (exactEngine) record["truth"] = "reference";
     const nlohmann::json described = engine->describe();
@@ -146,6 +178,7 @@ void runStepping(const RunArgs& args, nlohmann::json& record) {
         if (f >= args.warmup) run.add(out, nullptr);
     }
     run.write(record);
+    record["process_threads"] = threadsByName(threadUse());
     const nlohmann::json described = scene.describe();
     for (const auto& [key, value] : described.items()) record[key] = value;
 }
@@ -170,6 +203,7 @@ int main(int argc, char** argv) {
             else if (a == "--resolution") args.resolution = toInt(value(), a);
             else if (a == "--group") args.groupSize = toInt(value(), a);
             else if (a == "--iterations") args.maxIterations = toInt(value(), a);
+            else if (a == "--threads") args.threads = toInt(value(), a);
             else if (a == "--sample-every") args.sampleEvery = toInt(value(), a);
             else if (a == "--truth") args.truthPath = value();
             else if (a == "--tag") args.tag = value();
@@ -189,8 +223,8 @@ int main(int argc, char** argv) {
                 return usage("unknown argument " + a);
             }
         }
-        if (args.frames < 1 || args.warmup < 0 || args.sampleEvery < 1)
-            return usage("--frames >= 1, --warmup >= 0, --sample-every >= 1");
+        if (args.frames < 1 || args.warmup < 0 || args.sampleEvery < 1 || args.threads < -1 || args.threads > 1024)
+            return usage("--frames >= 1, --warmup >= 0, --sample-every >= 1, --threads 0 ... 1024");
     } catch (const std::invalid_argument& e) {
         return usage(e.what());
     } catch (const cullide::GlUnavailableError& e) {
@@ -203,6 +237,7 @@ int main(int argc, char** argv) {
     record["scene"] = args.scene;
     record["engine"] = args.engine;
     record["warmup"] = args.warmup;
+    record["cpus_allowed_start"] = cpusAllowed();
     try {
         const cullide::Timer wall;
         if (args.scene == "stack" || args.scene == "landscape") {
@@ -219,6 +254,7 @@ int main(int argc, char** argv) {
         }
         record["wall_s"] = wall.ms() / 1000.0;
         record["peak_rss_kb"] = peakResidentKb();
+        if (!record.contains("process_threads")) record["process_threads"] = threadsByName(threadUse());
         emit(args, record);
     } catch (const cullide::GlUnavailableError& e) {
         std::fprintf(stderr, "cullide-bench-run: %s\n", e.what());

@@ -2,11 +2,29 @@
 
 #include <algorithm>
 
+#if defined(__linux__)
+#include <pthread.h>
+#endif
+
 namespace cullide {
+namespace {
+
+/// Workers are named (Linux: top -H, perf, /proc/<pid>/task/*/comm) so that a profile or a thread listing tells the
+/// culler's workers from the application's and a GL driver's threads.
+void nameWorkerThread() {
+#if defined(__linux__)
+    pthread_setname_np(pthread_self(), TaskPool::kWorkerName);
+#endif
+}
+
+}  // namespace
 
 TaskPool::TaskPool(unsigned threads) {
     unsigned n = threads != 0 ? threads : std::max(1u, std::thread::hardware_concurrency());
-    for (unsigned i = 1; i < n; ++i) m_workers.emplace_back([this] { workerLoop(); });
+    for (unsigned i = 1; i < n; ++i) m_workers.emplace_back([this] {
+            nameWorkerThread();
+            workerLoop();
+        });
 }
 
 TaskPool::~TaskPool() {

@@ -5,9 +5,17 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
+#include <mutex>
+#include <set>
 #include <stdexcept>
+#include <string>
 #include <thread>
 #include <vector>
+
+#if defined(__linux__)
+#include <pthread.h>
+#endif
 
 namespace cullide {
 namespace {
@@ -72,6 +80,27 @@ TEST(TaskPool, ExceptionsFromEitherSideReachTheCaller) {
     pool.parallelFor(10, 1, [&](std::size_t, std::size_t) { n.fetch_add(1); }, [] {});
     EXPECT_EQ(n.load(), 10);
 }
+
+#if defined(__linux__)
+TEST(TaskPool, WorkersCarryTheirName) {
+    // A thread listing (top -H, perf, /proc) must tell the culler's workers from a GL driver's threads.
+    TaskPool pool(3);
+    const std::thread::id caller = std::this_thread::get_id();
+    std::mutex mutex;
+    std::set<std::string> names;
+    for (int attempt = 0; attempt < 200 && names.empty(); ++attempt) {
+        pool.parallelFor(16, 1, [&](std::size_t, std::size_t) {
+            std::this_thread::sleep_for(std::chrono::milliseconds(1));
+            if (std::this_thread::get_id() == caller) return;
+            char name[16] = {};
+            ASSERT_EQ(pthread_getname_np(pthread_self(), name, sizeof name), 0);
+            const std::lock_guard<std::mutex> lock(mutex);
+            names.insert(name);
+        });
+    }
+    EXPECT_EQ(names, std::set<std::string>{TaskPool::kWorkerName});
+}
+#endif
 
 }  // namespace
 }  // namespace cullide

@@ -15,6 +15,9 @@ namespace cullide {
 
 class TaskPool {
 public:
+    /// The name each worker thread gets where the platform has thread names (Linux: 15 characters at most).
+    static constexpr const char* kWorkerName = "cullide-worker";
+
     /// `threads` = total workers including the calling thread; 0 = hardware concurrency.
     explicit TaskPool(unsigned threads);
     ~TaskPool();
