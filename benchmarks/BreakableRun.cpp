@@ -1,6 +1,7 @@
 #include "BreakableRun.h"
 
 #include "PairSet.h"
+#include "ProcessInfo.h"
 #include "RunRecord.h"
 
 #include "cullide/Culler.h"
@@ -63,9 +64,11 @@ void runBreakable(const RunArgs& args, nlohmann::json& record) {
                 if (!p.triangles.empty()) exact.addObject(p.a, p.b);
             exact.finish();
         }
+        const long faults = minorFaults();
         const demo::BreakableFrame& fr = scene.step();
         if (f < args.warmup) continue;
         out.clear();
+        out.minorFaults = minorFaults() - faults;
         out.trianglePairsKnown = false;
         out.totalMs = fr.totalMs;
         const double known = fr.broadphaseMs + fr.narrowphaseMs + fr.solverMs + fr.fractureMs;

@@ -235,6 +235,7 @@ void ReportWriter::write() {
         scaling(c);
         memory(c);
         gpuLevels(c);
+        threads(c);
     }
     gpuComparison();
     m_md << "## Reproduce\n\n```sh\nscripts/bench.sh            # full run, writes this page\nscripts/bench.sh --quick    "
@@ -673,6 +674,104 @@ void ReportWriter::gpuLevels(const Class& c) {
     m_md << (rows.str().empty() ? "| – | (these records predate the measured `Auto` decision) | | | | | | | |\n"
                                 : rows.str())
          << "\n";
+}
+
+namespace {
+
+/// Median of a per-frame array over the frames where `keep` holds (by index); 0 when none.
+template <class Keep>
+double medianWhere(const json& values, Keep keep) {
+    std::vector<double> v;
+    for (std::size_t i = 0; i < values.size(); ++i)
+        if (keep(i)) v.push_back(values[i].get<double>());
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    const std::size_t n = v.size();
+    return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+/// "n threads, X ms" of the record's threads named (or, with `others`, not named) cullide-worker.
+std::string threadCpu(const json& r, bool workers) {
+    std::size_t n = 0;
+    double cpu = 0.0, busiest = 0.0;
+    for (const auto& g : r.value("process_threads", json::array())) {
+        if ((g.value("name", std::string()) == "cullide-worker") != workers) continue;
+        n += g.value("threads", std::size_t{0});
+        cpu += g.value("cpu_ms", 0.0);
+        busiest = std::max(busiest, g.value("cpu_ms_max", 0.0));
+    }
+    // /proc counts CPU time in clock ticks (10 ms): whole milliseconds.
+    return n == 0 ? "–" : count(static_cast<double>(n)) + " / " + fixed(cpu, 0) + " (busiest " + fixed(busiest, 0) + ")";
+}
+
+}  // namespace
+
+void ReportWriter::threads(const Class& c) {
+    m_md << "### 6. CPU frames, page faults and threads (" << c.name << ")\n\n"
+            "`Auto`'s CPU-path frames (the timed frames without GPU levels) beside the CPU path alone "
+            "(`cullide-cpu`), same scene and frames: median frame ms, the exact stage's in brackets, and minor page "
+            "faults per frame (memory touched for the first time: a few per frame in a steady state). Threads: the "
+            "culler's workers (`cullide-worker`) and every other thread of the process (the main thread, a GL "
+            "driver's): count / CPU ms over the whole run (busiest thread), from `/proc` at the end of the run.\n\n"
+            "| scene | Auto, CPU frames: ms (exact) | faults | cullide-cpu: ms (exact) | faults | Auto: workers | Auto: "
+            "other threads |\n|---|---|---|---|---|---|---|\n";
+    std::ostringstream rows;
+    for (const auto& scene : scenes(c, "side")) {
+        const json* a = find(c, "side", scene, "cullide");
+        const json* p = find(c, "side", scene, "cullide-cpu");
+        if (a == nullptr || p == nullptr || !a->contains("frame_ms") || !p->contains("frame_ms")) continue;
+        auto frames = [](const json& r, bool cpuOnly) {
+            const json& stages = r.at("stage_frame_ms");
+            const json gpu = stages.value("gpu levels", json::array());
+            auto cpuFrame = [&](std::size_t i) { return !cpuOnly || i >= gpu.size() || gpu[i].get<double>() == 0.0; };
+            std::size_t kept = 0;
+            for (std::size_t i = 0; i < r.at("frame_ms").size(); ++i) kept += cpuFrame(i) ? 1 : 0;
+            if (kept == 0) return std::string("– (every timed frame ran the GPU levels) | –");
+            return ms(medianWhere(r.at("frame_ms"), cpuFrame)) + " (" +
+                   ms(medianWhere(stages.value("exact", json::array()), cpuFrame)) + ") | " +
+                   count(medianWhere(r.value("frame_minor_faults", json::array()), cpuFrame));
+        };
+        rows << "| " << scene << " | " << frames(*a, true) << " | " << frames(*p, false) << " | "
+             << threadCpu(*a, true) << " | " << threadCpu(*a, false) << " |\n";
+    }
+    m_md << (rows.str().empty() ? "| – | (these records predate the per-frame figures) | | | | | |\n" : rows.str())
+         << "\n";
+    m_md << "The CULLIDE engines with `--threads N` (`Settings::threads`; 0 is every core), each its own process on "
+            "the same frames: median ms per frame, the exact stage's in brackets.\n\n";
+    std::set<int> counts;
+    std::vector<std::pair<std::string, std::string>> rowKeys;
+    for (const auto& r : c.records) {
+        if (r.value("tag", "") != "threads" || !r.contains("ms")) continue;
+        counts.insert(r.value("threads", 0));
+        const auto key = std::make_pair(r.value("scene", std::string()), r.value("engine", std::string()));
+        if (std::find(rowKeys.begin(), rowKeys.end(), key) == rowKeys.end()) rowKeys.push_back(key);
+    }
+    if (counts.empty()) {
+        m_md << "(no `threads` records in this run)\n\n";
+        return;
+    }
+    m_md << "| scene | engine |";
+    for (int n : counts) m_md << " " << n << (n == 1 ? " thread" : " threads") << " |";
+    m_md << "\n|---|---|";
+    for (std::size_t i = 0; i < counts.size(); ++i) m_md << "---|";
+    m_md << "\n";
+    for (const auto& [scene, engine] : rowKeys) {
+        m_md << "| " << scene << " | " << engine << " |";
+        for (int n : counts) {
+            const json* hit = nullptr;
+            for (const auto& r : c.records)
+                if (r.value("tag", "") == "threads" && r.value("scene", "") == scene &&
+                    r.value("engine", "") == engine && r.value("threads", 0) == n && r.contains("ms"))
+                    hit = &r;
+            std::string exact;
+            if (hit != nullptr)
+                for (const auto& stage : hit->value("stages", json::array()))
+                    if (stage.at(0) == "exact") exact = " (" + ms(stage.at(1).get<double>()) + ")";
+            m_md << " " << (hit != nullptr ? ms(medianMs(*hit)) + exact : std::string("–")) << " |";
+        }
+        m_md << "\n";
+    }
+    m_md << "\n";
 }
 
 void ReportWriter::gpuComparison() {

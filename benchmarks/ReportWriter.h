@@ -34,6 +34,7 @@ private:
     void scaling(const Class& c);
     void memory(const Class& c);
     void gpuLevels(const Class& c);
+    void threads(const Class& c);
     void gpuComparison();
     void plotSide(const Class& c);
     void plotSweep(const Class& c);

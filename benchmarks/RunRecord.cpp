@@ -74,6 +74,8 @@ void RunRecord::write(nlohmann::json& r) const {
     r["bytes_uploaded_mean"] = m_total.empty() ? 0.0 : static_cast<double>(m_sumUploaded) / static_cast<double>(m_total.size());
     r["bytes_read_back_max"] = m_maxReadBack;
     r["draws_median"] = median(m_draws);
+    std::vector<double> faults(m_faults.begin(), m_faults.end());
+    r["minor_faults_median"] = median(faults);  // per frame or step: memory freshly touched (see frame_minor_faults)
     // GPU timer: only when every timed frame had a valid one (a median of some frames would read as all).
     if (!m_gpuTimerMs.empty() && m_gpuTimerMs.size() == m_total.size()) r["gpu_timer_ms_median"] = median(m_gpuTimerMs);
     if (!m_lastLevels.is_null() && !m_lastLevels.empty()) r["levels_last_frame"] = m_lastLevels;

@@ -174,7 +174,9 @@ void runStepping(const RunArgs& args, nlohmann::json& record) {
     FrameOutput out;
     RunRecord run;
     for (int f = 0; f < args.warmup + args.frames; ++f) {
+        const long faults = minorFaults();
         scene.step(out);
+        out.minorFaults = minorFaults() - faults;
         if (f >= args.warmup) run.add(out, nullptr);
     }
     run.write(record);

@@ -109,4 +109,18 @@ done
 for n in $tris; do
   for e in $scale_engines; do bench scale-triangles env2 $e $scale_frames --tris "$n"; done
 done
+# 4. Threads: the CPU path and Auto with 1, 2, 4, ... workers up to every core (how the exact stage scales, and
+# whether Auto's CPU frames keep up with the CPU path's on a machine with a GL driver's threads beside them).
+cores=$(nproc)
+thread_counts=""
+for ((n = 1; n < cores; n *= 2)); do thread_counts="$thread_counts $n"; done
+thread_counts="$thread_counts $cores"
+if [ $quick -eq 1 ]; then thread_scenes="env1:3"; thread_engines="cullide-cpu"; thread_counts="1 $cores"
+else thread_scenes="env1:20 env3:8"; thread_engines="cullide-cpu cullide"; fi
+for sf in $thread_scenes; do
+  scene=${sf%%:*}; frames=${sf##*:}
+  for n in $thread_counts; do
+    for e in $thread_engines; do bench threads "$scene" "$e" "$frames" --threads "$n"; done
+  done
+done
 exit 0
