@@ -701,7 +701,8 @@ std::string threadCpu(const json& r, bool workers) {
         busiest = std::max(busiest, g.value("cpu_ms_max", 0.0));
     }
     // /proc counts CPU time in clock ticks (10 ms): whole milliseconds.
-    return n == 0 ? "–" : count(static_cast<double>(n)) + " / " + fixed(cpu, 0) + " (busiest " + fixed(busiest, 0) + ")";
+    if (n == 0) return "–";
+    return count(static_cast<double>(n)) + " / " + fixed(cpu, 0) + " (busiest " + fixed(busiest, 0) + ")";
 }
 
 }  // namespace
