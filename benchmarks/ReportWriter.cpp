@@ -714,8 +714,8 @@ void ReportWriter::threads(const Class& c) {
             "faults per frame (memory touched for the first time: a few per frame in a steady state). Threads: the "
             "culler's workers (`cullide-worker`) and every other thread of the process (the main thread, a GL "
             "driver's): count / CPU ms over the whole run (busiest thread), from `/proc` at the end of the run.\n\n"
-            "| scene | Auto, CPU frames: ms (exact) | faults | cullide-cpu: ms (exact) | faults | Auto: workers | Auto: "
-            "other threads |\n|---|---|---|---|---|---|---|\n";
+            "| scene | Auto, CPU frames: ms (exact) | faults | cullide-cpu: ms (exact) | faults | Auto: workers "
+            "| Auto: other threads |\n|---|---|---|---|---|---|---|\n";
     std::ostringstream rows;
     for (const auto& scene : scenes(c, "side")) {
         const json* a = find(c, "side", scene, "cullide");

@@ -10,10 +10,11 @@
 //
 // Frame scenes: the first --warmup frames run untimed, the next --frames are timed. With --engine exact the exact
 // answer (the brute-force reference) of the timed frames is written to --truth; other engines read it from there
-// and count missed and extra pairs. Frame scenes' records also hold each timed frame's ms and stage ms; every record
-// lists the process's threads at the end (CPU time and allowed CPUs, grouped by name: the culler's workers are
-// "cullide-worker", a GL driver's threads show up beside them) and the CPUs the main thread was allowed at the start.
-// --threads N sets the CULLIDE engines' worker count (0: every core). Exit status: 0 ok, 2 bad arguments, 3 no GL, 4 scene or engine not built.
+// and count missed and extra pairs. Frame scenes' records also hold each timed frame's ms, stage ms and minor page
+// faults; every record lists the process's threads at the end (CPU time and allowed CPUs, grouped by name: the
+// culler's workers are "cullide-worker", a GL driver's threads show up beside them) and the CPUs the main thread was
+// allowed at the start. --threads N sets the CULLIDE engines' worker count (0: every core).
+// Exit status: 0 ok, 2 bad arguments, 3 no GL, 4 scene or engine not built.
 #include "BenchScene.h"
 #include "Engine.h"
 #include "PairSet.h"
