@@ -2,6 +2,7 @@
 
 #include "FrameObjects.h"
 #include "KeptCapacity.h"
+#include "PoolOrHere.h"
 #include "exact/BoxTree.h"
 #include "cullide/TriangleTest.h"
 
@@ -19,6 +20,38 @@ struct ExactStage::Scratch {
     std::vector<std::vector<TrianglePair>> taskOut;
     std::vector<std::uint8_t> hit;  ///< per candidate: the triangle test's answer
 };
+
+namespace {
+
+/// The sorted lists runs[first .. last) merged into `out` (sorted), pairwise: log2(runs) passes over the pairs.
+void mergeRuns(const std::vector<std::vector<TrianglePair>>& runs, std::size_t first, std::size_t last,
+               std::vector<TrianglePair>& out) {
+    thread_local std::vector<std::size_t> bounds;  // run boundaries in `out`
+    thread_local std::vector<TrianglePair> merged;
+    out.clear();
+    bounds.assign(1, 0);
+    for (std::size_t t = first; t < last; ++t) {
+        if (runs[t].empty()) continue;
+        out.insert(out.end(), runs[t].begin(), runs[t].end());
+        bounds.push_back(out.size());
+    }
+    while (bounds.size() > 2) {
+        merged.resize(out.size());
+        std::size_t kept = 1;
+        for (std::size_t i = 0; i + 1 < bounds.size(); i += 2) {
+            const auto from = static_cast<std::ptrdiff_t>(bounds[i]);
+            const auto mid = static_cast<std::ptrdiff_t>(bounds[i + 1]);
+            const auto to = static_cast<std::ptrdiff_t>(i + 2 < bounds.size() ? bounds[i + 2] : bounds[i + 1]);
+            std::merge(out.begin() + from, out.begin() + mid, out.begin() + mid, out.begin() + to,
+                       merged.begin() + from);
+            bounds[kept++] = static_cast<std::size_t>(to);
+        }
+        bounds.resize(kept);
+        out.swap(merged);
+    }
+}
+
+}  // namespace
 
 ExactStage::ExactStage(TaskPool& pool) : m_pool(pool), m_scratch(std::make_unique<Scratch>()) {}
 ExactStage::~ExactStage() = default;
@@ -118,7 +151,7 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
     for (std::size_t j = jobs.size(); j-- > 0;) jobTasks[j] = std::min(jobTasks[j], jobTasks[j + 1]);
     std::vector<std::uint8_t>& hit = m_scratch->hit;
     assignKeeping(hit, total, static_cast<std::uint8_t>(exact ? 0 : 1));
-    if (exact) m_pool.parallelFor(total, 2048, [&](std::size_t begin, std::size_t end) {
+    if (exact) m_pool.parallelFor(total, chunkFor(&m_pool, total, 256, 2048), [&](std::size_t begin, std::size_t end) {
         std::size_t t = static_cast<std::size_t>(std::upper_bound(offsets.begin(), offsets.end(), begin) -
                                                  offsets.begin()) - 1;
         for (std::size_t k = begin; k < end; ++k) {
@@ -133,15 +166,22 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
                                      mb.vertices[tb[1]], mb.vertices[tb[2]], margin);
         }
     });
-    m_pool.parallelFor(jobs.size(), 16, [&](std::size_t begin, std::size_t end) {
+    // Each task keeps its hits, sorted, on the workers; then each job merges its tasks' runs (one large pair has
+    // hundreds of tasks: its results are not gathered and sorted on one thread).
+    m_pool.parallelFor(tasks.size(), chunkFor(&m_pool, tasks.size(), 1, 16), [&](std::size_t begin, std::size_t end) {
+        for (std::size_t t = begin; t < end; ++t) {
+            std::vector<TrianglePair>& list = taskOut[t];
+            std::size_t kept = 0;
+            for (std::size_t k = 0; k < list.size(); ++k)
+                if (hit[offsets[t] + k]) list[kept++] = list[k];
+            list.resize(kept);
+            std::sort(list.begin(), list.end());
+        }
+    });
+    m_pool.parallelFor(jobs.size(), chunkFor(&m_pool, jobs.size(), 1, 16), [&](std::size_t begin, std::size_t end) {
         for (std::size_t j = begin; j < end; ++j) {
-            auto& out = results[j].triangles;
-            for (std::size_t t = jobTasks[j]; t < jobTasks[j + 1]; ++t) {
-                results[j].candidates += taskOut[t].size();
-                for (std::size_t k = 0; k < taskOut[t].size(); ++k)
-                    if (hit[offsets[t] + k]) out.push_back(taskOut[t][k]);
-            }
-            std::sort(out.begin(), out.end());
+            results[j].candidates = offsets[jobTasks[j + 1]] - offsets[jobTasks[j]];
+            mergeRuns(taskOut, jobTasks[j], jobTasks[j + 1], results[j].triangles);
         }
     });
     if (exact)

@@ -80,7 +80,11 @@ std::vector<ValidatedObject> validateObjects(const std::vector<Object>& objects,
     // Fast path, in ranges on every worker when a pool is given: are all vertices finite, all indices in range?
     // Then the box is that of all vertices (a superset of the used ones when some are unused: only looser
     // culling). Otherwise the mesh takes the slow path, in triangle order.
-    constexpr std::size_t kRange = 32768;
+    std::size_t elements = 0;
+    for (std::size_t i = 0; i < objects.size(); ++i)
+        if (objects[i].mesh != nullptr && !isKnown(i))
+            elements += objects[i].mesh->vertices.size() + objects[i].mesh->triangles.size();
+    const std::size_t range = chunkFor(pool, elements, 4096, 32768);
     std::vector<MeshRange> ranges;
     for (std::size_t i = 0; i < objects.size(); ++i) {
         if (objects[i].mesh == nullptr || isKnown(i)) continue;
@@ -88,12 +92,12 @@ std::vector<ValidatedObject> validateObjects(const std::vector<Object>& objects,
         if (m.triangles.empty()) continue;
         for (const bool vertices : {true, false}) {
             const std::size_t n = vertices ? m.vertices.size() : m.triangles.size();
-            for (std::size_t first = 0; first < n; first += kRange) {
+            for (std::size_t first = 0; first < n; first += range) {
                 MeshRange r;
                 r.object = static_cast<std::uint32_t>(i);
                 r.vertices = vertices;
                 r.begin = first;
-                r.end = std::min(n, first + kRange);
+                r.end = std::min(n, first + range);
                 ranges.push_back(r);
             }
         }

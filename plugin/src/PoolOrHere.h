@@ -3,6 +3,7 @@
 
 #include "cullide/TaskPool.h"
 
+#include <algorithm>
 #include <cstddef>
 #include <functional>
 
@@ -16,6 +17,16 @@ inline void parallelForOrHere(TaskPool* pool, std::size_t count, std::size_t gra
         pool->parallelFor(count, grain, fn);
     else if (count > 0)
         fn(0, count);
+}
+
+/// Items per chunk for `total` items of about even cost: about kChunksPerWorker chunks for each of `pool`'s workers
+/// (dynamic scheduling evens out the rest), but no fewer than `least` items (a chunk must outweigh its hand-off) and
+/// no more than `most`. The result may depend on the pool's size: callers write per-index slots, so their output
+/// does not.
+inline std::size_t chunkFor(const TaskPool* pool, std::size_t total, std::size_t least, std::size_t most) {
+    constexpr std::size_t kChunksPerWorker = 8;
+    const std::size_t workers = pool != nullptr ? pool->size() : 1;
+    return std::clamp(total / (kChunksPerWorker * workers), least, most);
 }
 
 }  // namespace cullide

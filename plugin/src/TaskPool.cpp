@@ -5,6 +5,9 @@
 #if defined(__linux__)
 #include <pthread.h>
 #endif
+#if defined(__SSE2__) || defined(_M_X64)
+#include <emmintrin.h>
+#endif
 
 namespace cullide {
 namespace {
@@ -17,7 +20,67 @@ void nameWorkerThread() {
 #endif
 }
 
+/// Polls `ready` for up to TaskPool::kSpin: a few pause instructions between reads, the rest of the time slice
+/// handed back between rounds (a machine with more threads than cores, or a GL driver's threads, still run).
+template <typename Ready>
+bool pollFor(const Ready& ready) {
+    const auto until = std::chrono::steady_clock::now() + TaskPool::kSpin;
+    for (;;) {
+        for (int i = 0; i < 64; ++i) {
+            if (ready()) return true;
+#if defined(__SSE2__) || defined(_M_X64)
+            _mm_pause();
+#endif
+        }
+        if (std::chrono::steady_clock::now() >= until) return ready();
+        std::this_thread::yield();
+    }
+}
+
 }  // namespace
+
+/// One parallelFor call, on the caller's stack. Chunks are claimed by an atomic add on `next`; `finished` counts
+/// the indices done (or dropped after an error), so the caller knows when the last chunk is over.
+struct TaskPool::Job {
+    const std::function<void(std::size_t, std::size_t)>& fn;
+    const std::size_t count;
+    const std::size_t chunk;
+    std::atomic<std::size_t> next{0};
+    std::atomic<std::size_t> finished{0};
+    std::atomic<bool> failed{false};     ///< chunks not started yet are dropped
+    std::atomic<bool> callerAsleep{false};
+    std::mutex errorMutex;
+    std::exception_ptr error;
+
+    Job(const std::function<void(std::size_t, std::size_t)>& f, std::size_t n, std::size_t c)
+        : fn(f), count(n), chunk(c) {}
+
+    void fail(std::exception_ptr e) {
+        const std::lock_guard<std::mutex> lock(errorMutex);
+        if (!error) error = std::move(e);
+        failed.store(true);
+    }
+
+    /// Runs chunks until none is left. Returns true when this thread finished the job's last index.
+    bool runChunks() {
+        bool last = false;
+        for (;;) {
+            const std::size_t begin = next.fetch_add(chunk);
+            if (begin >= count) return last;
+            const std::size_t end = std::min(count, begin + chunk);
+            if (!failed.load(std::memory_order_relaxed)) {
+                try {
+                    fn(begin, end);
+                } catch (...) {
+                    fail(std::current_exception());
+                }
+            }
+            last = finished.fetch_add(end - begin) + (end - begin) == count;
+        }
+    }
+
+    bool done() const { return finished.load() == count; }
+};
 
 TaskPool::TaskPool(unsigned threads) {
     unsigned n = threads != 0 ? threads : std::max(1u, std::thread::hardware_concurrency());
@@ -30,44 +93,51 @@ TaskPool::TaskPool(unsigned threads) {
 TaskPool::~TaskPool() {
     {
         std::lock_guard<std::mutex> lock(m_mutex);
-        m_stop = true;
+        m_stop.store(true);
     }
     m_wake.notify_all();
     for (auto& t : m_workers) t.join();
 }
 
-void TaskPool::drain(std::unique_lock<std::mutex>& lock) {
-    while (m_fn != nullptr && m_next < m_count) {
-        const std::size_t begin = m_next;
-        const std::size_t end = std::min(m_count, begin + m_chunk);
-        m_next = end;
-        ++m_busy;
-        const auto* fn = m_fn;
-        lock.unlock();
-        std::exception_ptr error;
-        try {
-            (*fn)(begin, end);
-        } catch (...) {
-            error = std::current_exception();
-        }
-        lock.lock();
-        if (error) {
-            if (!m_error) m_error = error;
-            m_next = m_count;
-        }
-        if (--m_busy == 0 && m_next >= m_count) m_done.notify_all();
+bool TaskPool::waitForJob(std::uint64_t seen) {
+    auto ready = [&] { return m_stop.load() || m_generation.load() != seen; };
+    if (!pollFor(ready)) {
+        std::unique_lock<std::mutex> lock(m_mutex);
+        m_sleepers.fetch_add(1);  // before the predicate's check: a caller that misses it sees a sleeper
+        m_wake.wait(lock, ready);
+        m_sleepers.fetch_sub(1);
     }
+    return !m_stop.load();
 }
 
 void TaskPool::workerLoop() {
-    std::unique_lock<std::mutex> lock(m_mutex);
-    std::size_t seen = 0;
-    for (;;) {
-        m_wake.wait(lock, [&] { return m_stop || (m_generation != seen && m_fn != nullptr && m_next < m_count); });
-        if (m_stop) return;
-        seen = m_generation;
-        drain(lock);
+    std::uint64_t seen = 0;
+    while (waitForJob(seen)) {
+        seen = m_generation.load();
+        // Holding first, then reading the job: a caller that has cleared m_job and then sees no holder knows that
+        // no worker can still reach its job (all sequentially consistent).
+        m_holders.fetch_add(1);
+        Job* job = m_job.load();
+        if (job != nullptr && job->runChunks() && job->callerAsleep.load()) {
+            const std::lock_guard<std::mutex> lock(m_mutex);
+            m_done.notify_all();
+        }
+        m_holders.fetch_sub(1);
     }
+}
+
+void TaskPool::wakeWorkers(std::size_t wanted) {
+    const unsigned sleepers = m_sleepers.load();
+    if (sleepers == 0) return;
+    const std::lock_guard<std::mutex> lock(m_mutex);  // a worker between its check and its wait is waiting now
+    for (std::size_t i = 0; i < std::min<std::size_t>(wanted, sleepers); ++i) m_wake.notify_one();
+}
+
+void TaskPool::waitFinished(Job& job) {
+    if (pollFor([&] { return job.done(); })) return;
+    std::unique_lock<std::mutex> lock(m_mutex);
+    job.callerAsleep.store(true);  // before the predicate's check: the worker that ends the job then notifies
+    m_done.wait(lock, [&] { return job.done(); });
 }
 
 void TaskPool::parallelFor(std::size_t count, std::size_t chunk,
@@ -83,32 +153,22 @@ void TaskPool::parallelFor(std::size_t count, std::size_t chunk,
         if (count > 0) fn(0, count);
         return;
     }
-    std::unique_lock<std::mutex> lock(m_mutex);
-    m_fn = &fn;
-    m_count = count;
-    m_chunk = std::max<std::size_t>(1, chunk);
-    m_next = 0;
-    m_error = nullptr;
-    ++m_generation;
-    m_wake.notify_all();
+    Job job(fn, count, std::max<std::size_t>(1, chunk));
+    m_job.store(&job);
+    m_generation.fetch_add(1);
+    wakeWorkers((count + job.chunk - 1) / job.chunk);
     if (first) {
-        lock.unlock();
-        std::exception_ptr error;
         try {
             first();
         } catch (...) {
-            error = std::current_exception();
-        }
-        lock.lock();
-        if (error) {
-            if (!m_error) m_error = error;
-            m_next = m_count;  // the chunks not started yet are dropped
+            job.fail(std::current_exception());
         }
     }
-    drain(lock);
-    m_done.wait(lock, [&] { return m_busy == 0 && m_next >= m_count; });
-    m_fn = nullptr;
-    if (m_error) std::rethrow_exception(m_error);
+    job.runChunks();
+    waitFinished(job);
+    m_job.store(nullptr);
+    while (m_holders.load() != 0) std::this_thread::yield();  // a worker may still be reading `job`
+    if (job.error) std::rethrow_exception(job.error);
 }
 
 }  // namespace cullide

@@ -2,6 +2,7 @@
 
 #include "KeptCapacity.h"
 #include "Morton.h"
+#include "PoolOrHere.h"
 
 #include <algorithm>
 
@@ -152,8 +153,13 @@ void collectDirect(FrameState& frame, std::uint32_t groupSize, double margin, Ta
                    TriangleScratch& scratch) {
     const std::uint32_t k = groupSize;
     const std::size_t n = frame.valid.size();
+    // Ranges of whole groups (the many-partner branch tests groups of k), enough of them for every worker.
+    std::size_t triangles = 0;
+    for (std::uint32_t o = 0; o < n; ++o)
+        if (frame.isActiveMesh(o)) triangles += frame.meshOf(o).triangles.size();
+    const auto range = static_cast<std::uint32_t>(chunkFor(&pool, triangles, 1024, 8192));
     splitIntoRanges(frame, [&](std::uint32_t o) { return frame.isActiveMesh(o); },
-                    k * std::max<std::uint32_t>(1, 8192 / k), scratch.ranges);
+                    k * std::max<std::uint32_t>(1, range / k), scratch.ranges);
     if (scratch.rangeKept.size() < scratch.ranges.size()) scratch.rangeKept.resize(scratch.ranges.size());
     // The union of each object's partners' boxes: one test rejects the triangles far from all of them.
     scratch.partnerUnion.assign(n, Aabb{});

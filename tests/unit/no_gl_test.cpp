@@ -93,6 +93,32 @@ TEST(NoGl, RefillsTheSurvivorListsOfTheResultItIsGiven) {
     EXPECT_EQ(result.pcsTriangles, reference.pcsTriangles);
 }
 
+TEST(NoGl, ALargePairsTrianglesAreExactAndSortedOnAnyThreadCount) {
+    // Two dense soups on top of each other: their one pair is split into many descent tasks, whose hits are sorted
+    // per task and merged. The list must be the reference's, sorted and without repeats, whatever the workers.
+    std::vector<TriangleMesh> meshes = randomSoups(11, 1, 3000, 0.5);
+    meshes.push_back(meshes[0]);
+    for (Vec3& v : meshes[1].vertices) v.x() += 0.01;
+    const auto objects = asObjects(meshes);
+    Result reference;
+    createReferenceCuller(withoutDevice(GpuLevels::Never))->run(objects, reference);
+    for (const unsigned threads : {1u, 3u, 5u}) {
+        Settings settings = withoutDevice(GpuLevels::Never);
+        settings.threads = threads;
+        Result result;
+        createGpuCuller(settings)->run(objects, result);
+        const Comparison c = compare(reference, result);
+        ASSERT_GT(c.expected, 500u) << "the scene must give one large pair";
+        EXPECT_EQ(c.missed, 0u) << threads << " threads: " << c.firstMissed;
+        EXPECT_EQ(c.spurious, 0u) << threads << " threads";
+        for (const ObjectPair& pair : result.pairs) {
+            EXPECT_TRUE(std::is_sorted(pair.triangles.begin(), pair.triangles.end())) << threads << " threads";
+            EXPECT_EQ(std::adjacent_find(pair.triangles.begin(), pair.triangles.end()), pair.triangles.end());
+        }
+        EXPECT_GT(result.stats.candidateTrianglePairs, 4 * c.expected / 3) << "no work left for the split";
+    }
+}
+
 /// The notice lines ("cullide: ...") in captured standard error; lines of the EGL/Mesa libraries are not counted.
 std::size_t noticeLines(const std::string& text) {
     std::size_t lines = 0;

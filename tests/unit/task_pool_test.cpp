@@ -1,5 +1,6 @@
-// TaskPool: every index once, on any thread count; the caller-first variant runs its own work on the calling thread
-// while the workers start, and hands back exceptions from either side.
+// TaskPool: every index once, on any thread count and whether the workers are awake or asleep; the caller-first
+// variant runs its own work on the calling thread while the workers start, and hands back exceptions from either
+// side; idle workers sleep.
 #include "cullide/TaskPool.h"
 
 #include <gtest/gtest.h>
@@ -15,6 +16,7 @@
 
 #if defined(__linux__)
 #include <pthread.h>
+#include <time.h>
 #endif
 
 namespace cullide {
@@ -80,6 +82,69 @@ TEST(TaskPool, ExceptionsFromEitherSideReachTheCaller) {
     pool.parallelFor(10, 1, [&](std::size_t, std::size_t) { n.fetch_add(1); }, [] {});
     EXPECT_EQ(n.load(), 10);
 }
+
+TEST(TaskPool, BackToBackAndAfterSleepingEveryIndexOnce) {
+    // Workers poll for a while after a call (the next one finds them awake) and then sleep (the next one wakes
+    // them): both hand-overs, with counts below, at and above the number of chunks, on several pool sizes.
+    for (const unsigned threads : {2u, 4u, 9u}) {
+        TaskPool pool(threads);
+        for (int call = 0; call < 400; ++call) {
+            const std::size_t count = static_cast<std::size_t>(call % 37) * 3 + 1;
+            std::vector<std::atomic<int>> hits(count);
+            pool.parallelFor(count, 1 + static_cast<std::size_t>(call % 3), [&](std::size_t begin, std::size_t end) {
+                for (std::size_t i = begin; i < end; ++i) hits[i].fetch_add(1);
+            });
+            for (const auto& h : hits) ASSERT_EQ(h.load(), 1) << threads << " threads, call " << call;
+            if (call % 50 == 49) std::this_thread::sleep_for(TaskPool::kSpin * 20);  // every worker asleep
+        }
+    }
+}
+
+#if defined(__linux__)
+TEST(TaskPool, IdleWorkersSleep) {
+    // Polling is bounded: a pool between frames must not keep cores busy.
+    TaskPool pool(4);
+    std::atomic<int> n{0};
+    pool.parallelFor(64, 1, [&](std::size_t, std::size_t) { n.fetch_add(1); });
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    auto processCpuMs = [] {
+        timespec t{};
+        clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+        return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
+    };
+    const double before = processCpuMs();
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    // Three workers polling all along would use 200 ms or more of CPU time (one core each, or all the machine has).
+    EXPECT_LT(processCpuMs() - before, 40.0);
+    EXPECT_EQ(n.load(), 64);
+}
+
+TEST(TaskPool, CallerWaitingForALongChunkSleeps) {
+    // Whichever chunk the caller takes, it must not burn its core while a worker finishes a long one.
+    TaskPool pool(2);
+    auto threadCpuMs = [] {
+        timespec t{};
+        clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+        return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
+    };
+    const std::thread::id caller = std::this_thread::get_id();
+    for (int attempt = 0; attempt < 20; ++attempt) {
+        std::atomic<bool> callerTookTheShortOne{false};
+        const double before = threadCpuMs();
+        pool.parallelFor(2, 1, [&](std::size_t begin, std::size_t) {
+            // The first chunk claimed is short, the second long: the caller usually claims first.
+            const bool shortOne = begin == 0;
+            if (shortOne && std::this_thread::get_id() == caller) callerTookTheShortOne.store(true);
+            std::this_thread::sleep_for(std::chrono::milliseconds(shortOne ? 1 : 150));
+        });
+        const double used = threadCpuMs() - before;
+        if (!callerTookTheShortOne.load()) continue;
+        EXPECT_LT(used, 50.0);  // polling all along would be ~150 ms
+        return;
+    }
+    GTEST_SKIP() << "the caller never took the short chunk";
+}
+#endif
 
 #if defined(__linux__)
 TEST(TaskPool, WorkersCarryTheirName) {

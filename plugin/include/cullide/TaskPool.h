@@ -1,9 +1,12 @@
 // A small persistent worker pool (used by the culler's CPU stages and the Bullet adapter's narrow phase):
-// parallelFor over an index range with dynamic chunking. Deterministic results are the caller's job (write to
-// per-index slots).
+// parallelFor over an index range with dynamic chunking (chunks claimed with one atomic add; idle workers poll
+// briefly before they sleep). Deterministic results are the caller's job (write to per-index slots).
 #pragma once
 
+#include <atomic>
+#include <chrono>
 #include <condition_variable>
+#include <cstdint>
 #include <cstddef>
 #include <exception>
 #include <functional>
@@ -17,6 +20,10 @@ class TaskPool {
 public:
     /// The name each worker thread gets where the platform has thread names (Linux: 15 characters at most).
     static constexpr const char* kWorkerName = "cullide-worker";
+    /// How long an idle worker (and a caller waiting for the last chunks) keeps polling before it sleeps. A frame
+    /// runs a few dozen parallelFor calls with short serial steps between them; waking a sleeping thread costs
+    /// tens of microseconds each time, so workers stay awake across those steps, and sleep between frames.
+    static constexpr std::chrono::microseconds kSpin{100};
 
     /// `threads` = total workers including the calling thread; 0 = hardware concurrency.
     explicit TaskPool(unsigned threads);
@@ -25,7 +32,7 @@ public:
     TaskPool& operator=(const TaskPool&) = delete;
 
     /// Calls fn(begin, end) on disjoint chunks covering [0, count); returns when all are done. Exceptions thrown
-    /// by fn are rethrown on the calling thread (the first one).
+    /// by fn are rethrown on the calling thread (the first one). Not re-entrant: fn must not call parallelFor.
     void parallelFor(std::size_t count, std::size_t chunk, const std::function<void(std::size_t, std::size_t)>& fn);
     /// As parallelFor, but the calling thread first runs `first()` while the workers start on the chunks, then joins
     /// them (work that must stay on the calling thread, overlapped with the rest). An exception from `first` is
@@ -35,21 +42,24 @@ public:
     unsigned size() const { return static_cast<unsigned>(m_workers.size()) + 1; }
 
 private:
+    struct Job;
+
     void workerLoop();
-    void drain(std::unique_lock<std::mutex>& lock);
+    bool waitForJob(std::uint64_t seen);
+    void wakeWorkers(std::size_t wanted);
+    void waitFinished(Job& job);
 
     std::vector<std::thread> m_workers;
-    std::mutex m_mutex;
+    /// The running parallelFor's job (null between calls). Published before m_generation moves on; the caller
+    /// returns only when no worker holds it any more (m_holders).
+    std::atomic<Job*> m_job{nullptr};
+    std::atomic<std::uint64_t> m_generation{0};
+    std::atomic<unsigned> m_holders{0};   ///< workers that may be reading m_job's job
+    std::atomic<unsigned> m_sleepers{0};  ///< workers asleep on m_wake
+    std::atomic<bool> m_stop{false};
+    std::mutex m_mutex;  ///< only for sleeping and waking
     std::condition_variable m_wake;
     std::condition_variable m_done;
-    const std::function<void(std::size_t, std::size_t)>* m_fn = nullptr;
-    std::size_t m_count = 0;
-    std::size_t m_chunk = 1;
-    std::size_t m_next = 0;
-    std::size_t m_busy = 0;
-    std::size_t m_generation = 0;
-    bool m_stop = false;
-    std::exception_ptr m_error;
 };
 
 }  // namespace cullide
