@@ -58,17 +58,27 @@ ExactStage::~ExactStage() = default;
 
 void ExactStage::buildTrees(const std::vector<const std::vector<std::uint32_t>*>& lists,
                             const std::vector<const std::vector<Aabb>*>& listBoxes, std::vector<BoxTree>& trees) {
-    // One tree per task; but with fewer trees than workers (one or two large meshes on a many-core machine), a
-    // large tree is built with every worker on each step of its build instead of waiting for one thread.
-    constexpr std::size_t kLargeTree = 8192;
-    const bool spread = lists.size() < m_pool.size();
-    auto alone = [&](std::size_t i) { return spread && lists[i]->size() >= kLargeTree; };
-    m_pool.parallelFor(lists.size(), 1, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i)
-            if (!alone(i)) trees[i].build(*listBoxes[i], *lists[i]);
-    });
-    for (std::size_t i = 0; i < lists.size(); ++i)
-        if (alone(i)) trees[i].build(*listBoxes[i], *lists[i], &m_pool);
+    // One tree per task; but with fewer trees than workers (one or two large meshes on a many-core machine) the
+    // trees are built one after another, each with every worker on each step of its build, when that ends sooner
+    // (estimated in leaves: the largest tree for one tree per task, each tree over the workers its chunks keep busy
+    // for the other way).
+    std::size_t total = 0, largest = 0;
+    double spreadSpan = 0.0;
+    for (const std::vector<std::uint32_t>* list : lists) {
+        total += list->size();
+        largest = std::max(largest, list->size());
+        spreadSpan += static_cast<double>(list->size()) /
+                      static_cast<double>(std::max<std::size_t>(1, BoxTree::buildParallelism(m_pool, list->size())));
+    }
+    const double taskSpan = std::max(static_cast<double>(largest), static_cast<double>(total) / m_pool.size());
+    const bool spread = lists.size() < m_pool.size() && spreadSpan < taskSpan;
+    if (!spread) {
+        m_pool.parallelFor(lists.size(), 1, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t i = begin; i < end; ++i) trees[i].build(*listBoxes[i], *lists[i]);
+        });
+        return;
+    }
+    for (std::size_t i = 0; i < lists.size(); ++i) trees[i].build(*listBoxes[i], *lists[i], &m_pool);
 }
 
 void ExactStage::run(const std::vector<Object>& objects, const std::vector<ExactJob>& jobs, double margin, bool exact,

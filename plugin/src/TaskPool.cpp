@@ -4,6 +4,7 @@
 
 #if defined(__linux__)
 #include <pthread.h>
+#include <sched.h>
 #endif
 #if defined(__SSE2__) || defined(_M_X64)
 #include <emmintrin.h>
@@ -20,10 +21,22 @@ void nameWorkerThread() {
 #endif
 }
 
+/// The CPUs this process may run on (its affinity mask on Linux: a container or `taskset` may allow fewer than the
+/// machine has), at least 1.
+unsigned allowedCpus() {
+#if defined(__linux__)
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    if (sched_getaffinity(0, sizeof set, &set) == 0) return std::max(1, CPU_COUNT(&set));
+#endif
+    return std::max(1u, std::thread::hardware_concurrency());
+}
+
 /// Polls `ready` for up to TaskPool::kSpin: a few pause instructions between reads, the rest of the time slice
 /// handed back between rounds (a machine with more threads than cores, or a GL driver's threads, still run).
 template <typename Ready>
-bool pollFor(const Ready& ready) {
+bool pollFor(bool spin, const Ready& ready) {
+    if (!spin) return ready();
     const auto until = std::chrono::steady_clock::now() + TaskPool::kSpin;
     for (;;) {
         for (int i = 0; i < 64; ++i) {
@@ -83,7 +96,11 @@ struct TaskPool::Job {
 };
 
 TaskPool::TaskPool(unsigned threads) {
-    unsigned n = threads != 0 ? threads : std::max(1u, std::thread::hardware_concurrency());
+    const unsigned cpus = allowedCpus();
+    const unsigned n = threads != 0 ? threads : cpus;
+    // Polling pays only when every thread has a CPU of its own: with more threads than CPUs, a polling worker takes
+    // time slices from the ones that work (measured: the chunks of 16 threads on 2 CPUs ran at half speed).
+    m_spin = n <= cpus;
     for (unsigned i = 1; i < n; ++i) m_workers.emplace_back([this] {
             nameWorkerThread();
             workerLoop();
@@ -101,7 +118,7 @@ TaskPool::~TaskPool() {
 
 bool TaskPool::waitForJob(std::uint64_t seen) {
     auto ready = [&] { return m_stop.load() || m_generation.load() != seen; };
-    if (!pollFor(ready)) {
+    if (!pollFor(m_spin, ready)) {
         std::unique_lock<std::mutex> lock(m_mutex);
         m_sleepers.fetch_add(1);  // before the predicate's check: a caller that misses it sees a sleeper
         m_wake.wait(lock, ready);
@@ -134,7 +151,7 @@ void TaskPool::wakeWorkers(std::size_t wanted) {
 }
 
 void TaskPool::waitFinished(Job& job) {
-    if (pollFor([&] { return job.done(); })) return;
+    if (pollFor(m_spin, [&] { return job.done(); })) return;
     std::unique_lock<std::mutex> lock(m_mutex);
     job.callerAsleep.store(true);  // before the predicate's check: the worker that ends the job then notifies
     m_done.wait(lock, [&] { return job.done(); });

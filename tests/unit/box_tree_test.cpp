@@ -163,8 +163,8 @@ TEST(BoxTree, RebuildReusesMemoryWithoutStaleNodes) {
 }
 
 TEST(BoxTree, BuiltOnWorkersTheSameTreeAsOnOneThread) {
-    // The build's steps run in fixed chunks of the list: any number of workers must give the same leaves in the
-    // same order, and the pairs of brute force, across chunk boundaries and for lists that skip boxes.
+    // The build's steps run in chunks of the list, smaller on larger pools: any number of workers must give the same
+    // leaves in the same order, and the pairs of brute force, across chunk boundaries and for lists that skip boxes.
     std::mt19937 rng(13);
     TaskPool two(2), five(5);
     for (const std::size_t n : {1u, 4095u, 4096u, 4097u, 12289u, 40000u}) {

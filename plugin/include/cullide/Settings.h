@@ -67,7 +67,7 @@ struct Settings {
     /// boxes grown by margin / 2 overlap) — a superset, cheaper to produce; the Bullet adapter uses this, since
     /// Bullet's triangle routines decide the contacts anyway. The reference culler is always exact.
     bool exactTriangles = true;
-    /// Worker threads for the exact stage; 0 = hardware concurrency.
+    /// Worker threads for the CPU stages; 0 = the CPUs this process may run on (its affinity mask on Linux).
     unsigned threads = 0;
     /// Auto pipeline: a level whose input has at most this many triangles goes straight to the exact stage.
     std::size_t exactThreshold = 256;

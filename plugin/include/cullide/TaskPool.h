@@ -22,10 +22,12 @@ public:
     static constexpr const char* kWorkerName = "cullide-worker";
     /// How long an idle worker (and a caller waiting for the last chunks) keeps polling before it sleeps. A frame
     /// runs a few dozen parallelFor calls with short serial steps between them; waking a sleeping thread costs
-    /// tens of microseconds each time, so workers stay awake across those steps, and sleep between frames.
+    /// tens of microseconds each time, so workers stay awake across those steps, and sleep between frames. Only
+    /// when the pool has no more threads than the process has CPUs; otherwise they sleep at once.
     static constexpr std::chrono::microseconds kSpin{100};
 
-    /// `threads` = total workers including the calling thread; 0 = hardware concurrency.
+    /// `threads` = total workers including the calling thread; 0 = the CPUs this process may run on (its affinity
+    /// mask where the platform has one, else the hardware concurrency).
     explicit TaskPool(unsigned threads);
     ~TaskPool();
     TaskPool(const TaskPool&) = delete;
@@ -57,6 +59,7 @@ private:
     std::atomic<unsigned> m_holders{0};   ///< workers that may be reading m_job's job
     std::atomic<unsigned> m_sleepers{0};  ///< workers asleep on m_wake
     std::atomic<bool> m_stop{false};
+    bool m_spin = true;  ///< idle threads poll before they sleep (see kSpin)
     std::mutex m_mutex;  ///< only for sleeping and waking
     std::condition_variable m_wake;
     std::condition_variable m_done;

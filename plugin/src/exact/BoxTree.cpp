@@ -31,9 +31,12 @@ std::uint32_t blocksFor(std::size_t nodes) {
     return static_cast<std::uint32_t>((nodes + BoxTree::kFanout - 1) / BoxTree::kFanout);
 }
 
-/// The build's steps work on fixed chunks of the list (the same chunks for any number of workers).
+/// Leaves per chunk of the build's steps: 4096, or fewer for a pool with many workers (a tree of a few thousand
+/// leaves still spreads). The tree does not depend on the chunks: bounds are unions, the sort is stable, the rest
+/// writes per-index slots.
 constexpr std::size_t kBuildChunk = 4096;
-std::size_t chunkCount(std::size_t n) { return (n + kBuildChunk - 1) / kBuildChunk; }
+std::size_t buildChunk(const TaskPool* pool, std::size_t n) { return chunkFor(pool, n, 1024, kBuildChunk); }
+std::size_t chunkCount(std::size_t n, std::size_t chunk) { return (n + chunk - 1) / chunk; }
 
 }  // namespace
 
@@ -49,11 +52,16 @@ void BoxTree::build(const std::vector<Aabb>& boxes, const std::vector<std::uint3
     buildLevels(pool);
 }
 
+std::size_t BoxTree::buildParallelism(const TaskPool& pool, std::size_t leaves) {
+    return std::min<std::size_t>(pool.size(), chunkCount(leaves, buildChunk(&pool, leaves)));
+}
+
 void BoxTree::computeKeys(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles,
                           TaskPool* pool) {
     // Morton order of the box centres (10 bits per axis) over their common bounds.
     const std::size_t n = triangles.size();
-    const std::size_t chunks = chunkCount(n);
+    const std::size_t chunk = buildChunk(pool, n);
+    const std::size_t chunks = chunkCount(n, chunk);
     assignKeeping(m_chunkBounds, chunks, Aabb{});
     const Aabb* box = boxes.data();
     const std::uint32_t* list = triangles.data();
@@ -61,7 +69,7 @@ void BoxTree::computeKeys(const std::vector<Aabb>& boxes, const std::vector<std:
     parallelForOrHere(pool, chunks, 1, [&](std::size_t begin, std::size_t end) {
         for (std::size_t c = begin; c < end; ++c) {
             Aabb bounds;
-            for (std::size_t i = c * kBuildChunk, last = std::min(n, i + kBuildChunk); i < last; ++i)
+            for (std::size_t i = c * chunk, last = std::min(n, i + chunk); i < last; ++i)
                 bounds.grow(box[list[i]]);
             chunkBounds[c] = bounds;
         }
@@ -78,7 +86,7 @@ void BoxTree::computeKeys(const std::vector<Aabb>& boxes, const std::vector<std:
     std::uint64_t* keys = m_keys.data();
     FloatBox* floatBoxes = m_floatBoxes.data();
     parallelForOrHere(pool, chunks, 1, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin * kBuildChunk, last = std::min(n, end * kBuildChunk); i < last; ++i) {
+        for (std::size_t i = begin * chunk, last = std::min(n, end * chunk); i < last; ++i) {
             const Aabb& b = box[list[i]];
             double c[3];
             FloatBox f;
@@ -103,7 +111,7 @@ void BoxTree::fillLeaves(const std::vector<std::uint32_t>& triangles, TaskPool* 
     const std::uint32_t* list = triangles.data();
     std::uint32_t* leafTriangle = m_leafTriangle.data();
     Block* blocks = leaves.data();
-    parallelForOrHere(pool, leaves.size(), kBuildChunk / kFanout, [&](std::size_t begin, std::size_t end) {
+    parallelForOrHere(pool, leaves.size(), buildChunk(pool, n) / kFanout, [&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin * kFanout, last = std::min(n, end * kFanout); i < last; ++i) {
             const auto at = static_cast<std::uint32_t>(keys[i]);
             leafTriangle[i] = list[at];

@@ -40,10 +40,12 @@ public:
 
     /// Leaves: `boxes[t]` for each t of `triangles`, in Morton order of their centres, ties in list order (the
     /// order only affects speed, never the result). `boxes` must stay alive and unchanged until the last query.
-    /// Boxes must be finite. With `pool`, each step of the build runs on its workers in fixed chunks: the same tree
+    /// Boxes must be finite. With `pool`, each step of the build runs on its workers in chunks: the same tree
     /// for any number of workers (for large lists; a small one is cheaper built on one thread). `pool` must not be
     /// running a parallelFor already (it is not re-entrant).
     void build(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles, TaskPool* pool = nullptr);
+    /// How many of `pool`'s workers a build of `leaves` leaves keeps busy (its chunks, at most the workers).
+    static std::size_t buildParallelism(const TaskPool& pool, std::size_t leaves);
 
     bool empty() const { return m_leafTriangle.empty(); }
     /// The mesh triangle of each leaf, in leaf order.
