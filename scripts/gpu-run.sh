@@ -30,7 +30,8 @@ scripts/fetch_meshes.sh || true
 # The GL tests run cullide-pairs by its build-tree path; pairs-exe.h makes that the bare name (run.sh puts the
 # bundle's bin/ first on PATH).
 dir=build-gpu
-targets=(cullide_gl_tests cullide_bullet_tests cullide-bench-run cullide-bench-report cullide-demo cullide-pairs)
+targets=(cullide_gl_tests cullide_bullet_tests cullide-bench-run cullide-bench-report cullide-demo cullide-pairs
+  cullide-pool-bench)
 launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)   # optional: speeds up rebuilds
 cmake -S . -B $dir -G Ninja "${launcher[@]}" -DCMAKE_BUILD_TYPE=Release \
@@ -46,7 +47,7 @@ echo "gpu-run: built in $(( $(date +%s) - t0 )) s"
 rm -rf "$dest"
 mkdir -p "$dest/bin" "$dest/lib" "$dest/data"
 programs=(tests/cullide_gl_tests tests/bullet/cullide_bullet_tests benchmarks/cullide-bench-run
-  benchmarks/cullide-bench-report demos/cullide-demo plugin/cullide-pairs)
+  benchmarks/cullide-bench-report demos/cullide-demo plugin/cullide-pairs benchmarks/cullide-pool-bench)
 for p in "${programs[@]}"; do
   f=$(find $dir/${p%/*} -maxdepth 1 -name "${p##*/}" -type f | head -1)
   [ -n "$f" ] || { echo "gpu-run: ERROR: $p was not built" >&2; exit 1; }

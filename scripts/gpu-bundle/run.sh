@@ -3,7 +3,8 @@
 #   run.sh [--quick] [--device hardware|software|surfaceless|N] OUTDIR
 # 1. prints the machine, the driver and the EGL device/renderer CULLIDE picks (cullide-bench-run --probe);
 # 2. runs the GL tests (CI=true: a missing device fails) -> OUTDIR/gl-tests.json, the Bullet adapter tests ->
-#    OUTDIR/bullet-tests.json, and a short headless demo -> OUTDIR/demo/;
+#    OUTDIR/bullet-tests.json, a short headless demo -> OUTDIR/demo/, and the pool's fork/join cost ->
+#    OUTDIR/pool-bench.txt;
 # 3. runs the benchmarks: bench-runs.sh, the same run list as scripts/bench.sh (--quick: its quick list);
 # 4. cullide-bench-report: OUTDIR/results-gpu.json (results + machine, device, renderer, driver), OUTDIR/benchmarks.md,
 #    OUTDIR/plotdata/ (gnuplot scripts; PNGs in OUTDIR/plots/ only where gnuplot is installed);
@@ -119,6 +120,8 @@ step gl-tests $tests_limit "$here/bin/cullide_gl_tests" --gtest_output=json:"$ou
 step bullet-tests $tests_limit "$here/bin/cullide_bullet_tests" --gtest_output=json:"$out/bullet-tests.json"
 step demo 120 "$here/bin/cullide-demo" --frames $demo_frames --check-every 15 --snapshot-every $demo_frames --quiet \
   --out "$out/demo"
+# The worker pool's fork/join cost by thread count (the CPU stages make a few dozen parallelFor calls a frame).
+step pool-bench 60 bash -c '"$1" --calls 500 | tee "$2"' _ "$here/bin/cullide-pool-bench" "$out/pool-bench.txt"
 
 # 3. The benchmarks: the run list of scripts/bench.sh.
 t_bench=$(date +%s)
