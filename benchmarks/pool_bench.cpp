@@ -14,12 +14,7 @@
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
-#include <thread>
 #include <vector>
-
-#if defined(__linux__)
-#include <sched.h>
-#endif
 
 namespace {
 
@@ -36,14 +31,8 @@ void spinWork(std::uint64_t seed, int steps) {
     g_sink.fetch_add(x, std::memory_order_relaxed);
 }
 
-unsigned allowedCpus() {
-#if defined(__linux__)
-    cpu_set_t set;
-    CPU_ZERO(&set);
-    if (sched_getaffinity(0, sizeof set, &set) == 0) return static_cast<unsigned>(std::max(1, CPU_COUNT(&set)));
-#endif
-    return std::max(1u, std::thread::hardware_concurrency());
-}
+/// The pool's own default: the CPUs this process may use.
+unsigned allowedCpus() { return cullide::TaskPool(0).size(); }
 
 struct Options {
     unsigned threads = allowedCpus();
