@@ -56,29 +56,31 @@ void mergeRuns(const std::vector<std::vector<TrianglePair>>& runs, std::size_t f
 ExactStage::ExactStage(TaskPool& pool) : m_pool(pool), m_scratch(std::make_unique<Scratch>()) {}
 ExactStage::~ExactStage() = default;
 
-void ExactStage::buildTrees(const std::vector<const std::vector<std::uint32_t>*>& lists,
-                            const std::vector<const std::vector<Aabb>*>& listBoxes, std::vector<BoxTree>& trees) {
+void ExactStage::buildTrees(const std::vector<TreeInput>& inputs, std::vector<BoxTree>& trees) {
     // One tree per task; but with fewer trees than workers (one or two large meshes on a many-core machine) the
     // trees are built one after another, each with every worker on each step of its build, when that ends sooner
     // (estimated in leaves: the largest tree for one tree per task, each tree over the workers its chunks keep busy
     // for the other way).
     std::size_t total = 0, largest = 0;
     double spreadSpan = 0.0;
-    for (const std::vector<std::uint32_t>* list : lists) {
-        total += list->size();
-        largest = std::max(largest, list->size());
-        spreadSpan += static_cast<double>(list->size()) /
-                      static_cast<double>(std::max<std::size_t>(1, BoxTree::buildParallelism(m_pool, list->size())));
+    for (const TreeInput& in : inputs) {
+        const std::size_t n = in.list->size();
+        total += n;
+        largest = std::max(largest, n);
+        spreadSpan += static_cast<double>(n) /
+                      static_cast<double>(std::max<std::size_t>(1, BoxTree::buildParallelism(m_pool, n)));
     }
     const double taskSpan = std::max(static_cast<double>(largest), static_cast<double>(total) / m_pool.size());
-    const bool spread = lists.size() < m_pool.size() && spreadSpan < taskSpan;
+    const bool spread = inputs.size() < m_pool.size() && spreadSpan < taskSpan;
     if (!spread) {
-        m_pool.parallelFor(lists.size(), 1, [&](std::size_t begin, std::size_t end) {
-            for (std::size_t i = begin; i < end; ++i) trees[i].build(*listBoxes[i], *lists[i]);
+        m_pool.parallelFor(inputs.size(), 1, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t i = begin; i < end; ++i)
+                trees[i].build(*inputs[i].boxes, *inputs[i].list, nullptr, inputs[i].order);
         });
         return;
     }
-    for (std::size_t i = 0; i < lists.size(); ++i) trees[i].build(*listBoxes[i], *lists[i], &m_pool);
+    for (std::size_t i = 0; i < inputs.size(); ++i)
+        trees[i].build(*inputs[i].boxes, *inputs[i].list, &m_pool, inputs[i].order);
 }
 
 void ExactStage::run(const std::vector<Object>& objects, const std::vector<ExactJob>& jobs, double margin, bool exact,
@@ -87,27 +89,26 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
     results.assign(jobs.size(), ExactJobResult{});
     // Phase 1: a box tree over each object's surviving triangles (once, however many pairs the object is in: a
     // landscape under many bodies), the two trees of each job descended together, split into tasks for every worker.
-    std::vector<const std::vector<std::uint32_t>*> lists;
-    std::vector<const std::vector<Aabb>*> listBoxes;
+    std::vector<TreeInput> inputs;
     std::vector<std::size_t> jobListA(jobs.size()), jobListB(jobs.size());
     std::unordered_map<const std::vector<std::uint32_t>*, std::size_t> known;
-    auto listIndex = [&](const std::vector<std::uint32_t>* list, const std::vector<Aabb>* boxes) {
-        const auto [it, added] = known.emplace(list, lists.size());
-        if (added) {
-            lists.push_back(list);
-            listBoxes.push_back(boxes);
-        }
+    auto listIndex = [&](const TreeInput& in) {
+        const auto [it, added] = known.emplace(in.list, inputs.size());
+        if (added) inputs.push_back(in);
         return it->second;
     };
     for (std::size_t j = 0; j < jobs.size(); ++j) {
-        jobListA[j] = listIndex(jobs[j].trianglesA, jobs[j].boxesA);
-        jobListB[j] = listIndex(jobs[j].trianglesB, jobs[j].boxesB);
+        jobListA[j] = listIndex({jobs[j].trianglesA, jobs[j].boxesA, jobs[j].orderA});
+        jobListB[j] = listIndex({jobs[j].trianglesB, jobs[j].boxesB, jobs[j].orderB});
     }
     std::vector<std::size_t> boxJobList(boxJobs.size());
-    for (std::size_t j = 0; j < boxJobs.size(); ++j) boxJobList[j] = listIndex(boxJobs[j].triangles, boxJobs[j].boxes);
+    for (std::size_t j = 0; j < boxJobs.size(); ++j)
+        boxJobList[j] = listIndex({boxJobs[j].triangles, boxJobs[j].boxes, boxJobs[j].order});
     std::vector<BoxTree>& trees = m_scratch->trees;
-    if (trees.size() < lists.size()) trees.resize(lists.size());
-    buildTrees(lists, listBoxes, trees);
+    if (trees.size() < inputs.size()) trees.resize(inputs.size());
+    buildTrees(inputs, trees);
+    for (std::size_t i = 0; i < inputs.size(); ++i)
+        ++(trees[i].followedOrder() ? stats.exactTreesRefit : stats.exactTreesSorted);
     if (touches != nullptr) {
         touches->assign(boxJobs.size(), 0);
         m_pool.parallelFor(boxJobs.size(), 16, [&](std::size_t begin, std::size_t end) {

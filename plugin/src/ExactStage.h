@@ -21,6 +21,9 @@ struct ExactJob {
     const std::vector<std::uint32_t>* trianglesB = nullptr;
     const std::vector<Aabb>* boxesA = nullptr;  ///< box of every triangle of object a (inflated by margin / 2)
     const std::vector<Aabb>* boxesB = nullptr;
+    /// Optional: a spatial order of all of object a's triangles (TriangleOrders), which its box tree may follow.
+    const std::vector<std::uint32_t>* orderA = nullptr;
+    const std::vector<std::uint32_t>* orderB = nullptr;
 };
 
 /// A mesh against a box-only proxy: does some surviving triangle's box (inflated by margin / 2) overlap `box`
@@ -29,6 +32,7 @@ struct BoxJob {
     const std::vector<std::uint32_t>* triangles = nullptr;  ///< surviving triangles of the mesh
     const std::vector<Aabb>* boxes = nullptr;               ///< box of every triangle of the mesh
     Aabb box;
+    const std::vector<std::uint32_t>* order = nullptr;  ///< optional, as ExactJob::orderA
 };
 
 struct ExactJobResult {
@@ -51,9 +55,15 @@ public:
              std::vector<std::uint8_t>* touches = nullptr);
 
 private:
-    /// trees[i] over lists[i] (boxes listBoxes[i]).
-    void buildTrees(const std::vector<const std::vector<std::uint32_t>*>& lists,
-                    const std::vector<const std::vector<Aabb>*>& listBoxes, std::vector<BoxTree>& trees);
+    /// What one box tree is built over: a surviving-triangle list, the mesh's triangle boxes, and optionally the
+    /// mesh's spatial order.
+    struct TreeInput {
+        const std::vector<std::uint32_t>* list;
+        const std::vector<Aabb>* boxes;
+        const std::vector<std::uint32_t>* order;
+    };
+    /// trees[i] over inputs[i].
+    void buildTrees(const std::vector<TreeInput>& inputs, std::vector<BoxTree>& trees);
 
     struct Scratch;  ///< per-frame working memory, kept between frames: no allocation churn on large scenes
     TaskPool& m_pool;

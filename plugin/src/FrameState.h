@@ -39,8 +39,10 @@ struct FrameState {
     std::vector<std::uint8_t> active;
     bool gpuLevels = false;  ///< whether the visibility levels run this frame
 
-    /// Per active mesh: its triangles in Morton order of their centroids (GPU levels only).
-    std::vector<std::vector<std::uint32_t>> order;
+    /// Per object: all its mesh's triangles in a spatial order kept between frames (TriangleOrders), or null. Set
+    /// for every active mesh when GPU levels run (their groups follow it); on the CPU path for the meshes whose
+    /// surviving triangles are a large part of them (their box trees follow it).
+    std::vector<const std::vector<std::uint32_t>*> order;
     /// Per active non-static mesh: storage of its triangle boxes (static ones are in their StaticEntry).
     std::vector<std::vector<Aabb>> ownBoxes;
     /// Per active mesh: triangle boxes (inflated by margin / 2), of every triangle (static meshes; every mesh with

@@ -10,8 +10,10 @@
 #include "LevelPipelines.h"
 #include "MeshCache.h"
 #include "PairAssembly.h"
+#include "TriangleOrders.h"
 #include "TriangleSets.h"
 #include "WorldMeshes.h"
+#include "exact/BoxTree.h"
 #include "cullide/Culler.h"
 #include "cullide/Timer.h"
 
@@ -66,6 +68,8 @@ private:
         Timer prepass;
         prepareObjects(objects, only, frame, result);
         const bool autoActive = choosePath(frame, stats);
+        if (frame.gpuLevels)
+            stats.meshOrdersComputed = m_orders.assign(objects, frame, [](std::uint32_t) { return true; }, m_pool);
         buildTriangleBoxesAndGroups(frame, static_cast<std::uint32_t>(m_settings.groupSize), m_settings.margin,
                                     m_settings.pipeline != Pipeline::Paper, m_pool, m_scratch, stats);
         stats.prepassMs = prepass.ms();
@@ -76,6 +80,7 @@ private:
         (frame.gpuLevels ? stats.gpuLevelsMs : stats.prepassMs) += levels.ms() - stats.uploadMs;
 
         Timer exact;
+        if (!frame.gpuLevels) stats.meshOrdersComputed = assignTreeOrders(objects, frame);
         m_assembly.run(frame, m_settings, m_exact, result);
         stats.exactMs = exact.ms();
         stats.pcsObjects = result.pcs.size();
@@ -159,6 +164,14 @@ private:
         }
     }
 
+    /// The CPU path: kept spatial orders for the meshes whose surviving triangles are enough of them for their box
+    /// trees to follow the order (BoxTree::kOrderedFraction) instead of sorting.
+    std::size_t assignTreeOrders(const std::vector<Object>& objects, FrameState& frame) {
+        return m_orders.assign(objects, frame, [&](std::uint32_t o) {
+            return frame.surviving[o].size() * BoxTree::kOrderedFraction >= frame.meshOf(o).triangles.size();
+        }, m_pool);
+    }
+
     /// A frame that fell back to the CPU path after a backend error is no timing of the GPU levels: not recorded.
     void recordAutoFrame(Stats& stats) {
         if (stats.gpuFallbacks == 0) m_auto.record(m_autoPath, stats.totalMs);
@@ -194,6 +207,7 @@ private:
 
     // What carries over between frames.
     StaticMeshCache m_statics;
+    TriangleOrders m_orders;  ///< spatial orders of the meshes, kept between frames
     LevelPipelines m_levels;  ///< holds the device's copy of the geometry and its resident region
     AutoLevels m_auto;        ///< GpuLevels::Auto: the timing trial and its decision
     AutoLevels::Path m_autoPath = AutoLevels::Path::Cpu;  ///< the path AutoLevels chose for this frame

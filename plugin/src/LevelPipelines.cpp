@@ -167,7 +167,7 @@ void runPaperPipeline(LevelRun& run) {
     beginLevel(run);
     for (std::uint32_t o : objects) {
         if (frame.isMesh(o))
-            addTriangleItem(run, o, frame.order[o].data(), static_cast<std::uint32_t>(frame.order[o].size()),
+            addTriangleItem(run, o, frame.order[o]->data(), static_cast<std::uint32_t>(frame.order[o]->size()),
                             frame.valid[o].box);
         else
             addObjectBoxItem(run, o);
@@ -184,7 +184,7 @@ void runPaperPipeline(LevelRun& run) {
     for (std::uint32_t o : clusterProxies(run))
         if (objectAlive[o]) proxies.push_back(o);
     beginLevel(run);
-    for (const Group& g : groups) addTriangleItem(run, g.object, &frame.order[g.object][g.first], g.count, g.box);
+    for (const Group& g : groups) addTriangleItem(run, g.object, &(*frame.order[g.object])[g.first], g.count, g.box);
     for (std::uint32_t o : proxies) addObjectBoxItem(run, o);
     prune(run, "groups");
     const std::size_t groupItems = groups.size();

@@ -14,7 +14,8 @@ void PairAssembly::run(const FrameState& frame, const Settings& settings, ExactS
         if (frame.isMesh(a) && frame.isMesh(b)) {
             if (frame.surviving[a].empty() || frame.surviving[b].empty()) continue;
             pair.hasTriangles = true;
-            jobs.push_back({a, b, &frame.surviving[a], &frame.surviving[b], frame.boxesOf[a], frame.boxesOf[b]});
+            jobs.push_back({a, b, &frame.surviving[a], &frame.surviving[b], frame.boxesOf[a], frame.boxesOf[b],
+                            frame.order[a], frame.order[b]});
             jobPair.push_back(result.pairs.size());
         } else if (frame.isMesh(a) || frame.isMesh(b)) {
             const std::uint32_t mesh = frame.isMesh(a) ? a : b;
@@ -22,7 +23,7 @@ void PairAssembly::run(const FrameState& frame, const Settings& settings, ExactS
             if (!frame.gpuLevels) {
                 // The mesh's surviving triangles include every one whose box overlaps this partner's: its tree
                 // answers in O(log n) (a landscape under hundreds of bodies).
-                boxJobs.push_back({&frame.surviving[mesh], frame.boxesOf[mesh], box});
+                boxJobs.push_back({&frame.surviving[mesh], frame.boxesOf[mesh], box, frame.order[mesh]});
                 boxJobPair.push_back(result.pairs.size());
             } else if (!meshTouchesBox(frame.meshOf(mesh), box, settings.margin)) {  // the levels prune survivors
                 continue;

@@ -1,32 +1,12 @@
 #include "TriangleSets.h"
 
 #include "KeptCapacity.h"
-#include "Morton.h"
 #include "PoolOrHere.h"
 
 #include <algorithm>
 
 namespace cullide {
 namespace {
-
-/// Orders an object's triangles along a Morton curve of their centroids, so that k consecutive ones are close
-/// together whatever the file order (scanned meshes and soups are not stored spatially). O(n).
-void spatialOrder(const TriangleMesh& mesh, const Aabb& box, std::vector<std::uint32_t>& order) {
-    thread_local std::vector<std::uint64_t> keys;  // per worker: objects are ordered in parallel
-    thread_local std::vector<std::uint64_t> tmp;
-    thread_local std::vector<std::uint32_t> counts;
-    const Vec3 scale = (box.extent().array().max(1e-300)).inverse() * 1023.0;
-    keys.clear();
-    for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
-        const auto& tri = mesh.triangles[t];
-        const Vec3 c =
-            ((mesh.vertices[tri[0]] + mesh.vertices[tri[1]] + mesh.vertices[tri[2]]) / 3.0 - box.min).cwiseProduct(scale);
-        keys.push_back(morton::key(morton::code(c[0], c[1], c[2]), t));
-    }
-    morton::sortByCode(keys, tmp, counts);
-    resizeKeeping(order, keys.size());
-    for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<std::uint32_t>(keys[i]);
-}
 
 /// Ranges of at most `range` triangles over the meshes for which take(o) holds, in object and triangle order.
 template <typename Take>
@@ -81,7 +61,7 @@ void buildGroups(FrameState& frame, std::uint32_t k, bool prepass, TaskPool& poo
         for (std::size_t i = begin; i < end; ++i) {
             Group& g = candidates[i];
             const std::vector<Aabb>& boxes = *frame.boxesOf[g.object];
-            const std::vector<std::uint32_t>& order = frame.order[g.object];
+            const std::vector<std::uint32_t>& order = *frame.order[g.object];
             for (std::uint32_t t = g.first; t < g.first + g.count; ++t) g.box.grow(boxes[order[t]]);
             scratch.groupKept[i] = !prepass || frame.overlapsPartner(g.object, g.box);
         }
@@ -98,15 +78,6 @@ void buildGroups(FrameState& frame, std::uint32_t k, bool prepass, TaskPool& poo
 void buildTriangleBoxesAndGroups(FrameState& frame, std::uint32_t groupSize, double margin, bool prepass,
                                  TaskPool& pool, TriangleScratch& scratch, Stats& stats) {
     frame.groups.clear();
-    frame.order.resize(frame.valid.size());
-    if (frame.gpuLevels) {  // the CPU path has no groups (collectDirect)
-        pool.parallelFor(frame.valid.size(), 1, [&](std::size_t begin, std::size_t end) {
-            for (std::size_t i = begin; i < end; ++i) {
-                const auto o = static_cast<std::uint32_t>(i);
-                if (frame.isActiveMesh(o)) spatialOrder(frame.meshOf(o), frame.valid[o].box, frame.order[o]);
-            }
-        });
-    }
     assignBoxStorage(frame, scratch);
     splitIntoRanges(frame, [&](std::uint32_t o) { return scratch.needBoxes[o] != 0; }, 8192, scratch.ranges);
     const double inflate = 0.5 * margin;
@@ -136,7 +107,7 @@ void collectTriangles(const FrameState& frame, const std::vector<Group>& groups,
                 const std::vector<Aabb>& boxes = *frame.boxesOf[g.object];
                 const bool test = prepass && frame.partners[g.object].size() <= 16;
                 for (std::uint32_t k = g.first; k < g.first + g.count; ++k) {
-                    const std::uint32_t t = frame.order[g.object][k];
+                    const std::uint32_t t = (*frame.order[g.object])[k];
                     if (test && !frame.overlapsPartner(g.object, boxes[t])) continue;
                     kept.push_back({g.object, t});
                 }

@@ -29,8 +29,9 @@ struct TriangleScratch {
 };
 
 /// Sets frame.boxesOf for every active mesh and computes the triangle boxes of new static meshes; with GPU levels
-/// (frame.gpuLevels) also every active mesh's boxes, its Morton order (frame.order) and its groups of `groupSize`
-/// spatially consecutive triangles (frame.groups; with `prepass`, only groups whose box overlaps a partner's box).
+/// (frame.gpuLevels) also every active mesh's boxes and its groups of `groupSize` triangles consecutive in its
+/// spatial order (frame.order, which must be set for every active mesh) into frame.groups (with `prepass`, only
+/// groups whose box overlaps a partner's box).
 /// Without GPU levels the other meshes' boxes are computed where they are filtered (collectDirect).
 void buildTriangleBoxesAndGroups(FrameState& frame, std::uint32_t groupSize, double margin, bool prepass,
                                  TaskPool& pool, TriangleScratch& scratch, Stats& stats);

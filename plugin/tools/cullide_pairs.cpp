@@ -186,6 +186,9 @@ nlohmann::ordered_json statsToJson(const cullide::Stats& s) {
     j["candidate_object_pairs"] = s.candidateObjectPairs;
     j["candidate_triangle_pairs"] = s.candidateTrianglePairs;
     j["exact_tests"] = s.exactTests;
+    j["exact_trees_refit"] = s.exactTreesRefit;
+    j["exact_trees_sorted"] = s.exactTreesSorted;
+    j["mesh_orders_computed"] = s.meshOrdersComputed;
     j["intersecting_triangle_pairs"] = s.intersectingTrianglePairs;
     j["draws"] = s.draws;
     j["bytes_uploaded"] = s.bytesUploaded;

@@ -281,3 +281,88 @@ TEST(BoxTree, RebuildsIntoTheMemoryOfEarlierFrames) {
 
 }  // namespace
 }  // namespace cullide
+
+namespace cullide {
+namespace {
+
+std::vector<TrianglePair> pairsOf(const BoxTree& ta, const BoxTree& tb) {
+    std::vector<BoxTree::NodePair> frontier, stack;
+    BoxTree::split(ta, tb, 64, frontier);
+    std::vector<TrianglePair> out;
+    for (const BoxTree::NodePair& p : frontier) BoxTree::leafPairs(ta, tb, p, stack, out);
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+TEST(BoxTree, FollowingAKeptOrderTakesTheListsTrianglesInThatOrder) {
+    // A refit in a kept order (a shuffled permutation here: any order must do) instead of a sort: the leaves are
+    // exactly the listed triangles, in the order's sequence, on any number of workers, with brute force's pairs.
+    std::mt19937 rng(29);
+    TaskPool three(3);
+    for (const std::size_t n : {9u, 4096u, 4097u, 30000u}) {
+        const auto a = randomBoxes(rng, n, 10.0, 0.3, 0.0);
+        std::vector<std::uint32_t> order(n);
+        std::iota(order.begin(), order.end(), 0u);
+        std::shuffle(order.begin(), order.end(), rng);
+        const auto b = randomBoxes(rng, 300, 10.0, 1.0, 0.0);
+        const auto listB = everyOther(b.size(), 1);
+        BoxTree tb;
+        tb.build(b, listB);
+        for (const std::uint32_t step : {1u, 3u, 8u}) {  // 1/8 of the mesh: still followed
+            const auto listA = everyOther(a.size(), step);
+            std::vector<std::uint32_t> expectedLeaves;
+            for (const std::uint32_t t : order)
+                if (t % step == 0) expectedLeaves.push_back(t);
+            for (TaskPool* pool : {static_cast<TaskPool*>(nullptr), &three}) {
+                BoxTree ta;
+                ta.build(a, listA, pool, &order);
+                ASSERT_TRUE(ta.followedOrder()) << n << " step " << step;
+                ASSERT_EQ(ta.leafTriangles(), expectedLeaves) << n << " step " << step;
+                EXPECT_EQ(pairsOf(ta, tb), bruteForce(a, listA, b, listB)) << n << " step " << step;
+            }
+        }
+    }
+}
+
+TEST(BoxTree, AnOrderThatCannotBeFollowedIsIgnored) {
+    // Sorted instead, with the same pairs: a list under 1/8 of the order (walking the order would cost more), a list
+    // that is not strictly increasing (a triangle twice), a triangle beyond the order, an order shorter than the mesh
+    // (it does not hold every listed triangle). (An order is a permutation of the mesh's triangles: build()'s
+    // precondition, which TriangleOrders meets.)
+    std::mt19937 rng(31);
+    const auto a = randomBoxes(rng, 2000, 10.0, 0.5, 0.0);
+    const auto b = randomBoxes(rng, 300, 10.0, 1.0, 0.0);
+    const auto listB = everyOther(b.size(), 1);
+    BoxTree tb;
+    tb.build(b, listB);
+    std::vector<std::uint32_t> order(a.size());
+    std::iota(order.begin(), order.end(), 0u);
+    std::vector<std::uint32_t> twice = everyOther(a.size(), 2);
+    twice.insert(twice.begin() + 10, twice[10]);
+    const std::vector<std::uint32_t> shortOrder(order.begin(), order.begin() + 1500);
+    std::vector<std::uint32_t> missing(order.begin() + 1, order.end());  // a permutation without triangle 0
+    struct Case {
+        const char* what;
+        std::vector<std::uint32_t> list;
+        const std::vector<std::uint32_t>* order;
+    };
+    const Case cases[] = {{"a ninth", everyOther(a.size(), 9), &order},
+                          {"a triangle twice", twice, &order},
+                          {"beyond the order", everyOther(a.size(), 1), &shortOrder},
+                          {"not in the order", everyOther(a.size(), 1), &missing}};
+    TaskPool two(2);
+    for (const Case& c : cases) {
+        for (TaskPool* pool : {static_cast<TaskPool*>(nullptr), &two}) {
+            BoxTree ta;
+            ta.build(a, c.list, pool, c.order);
+            EXPECT_FALSE(ta.followedOrder()) << c.what;
+            BoxTree sorted;
+            sorted.build(a, c.list, pool);
+            EXPECT_EQ(ta.leafTriangles(), sorted.leafTriangles()) << c.what;
+            EXPECT_EQ(pairsOf(ta, tb), bruteForce(a, c.list, b, listB)) << c.what;
+        }
+    }
+}
+
+}  // namespace
+}  // namespace cullide

@@ -3,12 +3,14 @@
 // levels are demanded (GpuLevels::Always, Pipeline::Paper) does a missing device throw GlUnavailableError. The
 // device is made unusable with a device preference that cannot exist ("99"), which the EGL code refuses.
 #include "Compare.h"
+#include "cullide/scenes/Procedural.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cstddef>
 #include <memory>
+#include <random>
 #include <stdexcept>
 #include <string>
 
@@ -117,6 +119,49 @@ TEST(NoGl, ALargePairsTrianglesAreExactAndSortedOnAnyThreadCount) {
         }
         EXPECT_GT(result.stats.candidateTrianglePairs, 4 * c.expected / 3) << "no work left for the split";
     }
+}
+
+TEST(NoGl, KeptSpatialOrdersOnlyChangeSpeed) {
+    // A rigid sphere (a transform) turning inside a static torus (staticKey), and a soup whose triangles are shuffled
+    // in place every frame (the same mesh and counts: its kept order is stale every frame). The exact stage's trees
+    // follow the kept orders (refits); every frame's pairs must still be the reference's.
+    const TriangleMesh sphere = scenes::makeSphere(0.5, 40, 20);
+    const TriangleMesh torus = scenes::makeTorus(1.0, 0.4, 60, 30);
+    TriangleMesh soup = randomSoups(17, 1, 600, 0.8)[0];
+    for (Vec3& v : soup.vertices) v += Vec3(1.0, 0.0, 0.0);
+    std::mt19937 rng(5);
+    std::unique_ptr<Culler> culler = createGpuCuller(withoutDevice(GpuLevels::Never));
+    std::unique_ptr<Culler> reference = createReferenceCuller(withoutDevice(GpuLevels::Never));
+    constexpr int kFrames = 40;
+    std::size_t refits = 0, orders = 0, expected = 0;
+    for (int f = 0; f < kFrames; ++f) {
+        Transform t;
+        t.linear = Eigen::AngleAxisd(0.07 * f, Vec3(0.3, 0.2, 1.0).normalized()).toRotationMatrix();
+        t.translation = Vec3(1.0 + 0.005 * f, 0.0, 0.0);
+        std::shuffle(soup.triangles.begin(), soup.triangles.end(), rng);
+        std::vector<Object> objects(3);
+        objects[0].mesh = &sphere;
+        objects[0].transform = &t;
+        objects[1].mesh = &torus;
+        objects[1].staticKey = 1;
+        objects[1].version = 1;
+        objects[2].mesh = &soup;
+        Result want, got;
+        reference->run(objects, want);
+        culler->run(objects, got);
+        const Comparison c = compare(want, got);
+        ASSERT_EQ(c.missed, 0u) << "frame " << f << ": " << c.firstMissed;
+        ASSERT_EQ(c.spurious, 0u) << "frame " << f;
+        expected += c.expected;
+        refits += got.stats.exactTreesRefit;
+        orders += got.stats.meshOrdersComputed;
+    }
+    EXPECT_GT(expected, 100u * kFrames) << "the scene must give pairs every frame";
+    EXPECT_GE(refits, 2u * kFrames) << "the sphere's and the soup's trees follow their kept orders";
+    // Three meshes, each recomputed at most every TriangleOrders::kRefreshFrames frames after a staggered first one
+    // (the static torus only once).
+    EXPECT_LE(orders, 3u * (1 + kFrames / 16));
+    EXPECT_GE(orders, 2u);
 }
 
 /// The notice lines ("cullide: ...") in captured standard error; lines of the EGL/Mesa libraries are not counted.

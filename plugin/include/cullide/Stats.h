@@ -54,6 +54,13 @@ struct Stats {
     std::size_t candidateObjectPairs = 0;
     std::size_t candidateTrianglePairs = 0;  ///< pairs whose inflated boxes overlap (handed to the exact test)
     std::size_t exactTests = 0;
+    /// The exact stage's box trees (one per mesh with surviving triangles): built in a spatial order of the mesh kept
+    /// between frames (a refit, no sort: when the survivors are at least an eighth of the mesh), or sorted.
+    std::size_t exactTreesRefit = 0;
+    std::size_t exactTreesSorted = 0;
+    /// Spatial orders of whole meshes computed this frame (kept between frames; recomputed every 16 frames for
+    /// meshes without Object::staticKey, and when a mesh's counts, key or version change).
+    std::size_t meshOrdersComputed = 0;
     std::size_t intersectingTrianglePairs = 0;  ///< exact pairs found (0 with Settings::exactTriangles false)
     std::size_t draws = 0;
     /// GpuLevels::Auto with a GL device: "measuring" (the first four frames of a scene, and again after its triangle

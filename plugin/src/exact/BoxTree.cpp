@@ -40,15 +40,17 @@ std::size_t chunkCount(std::size_t n, std::size_t chunk) { return (n + chunk - 1
 
 }  // namespace
 
-void BoxTree::build(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles, TaskPool* pool) {
+void BoxTree::build(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles, TaskPool* pool,
+                    const std::vector<std::uint32_t>* order) {
     const std::size_t n = triangles.size();
     m_boxes = &boxes;
     resizeKeeping(m_leafTriangle, n);
     m_levelCount = 0;
+    m_followedOrder = false;
     if (n == 0) return;
-    computeKeys(boxes, triangles, pool);
-    morton::sortByCode(m_keys, m_keysTmp, m_histogram, pool);
-    fillLeaves(triangles, pool);
+    m_followedOrder = canFollow(triangles, order, pool) && leavesInOrder(triangles, *order, pool);
+    if (!m_followedOrder) sortLeaves(boxes, triangles, pool);
+    fillLeaves(pool);
     buildLevels(pool);
 }
 
@@ -56,8 +58,8 @@ std::size_t BoxTree::buildParallelism(const TaskPool& pool, std::size_t leaves) 
     return std::min<std::size_t>(pool.size(), chunkCount(leaves, buildChunk(&pool, leaves)));
 }
 
-void BoxTree::computeKeys(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles,
-                          TaskPool* pool) {
+void BoxTree::sortLeaves(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles,
+                         TaskPool* pool) {
     // Morton order of the box centres (10 bits per axis) over their common bounds.
     const std::size_t n = triangles.size();
     const std::size_t chunk = buildChunk(pool, n);
@@ -82,45 +84,102 @@ void BoxTree::computeKeys(const std::vector<Aabb>& boxes, const std::vector<std:
         scale[k] = extent > 0.0 && std::isfinite(extent) ? 1023.0 / extent : 0.0;
     }
     resizeKeeping(m_keys, n);
-    resizeKeeping(m_floatBoxes, n);
     std::uint64_t* keys = m_keys.data();
-    FloatBox* floatBoxes = m_floatBoxes.data();
     parallelForOrHere(pool, chunks, 1, [&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin * chunk, last = std::min(n, end * chunk); i < last; ++i) {
             const Aabb& b = box[list[i]];
             double c[3];
-            FloatBox f;
-            for (int k = 0; k < 3; ++k) {
+            for (int k = 0; k < 3; ++k)
                 c[k] = (0.5 * b.min[k] + 0.5 * b.max[k] - all.min[k]) * scale[k];  // no overflow near 1e308
-                f.lo[k] = floatBelow(b.min[k]);
-                f.hi[k] = floatAbove(b.max[k]);
-            }
-            floatBoxes[i] = f;
             keys[i] = morton::key(morton::code(c[0], c[1], c[2]), static_cast<std::uint32_t>(i));
         }
     });
+    morton::sortByCode(m_keys, m_keysTmp, m_histogram, pool);
+    const std::uint64_t* sorted = m_keys.data();  // the sort may have swapped the buffers
+    std::uint32_t* leafTriangle = m_leafTriangle.data();
+    parallelForOrHere(pool, chunks, 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin * chunk, last = std::min(n, end * chunk); i < last; ++i)
+            leafTriangle[i] = list[static_cast<std::uint32_t>(sorted[i])];
+    });
 }
 
-void BoxTree::fillLeaves(const std::vector<std::uint32_t>& triangles, TaskPool* pool) {
-    const std::size_t n = m_keys.size();
+bool BoxTree::canFollow(const std::vector<std::uint32_t>& triangles, const std::vector<std::uint32_t>* order,
+                        TaskPool* pool) const {
+    const std::size_t n = triangles.size();
+    if (order == nullptr || n * kOrderedFraction < order->size() || triangles.back() >= order->size()) return false;
+    // Strictly increasing: no triangle twice, so marking them below never writes one flag from two workers.
+    const std::size_t chunk = buildChunk(pool, n);
+    std::vector<std::uint8_t> sorted(chunkCount(n, chunk), 1);
+    parallelForOrHere(pool, sorted.size(), 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t c = begin; c < end; ++c)
+            for (std::size_t i = std::max<std::size_t>(c * chunk, 1), last = std::min(n, (c + 1) * chunk); i < last;
+                 ++i)
+                if (triangles[i - 1] >= triangles[i]) sorted[c] = 0;
+    });
+    return std::all_of(sorted.begin(), sorted.end(), [](std::uint8_t s) { return s != 0; });
+}
+
+bool BoxTree::leavesInOrder(const std::vector<std::uint32_t>& triangles, const std::vector<std::uint32_t>& order,
+                            TaskPool* pool) {
+    // Flag the list's triangles, then keep the flagged ones of each chunk of the order at the chunk's first leaf
+    // (counted first), then clear the flags again. An order that does not hold each listed triangle once is not
+    // followed.
+    const std::size_t n = triangles.size();
+    const std::size_t total = order.size();
+    if (m_inList.size() < total) m_inList.resize(total, 0);
+    std::uint8_t* inList = m_inList.data();
+    const std::uint32_t* list = triangles.data();
+    auto flag = [&](std::uint8_t value) {
+        parallelForOrHere(pool, n, buildChunk(pool, n), [&](std::size_t begin, std::size_t end) {
+            for (std::size_t i = begin; i < end; ++i) inList[list[i]] = value;
+        });
+    };
+    flag(1);
+    const std::size_t chunk = buildChunk(pool, total);
+    const std::size_t chunks = chunkCount(total, chunk);
+    m_chunkFirst.assign(chunks + 1, 0);
+    const std::uint32_t* sequence = order.data();
+    parallelForOrHere(pool, chunks, 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t c = begin; c < end; ++c) {
+            std::size_t kept = 0;
+            for (std::size_t i = c * chunk, last = std::min(total, i + chunk); i < last; ++i)
+                kept += inList[sequence[i]];
+            m_chunkFirst[c + 1] = kept;
+        }
+    });
+    for (std::size_t c = 0; c < chunks; ++c) m_chunkFirst[c + 1] += m_chunkFirst[c];
+    if (m_chunkFirst[chunks] != n) {
+        flag(0);
+        return false;
+    }
+    std::uint32_t* leafTriangle = m_leafTriangle.data();
+    parallelForOrHere(pool, chunks, 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t c = begin; c < end; ++c) {
+            std::size_t at = m_chunkFirst[c];
+            for (std::size_t i = c * chunk, last = std::min(total, i + chunk); i < last; ++i)
+                if (inList[sequence[i]]) leafTriangle[at++] = sequence[i];
+        }
+    });
+    flag(0);
+    return true;
+}
+
+void BoxTree::fillLeaves(TaskPool* pool) {
+    const std::size_t n = m_leafTriangle.size();
     if (m_levels.empty()) m_levels.emplace_back();
     std::vector<Block>& leaves = m_levels[0];
     resizeKeeping(leaves, blocksFor(n));
-    const std::uint64_t* keys = m_keys.data();
-    const FloatBox* floatBoxes = m_floatBoxes.data();
-    const std::uint32_t* list = triangles.data();
-    std::uint32_t* leafTriangle = m_leafTriangle.data();
+    const Aabb* box = m_boxes->data();
+    const std::uint32_t* leafTriangle = m_leafTriangle.data();
     Block* blocks = leaves.data();
     parallelForOrHere(pool, leaves.size(), buildChunk(pool, n) / kFanout, [&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin * kFanout, last = std::min(n, end * kFanout); i < last; ++i) {
-            const auto at = static_cast<std::uint32_t>(keys[i]);
-            leafTriangle[i] = list[at];
-            const FloatBox& f = floatBoxes[at];
+            const Aabb& b = box[leafTriangle[i]];
             Block& block = blocks[i / kFanout];
             const auto slot = static_cast<std::uint32_t>(i % kFanout);
             for (int k = 0; k < 3; ++k) {
-                block.lo[k][slot] = f.lo[k];
-                block.hi[k][slot] = f.hi[k];
+                block.lo[k][slot] = floatBelow(b.min[k]);
+                block.hi[k][slot] = floatAbove(b.max[k]);
             }
         }
     });

@@ -43,7 +43,15 @@ public:
     /// Boxes must be finite. With `pool`, each step of the build runs on its workers in chunks: the same tree
     /// for any number of workers (for large lists; a small one is cheaper built on one thread). `pool` must not be
     /// running a parallelFor already (it is not re-entrant).
-    void build(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles, TaskPool* pool = nullptr);
+    /// With `order` (a spatial order of the mesh's triangles, kept between frames: TriangleOrders; each triangle at
+    /// most once), the leaves follow it instead of being sorted when `triangles` is strictly increasing, at least
+    /// 1/kOrderedFraction of the order and wholly in it (a refit: no keys, no sort). Any order gives the same pairs.
+    void build(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles, TaskPool* pool = nullptr,
+               const std::vector<std::uint32_t>* order = nullptr);
+    /// A list shorter than 1/kOrderedFraction of the mesh's order is sorted: walking the whole order would cost more.
+    static constexpr std::size_t kOrderedFraction = 8;
+    /// Whether the last build followed the order it was given.
+    bool followedOrder() const { return m_followedOrder; }
     /// How many of `pool`'s workers a build of `leaves` leaves keeps busy (its chunks, at most the workers).
     static std::size_t buildParallelism(const TaskPool& pool, std::size_t leaves);
 
@@ -67,9 +75,14 @@ public:
     bool anyOverlap(const Aabb& query, std::vector<NodePair>& stack) const;
 
 private:
-    /// Build steps (see build()): m_keys (Morton code, list position) and m_floatBoxes by list position.
-    void computeKeys(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles, TaskPool* pool);
-    void fillLeaves(const std::vector<std::uint32_t>& triangles, TaskPool* pool);
+    /// Build steps (see build()): the leaves' triangles (m_leafTriangle) by sorting the list's Morton keys, or by
+    /// taking the list's triangles in `order`; then their float boxes, then the levels above.
+    void sortLeaves(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles, TaskPool* pool);
+    bool canFollow(const std::vector<std::uint32_t>& triangles, const std::vector<std::uint32_t>* order,
+                   TaskPool* pool) const;
+    bool leavesInOrder(const std::vector<std::uint32_t>& triangles, const std::vector<std::uint32_t>& order,
+                       TaskPool* pool);
+    void fillLeaves(TaskPool* pool);
     void buildLevels(TaskPool* pool);
     FloatBox box(std::uint32_t level, std::uint32_t node) const;
     /// Bit i set when child i of `node` (at `level` > 0) overlaps `q`.
@@ -86,7 +99,9 @@ private:
     const std::vector<Aabb>* m_boxes = nullptr;  ///< the double boxes, by triangle
     std::vector<std::uint64_t> m_keys;           ///< build scratch: Morton code << 32 | position
     std::vector<std::uint64_t> m_keysTmp;
-    std::vector<FloatBox> m_floatBoxes;          ///< build scratch: leaf boxes in input order
+    std::vector<std::uint8_t> m_inList;          ///< build scratch, by triangle: 1 while in the list (then 0 again)
+    std::vector<std::size_t> m_chunkFirst;       ///< build scratch: first leaf of each chunk of the order
+    bool m_followedOrder = false;
     std::vector<Aabb> m_chunkBounds;             ///< build scratch: bounds of each chunk of the list
     std::vector<std::uint32_t> m_histogram;      ///< build scratch: digit counts of each chunk, then its cursors
 };

@@ -1,0 +1,158 @@
+// Spatial orders of whole meshes and the cache that keeps them between frames (TriangleOrders), without GL.
+#include "TriangleOrders.h"
+#include "cullide/scenes/Procedural.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <numeric>
+#include <vector>
+
+namespace cullide::test {
+namespace {
+
+/// A frame in which every object is a valid, active mesh (what TriangleOrders::assign looks at).
+FrameState activeFrame(std::size_t objects) {
+    FrameState frame;
+    frame.valid.assign(objects, ValidatedObject{true, true, Aabb{}});
+    frame.active.assign(objects, 1);
+    return frame;
+}
+
+/// `n` separate triangles along x, listed in a scrambled order.
+TriangleMesh triangleRow(std::uint32_t n) {
+    TriangleMesh mesh;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const double x = static_cast<double>((i * 7919u) % n);
+        const auto v = static_cast<std::uint32_t>(mesh.vertices.size());
+        mesh.vertices.push_back(Vec3(x, 0, 0));
+        mesh.vertices.push_back(Vec3(x + 0.5, 0, 0));
+        mesh.vertices.push_back(Vec3(x, 0.5, 0));
+        mesh.triangles.push_back({v, v + 1, v + 2});
+    }
+    return mesh;
+}
+
+TEST(SpatialOrder, APermutationAlongTheMortonCurveOnAnyNumberOfWorkers) {
+    constexpr std::uint32_t kTriangles = 1000;  // under 1,024 cells along x: one triangle per cell
+    const TriangleMesh row = triangleRow(kTriangles);
+    std::vector<std::uint32_t> serial;
+    spatialOrder(row, serial);
+    ASSERT_EQ(serial.size(), kTriangles);
+    for (std::size_t i = 1; i < serial.size(); ++i)
+        ASSERT_LT(row.vertices[row.triangles[serial[i - 1]][0]][0], row.vertices[row.triangles[serial[i]][0]][0]);
+    const TriangleMesh sphere = scenes::makeSphere(1.0, 200, 100);
+    spatialOrder(sphere, serial);
+    std::vector<std::uint32_t> sorted = serial;
+    std::sort(sorted.begin(), sorted.end());
+    std::vector<std::uint32_t> identity(sphere.triangles.size());
+    std::iota(identity.begin(), identity.end(), 0u);
+    EXPECT_EQ(sorted, identity);
+    TaskPool three(3);
+    std::vector<std::uint32_t> onThree;
+    spatialOrder(sphere, onThree, &three);
+    EXPECT_EQ(onThree, serial);
+}
+
+TEST(TriangleOrders, KeptBetweenFramesAndSharedByInstances) {
+    const TriangleMesh sphere = scenes::makeSphere(1.0, 20, 10);
+    const TriangleMesh box = scenes::makeBox(Vec3::Ones());
+    std::vector<Object> objects(3);
+    objects[0].mesh = objects[1].mesh = &sphere;  // two instances
+    objects[2].mesh = &box;
+    TaskPool pool(2);
+    TriangleOrders orders;
+    FrameState frame = activeFrame(objects.size());
+    auto all = [](std::uint32_t) { return true; };
+    orders.assign(objects, frame, all, pool);
+    EXPECT_EQ(orders.computed(), 2u);
+    ASSERT_NE(frame.order[0], nullptr);
+    EXPECT_EQ(frame.order[0], frame.order[1]);
+    std::vector<std::uint32_t> expected;
+    spatialOrder(sphere, expected);
+    EXPECT_EQ(*frame.order[0], expected);
+    orders.assign(objects, frame, all, pool);
+    EXPECT_EQ(orders.computed(), 2u);  // the same meshes: nothing recomputed
+    EXPECT_EQ(*frame.order[0], expected);
+}
+
+TEST(TriangleOrders, OnlyForActiveMeshesThatAreWanted) {
+    const TriangleMesh box = scenes::makeBox(Vec3::Ones());
+    const TriangleMesh other = scenes::makeBox(Vec3(1, 2, 3));
+    const TriangleMesh third = scenes::makeBox(Vec3(3, 2, 1));
+    std::vector<Object> objects(4);
+    objects[0].mesh = &box;
+    objects[1].mesh = &other;
+    objects[2].mesh = &third;
+    objects[3].box = Aabb{Vec3::Zero(), Vec3::Ones()};  // a box-only proxy
+    FrameState frame = activeFrame(objects.size());
+    frame.active[1] = 0;
+    frame.valid[3].isMesh = false;
+    TaskPool pool(2);
+    TriangleOrders orders;
+    orders.assign(objects, frame, [](std::uint32_t o) { return o != 2; }, pool);
+    EXPECT_NE(frame.order[0], nullptr);
+    EXPECT_EQ(frame.order[1], nullptr);  // not active
+    EXPECT_EQ(frame.order[2], nullptr);  // not wanted
+    EXPECT_EQ(frame.order[3], nullptr);  // not a mesh
+    EXPECT_EQ(orders.computed(), 1u);
+}
+
+TEST(TriangleOrders, RecomputedWhenTheMeshMayHaveChanged) {
+    TriangleMesh moving = triangleRow(50);
+    TriangleMesh fixed = triangleRow(60);
+    std::vector<Object> objects(2);
+    objects[0].mesh = &moving;
+    objects[1].mesh = &fixed;
+    objects[1].staticKey = 9;
+    objects[1].version = 1;
+    FrameState frame = activeFrame(objects.size());
+    TaskPool pool(2);
+    TriangleOrders orders;
+    auto all = [](std::uint32_t) { return true; };
+    auto framesUntilRecomputed = [&](std::size_t limit) {
+        const std::uint64_t before = orders.computed();
+        for (std::size_t f = 1; f <= limit; ++f) {
+            orders.assign(objects, frame, all, pool);
+            if (orders.computed() != before) return f;
+        }
+        return limit + 1;
+    };
+    orders.assign(objects, frame, all, pool);
+    // Without a staticKey: within two refresh periods (the first one is staggered), then every period.
+    objects.pop_back();
+    frame = activeFrame(1);
+    EXPECT_LE(framesUntilRecomputed(2 * TriangleOrders::kRefreshFrames), 2 * TriangleOrders::kRefreshFrames);
+    EXPECT_EQ(framesUntilRecomputed(TriangleOrders::kRefreshFrames), TriangleOrders::kRefreshFrames);
+    // A triangle more: at once.
+    moving.triangles.push_back(moving.triangles.front());
+    EXPECT_EQ(framesUntilRecomputed(1), 1u);
+    EXPECT_EQ(frame.order[0]->size(), moving.triangles.size());
+    objects = {Object{}};
+    objects[0].mesh = &fixed;
+    objects[0].staticKey = 9;
+    objects[0].version = 1;
+    // A static mesh (kept since the first frame, unused since): only when its version (or a count) changes.
+    EXPECT_GT(framesUntilRecomputed(5 * TriangleOrders::kRefreshFrames), 5 * TriangleOrders::kRefreshFrames);
+    objects[0].version = 2;
+    EXPECT_EQ(framesUntilRecomputed(1), 1u);
+}
+
+TEST(TriangleOrders, UnusedOrdersAreDropped) {
+    const TriangleMesh a = triangleRow(10);
+    const TriangleMesh b = triangleRow(20);
+    std::vector<Object> objects(2);
+    objects[0].mesh = &a;
+    objects[1].mesh = &b;
+    FrameState frame = activeFrame(2);
+    TaskPool pool(1);
+    TriangleOrders orders;
+    orders.assign(objects, frame, [](std::uint32_t) { return true; }, pool);
+    EXPECT_EQ(orders.size(), 2u);
+    for (std::uint64_t f = 0; f <= TriangleOrders::kKeepFrames; ++f)
+        orders.assign(objects, frame, [](std::uint32_t o) { return o == 0; }, pool);
+    EXPECT_EQ(orders.size(), 1u);
+}
+
+}  // namespace
+}  // namespace cullide::test
