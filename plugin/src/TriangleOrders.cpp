@@ -28,7 +28,8 @@ void spatialOrder(const TriangleMesh& mesh, std::vector<std::uint32_t>& order, T
     std::vector<Aabb>& bounds = chunkBounds;  // the caller's, for the workers
     parallelForOrHere(pool, chunks, 1, [&](std::size_t begin, std::size_t end) {
         for (std::size_t c = begin; c < end; ++c)
-            for (std::size_t t = c * chunk, last = std::min(n, t + chunk); t < last; ++t) bounds[c].grow(centroid(mesh, t));
+            for (std::size_t t = c * chunk, last = std::min(n, t + chunk); t < last; ++t)
+                bounds[c].grow(centroid(mesh, t));
     });
     Aabb all;
     for (const Aabb& b : bounds) all.grow(b);
