@@ -173,7 +173,9 @@ void BoxTree::fillLeaves(TaskPool* pool) {
     const std::uint32_t* leafTriangle = m_leafTriangle.data();
     Block* blocks = leaves.data();
     parallelForOrHere(pool, leaves.size(), buildChunk(pool, n) / kFanout, [&](std::size_t begin, std::size_t end) {
+        constexpr std::size_t kAhead = 16;  // leaves follow a spatial order: their boxes are scattered in memory
         for (std::size_t i = begin * kFanout, last = std::min(n, end * kFanout); i < last; ++i) {
+            if (i + kAhead < last) __builtin_prefetch(&box[leafTriangle[i + kAhead]]);
             const Aabb& b = box[leafTriangle[i]];
             Block& block = blocks[i / kFanout];
             const auto slot = static_cast<std::uint32_t>(i % kFanout);
