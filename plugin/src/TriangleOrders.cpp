@@ -60,7 +60,11 @@ std::size_t TriangleOrders::assign(const std::vector<Object>& objects, FrameStat
     for (auto it = m_entries.begin(); it != m_entries.end();)
         it = m_frame - it->second.lastFrame > kKeepFrames ? m_entries.erase(it) : std::next(it);
     frame.order.assign(objects.size(), nullptr);
-    std::vector<std::uint32_t> due;  // objects whose mesh is ordered now, each mesh once
+    struct Due {
+        const TriangleMesh* mesh;
+        Entry* entry;
+    };
+    std::vector<Due> due;  // meshes ordered now, each once
     for (std::uint32_t o = 0; o < objects.size(); ++o) {
         if (!frame.isActiveMesh(o) || !wanted(o)) continue;
         const Object& object = objects[o];
@@ -73,27 +77,25 @@ std::size_t TriangleOrders::assign(const std::vector<Object>& objects, FrameStat
             e.triangles = object.mesh->triangles.size();
             e.staticKey = object.staticKey;
             e.version = object.version;
-            e.ready = false;
-            due.push_back(o);
+            e.ready = false;  // until computed below
+            due.push_back({object.mesh, &e});
             ++m_computed;
         }
         e.lastFrame = m_frame;
         frame.order[o] = &e.order;
     }
     // The source meshes: a transformed object's world copy has the same triangles, in the same order.
-    std::vector<std::uint32_t> small;
-    for (std::uint32_t o : due) {
-        if (objects[o].mesh->triangles.size() < kSpreadTriangles)
-            small.push_back(o);
+    std::vector<Due> small;
+    for (const Due& d : due) {
+        if (d.mesh->triangles.size() < kSpreadTriangles)
+            small.push_back(d);
         else
-            spatialOrder(*objects[o].mesh, m_entries[objects[o].mesh].order, &pool);
+            spatialOrder(*d.mesh, d.entry->order, &pool);
     }
-    std::vector<std::vector<std::uint32_t>*> smallOrders;
-    for (std::uint32_t o : small) smallOrders.push_back(&m_entries[objects[o].mesh].order);
     pool.parallelFor(small.size(), 1, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i) spatialOrder(*objects[small[i]].mesh, *smallOrders[i]);
+        for (std::size_t i = begin; i < end; ++i) spatialOrder(*small[i].mesh, small[i].entry->order);
     });
-    for (std::uint32_t o : due) m_entries[objects[o].mesh].ready = true;
+    for (const Due& d : due) d.entry->ready = true;
     return due.size();
 }
 
