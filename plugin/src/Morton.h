@@ -1,5 +1,5 @@
-// Morton (Z-order) codes of points in a box, and the stable radix sort that orders items by them: the spatial order
-// of the pre-pass's groups and of the exact stage's box trees, rebuilt every frame in O(n).
+// Morton (Z-order) codes of points in a box, and the stable radix sort that orders items by them in O(n): the
+// spatial orders of whole meshes (TriangleOrders, kept between frames) and of the box trees' sorted leaves.
 #pragma once
 
 #include "cullide/TaskPool.h"
