@@ -1,6 +1,6 @@
 // The CPU stages over the active meshes' triangles: their boxes and groups of k in each mesh's kept spatial order
-// (what the visibility levels start from), and the triangles whose boxes meet a partner's (the CPU path, and what is left
-// when the levels cannot run). All run on the pool; results do not depend on the number of workers.
+// (what the visibility levels start from), and the triangles whose boxes meet a partner's (the CPU path, and what
+// is left when the levels cannot run). All run on the pool; results do not depend on the number of workers.
 #pragma once
 
 #include "FrameState.h"
@@ -36,8 +36,8 @@ struct TriangleScratch {
 void buildTriangleBoxesAndGroups(FrameState& frame, std::uint32_t groupSize, double margin, bool prepass,
                                  TaskPool& pool, TriangleScratch& scratch, Stats& stats);
 
-/// The triangles of `groups` (each in the object's spatial order, FrameState::order), in group order; with `prepass`, only those whose
-/// box overlaps a partner object's box (tested when the object has at most 16 partners).
+/// The triangles of `groups` (each in the object's spatial order, FrameState::order), in group order; with
+/// `prepass`, only those whose box overlaps a partner object's box (tested when the object has at most 16 partners).
 void collectTriangles(const FrameState& frame, const std::vector<Group>& groups, bool prepass, TaskPool& pool,
                       TriangleScratch& scratch, std::vector<FrameTriangle>& triangles);
 
