@@ -15,7 +15,8 @@
 
 namespace cullide {
 struct ExactStage::Scratch {
-    std::vector<BoxTree> trees;  ///< one per distinct surviving-triangle list
+    std::vector<BoxTree> trees;  ///< one per distinct surviving-triangle list without a ready tree
+    std::vector<const BoxTree*> treeOf;  ///< per input: its tree
     std::vector<std::vector<BoxTree::NodePair>> frontiers;  ///< per job
     std::vector<std::vector<TrianglePair>> taskOut;
     std::vector<std::uint8_t> hit;  ///< per candidate: the triangle test's answer
@@ -56,31 +57,27 @@ void mergeRuns(const std::vector<std::vector<TrianglePair>>& runs, std::size_t f
 ExactStage::ExactStage(TaskPool& pool) : m_pool(pool), m_scratch(std::make_unique<Scratch>()) {}
 ExactStage::~ExactStage() = default;
 
-void ExactStage::buildTrees(const std::vector<TreeInput>& inputs, std::vector<BoxTree>& trees) {
-    // One tree per task; but with fewer trees than workers (one or two large meshes on a many-core machine) the
-    // trees are built one after another, each with every worker on each step of its build, when that ends sooner
-    // (estimated in leaves: the largest tree for one tree per task, each tree over the workers its chunks keep busy
-    // for the other way).
-    std::size_t total = 0, largest = 0;
-    double spreadSpan = 0.0;
-    for (const TreeInput& in : inputs) {
-        const std::size_t n = in.list->size();
-        total += n;
-        largest = std::max(largest, n);
-        spreadSpan += static_cast<double>(n) /
-                      static_cast<double>(std::max<std::size_t>(1, BoxTree::buildParallelism(m_pool, n)));
+void ExactStage::buildTrees(const std::vector<TreeInput>& inputs, std::vector<const BoxTree*>& trees, Stats& stats) {
+    std::vector<std::size_t> built;  // inputs without a ready tree
+    trees.assign(inputs.size(), nullptr);
+    for (std::size_t i = 0; i < inputs.size(); ++i) {
+        if (inputs[i].ready != nullptr)
+            trees[i] = inputs[i].ready;
+        else
+            built.push_back(i);
     }
-    const double taskSpan = std::max(static_cast<double>(largest), static_cast<double>(total) / m_pool.size());
-    const bool spread = inputs.size() < m_pool.size() && spreadSpan < taskSpan;
-    if (!spread) {
-        m_pool.parallelFor(inputs.size(), 1, [&](std::size_t begin, std::size_t end) {
-            for (std::size_t i = begin; i < end; ++i)
-                trees[i].build(*inputs[i].boxes, *inputs[i].list, nullptr, inputs[i].order);
+    std::vector<BoxTree>& own = m_scratch->trees;
+    if (own.size() < built.size()) own.resize(built.size());
+    BoxTree::buildMany(
+        m_pool, built.size(), [&](std::size_t k) { return inputs[built[k]].list->size(); },
+        [&](std::size_t k, TaskPool* pool) {
+            const TreeInput& in = inputs[built[k]];
+            own[k].build(*in.boxes, *in.list, pool, in.order);
         });
-        return;
+    for (std::size_t k = 0; k < built.size(); ++k) {
+        trees[built[k]] = &own[k];
+        ++(own[k].followedOrder() ? stats.exactTreesRefit : stats.exactTreesSorted);
     }
-    for (std::size_t i = 0; i < inputs.size(); ++i)
-        trees[i].build(*inputs[i].boxes, *inputs[i].list, &m_pool, inputs[i].order);
 }
 
 void ExactStage::run(const std::vector<Object>& objects, const std::vector<ExactJob>& jobs, double margin, bool exact,
@@ -91,43 +88,42 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
     // landscape under many bodies), the two trees of each job descended together, split into tasks for every worker.
     std::vector<TreeInput> inputs;
     std::vector<std::size_t> jobListA(jobs.size()), jobListB(jobs.size());
-    std::unordered_map<const std::vector<std::uint32_t>*, std::size_t> known;
+    std::unordered_map<const void*, std::size_t> known;  // by ready tree, else by list
     auto listIndex = [&](const TreeInput& in) {
-        const auto [it, added] = known.emplace(in.list, inputs.size());
+        const void* key = in.ready != nullptr ? static_cast<const void*>(in.ready) : in.list;
+        const auto [it, added] = known.emplace(key, inputs.size());
         if (added) inputs.push_back(in);
         return it->second;
     };
     for (std::size_t j = 0; j < jobs.size(); ++j) {
-        jobListA[j] = listIndex({jobs[j].trianglesA, jobs[j].boxesA, jobs[j].orderA});
-        jobListB[j] = listIndex({jobs[j].trianglesB, jobs[j].boxesB, jobs[j].orderB});
+        jobListA[j] = listIndex({jobs[j].trianglesA, jobs[j].boxesA, jobs[j].orderA, jobs[j].treeA});
+        jobListB[j] = listIndex({jobs[j].trianglesB, jobs[j].boxesB, jobs[j].orderB, jobs[j].treeB});
     }
     std::vector<std::size_t> boxJobList(boxJobs.size());
     for (std::size_t j = 0; j < boxJobs.size(); ++j)
-        boxJobList[j] = listIndex({boxJobs[j].triangles, boxJobs[j].boxes, boxJobs[j].order});
-    std::vector<BoxTree>& trees = m_scratch->trees;
-    if (trees.size() < inputs.size()) trees.resize(inputs.size());
-    buildTrees(inputs, trees);
-    for (std::size_t i = 0; i < inputs.size(); ++i)
-        ++(trees[i].followedOrder() ? stats.exactTreesRefit : stats.exactTreesSorted);
+        boxJobList[j] = listIndex({boxJobs[j].triangles, boxJobs[j].boxes, boxJobs[j].order, boxJobs[j].tree});
+    std::vector<const BoxTree*>& treeOf = m_scratch->treeOf;
+    buildTrees(inputs, treeOf, stats);
+    auto tree = [&](std::size_t input) -> const BoxTree& { return *treeOf[input]; };
     if (touches != nullptr) {
         touches->assign(boxJobs.size(), 0);
         m_pool.parallelFor(boxJobs.size(), 16, [&](std::size_t begin, std::size_t end) {
             thread_local std::vector<BoxTree::NodePair> stack;
             for (std::size_t j = begin; j < end; ++j)
-                (*touches)[j] = trees[boxJobList[j]].anyOverlap(boxJobs[j].box, stack) ? 1 : 0;
+                (*touches)[j] = tree(boxJobList[j]).anyOverlap(boxJobs[j].box, stack) ? 1 : 0;
         });
     }
     // Node pairs per job in proportion to its trees' size, 64 per worker in all: one large pair (a bunny on a
     // dragon) still feeds every worker, and a thousand small pairs are not cut into a thousand tasks each.
     std::size_t totalLeaves = 0;
-    for (std::size_t j = 0; j < jobs.size(); ++j) totalLeaves += trees[jobListA[j]].size() + trees[jobListB[j]].size();
+    for (std::size_t j = 0; j < jobs.size(); ++j) totalLeaves += tree(jobListA[j]).size() + tree(jobListB[j]).size();
     const double perLeaf = 64.0 * m_pool.size() / static_cast<double>(std::max<std::size_t>(1, totalLeaves));
     std::vector<std::vector<BoxTree::NodePair>>& frontiers = m_scratch->frontiers;
     if (frontiers.size() < jobs.size()) frontiers.resize(jobs.size());
     m_pool.parallelFor(jobs.size(), 1, [&](std::size_t begin, std::size_t end) {
         for (std::size_t j = begin; j < end; ++j) {
-            const BoxTree& a = trees[jobListA[j]];
-            const BoxTree& b = trees[jobListB[j]];
+            const BoxTree& a = tree(jobListA[j]);
+            const BoxTree& b = tree(jobListB[j]);
             const auto target = static_cast<std::size_t>(std::ceil(perLeaf * static_cast<double>(a.size() + b.size())));
             BoxTree::split(a, b, target, frontiers[j]);
         }
@@ -148,7 +144,7 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
             const std::vector<BoxTree::NodePair>& frontier = frontiers[j];
             pairs.clear();
             for (std::size_t i = tasks[t].second, last = std::min(frontier.size(), i + kChunk); i < last; ++i)
-                BoxTree::leafPairs(trees[jobListA[j]], trees[jobListB[j]], frontier[i], stack, pairs);
+                BoxTree::leafPairs(tree(jobListA[j]), tree(jobListB[j]), frontier[i], stack, pairs);
             assignKeeping(taskOut[t], pairs.begin(), pairs.end());
         }
     });

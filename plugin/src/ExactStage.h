@@ -24,6 +24,10 @@ struct ExactJob {
     /// Optional: a spatial order of all of object a's triangles (TriangleOrders), which its box tree may follow.
     const std::vector<std::uint32_t>* orderA = nullptr;
     const std::vector<std::uint32_t>* orderB = nullptr;
+    /// Optional: a box tree of all of object a's triangles (MeshTrees), used instead of one over trianglesA (which
+    /// must then hold every triangle whose box overlaps object b's box: the tree's other leaves pair with nothing).
+    const BoxTree* treeA = nullptr;
+    const BoxTree* treeB = nullptr;
 };
 
 /// A mesh against a box-only proxy: does some surviving triangle's box (inflated by margin / 2) overlap `box`
@@ -33,6 +37,7 @@ struct BoxJob {
     const std::vector<Aabb>* boxes = nullptr;               ///< box of every triangle of the mesh
     Aabb box;
     const std::vector<std::uint32_t>* order = nullptr;  ///< optional, as ExactJob::orderA
+    const BoxTree* tree = nullptr;                      ///< optional, as ExactJob::treeA
 };
 
 struct ExactJobResult {
@@ -56,14 +61,15 @@ public:
 
 private:
     /// What one box tree is built over: a surviving-triangle list, the mesh's triangle boxes, and optionally the
-    /// mesh's spatial order.
+    /// mesh's spatial order; or a tree given ready (then nothing is built).
     struct TreeInput {
         const std::vector<std::uint32_t>* list;
         const std::vector<Aabb>* boxes;
         const std::vector<std::uint32_t>* order;
+        const BoxTree* ready;
     };
-    /// trees[i] over inputs[i].
-    void buildTrees(const std::vector<TreeInput>& inputs, std::vector<BoxTree>& trees);
+    /// The tree of each input: its ready one, or one built now into the scratch trees.
+    void buildTrees(const std::vector<TreeInput>& inputs, std::vector<const BoxTree*>& trees, Stats& stats);
 
     struct Scratch;  ///< per-frame working memory, kept between frames: no allocation churn on large scenes
     TaskPool& m_pool;

@@ -46,8 +46,13 @@ struct FrameState {
     /// Per active non-static mesh: storage of its triangle boxes (static ones are in their StaticEntry).
     std::vector<std::vector<Aabb>> ownBoxes;
     /// Per active mesh: triangle boxes (inflated by margin / 2), of every triangle (static meshes; every mesh with
-    /// GPU levels) or, on the CPU path, only of its surviving ones.
+    /// GPU levels) or, on the CPU path, only of its surviving ones (none for the meshes with a whole tree).
     std::vector<std::vector<Aabb>*> boxesOf;
+    /// Per object, on the CPU path: 1 when its mesh has a box tree of all its triangles (MeshTrees: a static mesh, or
+    /// one lying mostly near its partners) in place of per-triangle boxes (boxesOf) and a tree of its survivors.
+    std::vector<std::uint8_t> whole;
+    /// Per object: that tree, once built (null for every other object).
+    std::vector<const BoxTree*> tree;
     /// The groups the levels start from (GPU levels only).
     std::vector<Group> groups;
     /// Per object: its triangles that may touch another object's, sorted (what the exact stage tests).
@@ -56,6 +61,7 @@ struct FrameState {
     const TriangleMesh& meshOf(std::uint32_t o) const { return *(*objects)[o].mesh; }
     bool isMesh(std::uint32_t o) const { return valid[o].isMesh; }
     bool isActiveMesh(std::uint32_t o) const { return active[o] && valid[o].isMesh; }
+    bool hasWholeTree(std::uint32_t o) const { return !whole.empty() && whole[o] != 0; }
     bool overlapsPartner(std::uint32_t o, const Aabb& box) const {
         for (std::uint32_t p : partners[o])
             if (box.overlaps(valid[p].box)) return true;

@@ -9,6 +9,7 @@
 #include "KeptCapacity.h"
 #include "LevelPipelines.h"
 #include "MeshCache.h"
+#include "MeshTrees.h"
 #include "PairAssembly.h"
 #include "TriangleOrders.h"
 #include "TriangleSets.h"
@@ -68,8 +69,7 @@ private:
         Timer prepass;
         prepareObjects(objects, only, frame, result);
         const bool autoActive = choosePath(frame, stats);
-        if (frame.gpuLevels)
-            stats.meshOrdersComputed = m_orders.assign(objects, frame, [](std::uint32_t) { return true; }, m_pool);
+        assignOrders(objects, frame, stats);
         buildTriangleBoxesAndGroups(frame, static_cast<std::uint32_t>(m_settings.groupSize), m_settings.margin,
                                     m_settings.pipeline != Pipeline::Paper, m_pool, m_scratch, stats);
         stats.prepassMs = prepass.ms();
@@ -80,8 +80,9 @@ private:
         (frame.gpuLevels ? stats.gpuLevelsMs : stats.prepassMs) += levels.ms() - stats.uploadMs;
 
         Timer exact;
-        if (!frame.gpuLevels) stats.meshOrdersComputed = assignTreeOrders(objects, frame);
+        if (!frame.gpuLevels) stats.meshOrdersComputed += assignTreeOrders(objects, frame);
         m_assembly.run(frame, m_settings, m_exact, result);
+        if (!frame.gpuLevels) MeshTrees::listPairedTriangles(result, frame);
         stats.exactMs = exact.ms();
         stats.pcsObjects = result.pcs.size();
         stats.candidateObjectPairs = result.pairs.size();
@@ -143,10 +144,27 @@ private:
         return true;
     }
 
+    /// The meshes' kept spatial orders needed before the triangle stages: every active mesh's with GPU levels (their
+    /// groups follow it); on the CPU path, which meshes get a whole tree (MeshTrees) and the orders of those built
+    /// now.
+    void assignOrders(const std::vector<Object>& objects, FrameState& frame, Stats& stats) {
+        m_orders.beginFrame(objects.size(), frame);
+        if (frame.gpuLevels) {
+            frame.whole.assign(objects.size(), 0);
+            frame.tree.assign(objects.size(), nullptr);
+            stats.meshOrdersComputed = m_orders.assign(objects, frame, [](std::uint32_t) { return true; }, m_pool);
+            return;
+        }
+        MeshTrees::choose(frame);
+        stats.meshOrdersComputed = m_orders.assign(
+            objects, frame, [&](std::uint32_t o) { return MeshTrees::needsBuild(frame, o); }, m_pool);
+    }
+
     /// frame.surviving: by the visibility levels, or by the CPU path. A backend error mid-frame costs this frame its
     /// pruning, never a contact: every triangle that the CPU pre-pass keeps goes to the exact stage.
     void findSurvivingTriangles(FrameState& frame, Stats& stats) {
         if (!frame.gpuLevels) {
+            m_trees.build(frame, m_settings.margin, m_pool, stats);
             collectDirect(frame, static_cast<std::uint32_t>(m_settings.groupSize), m_settings.margin, m_pool,
                           m_scratch);
             return;
@@ -164,11 +182,12 @@ private:
         }
     }
 
-    /// The CPU path: kept spatial orders for the meshes whose surviving triangles are enough of them for their box
-    /// trees to follow the order (BoxTree::kOrderedFraction) instead of sorting.
+    /// The CPU path: kept spatial orders for the meshes (without a whole tree) whose surviving triangles are enough
+    /// of them for their box trees to follow the order (BoxTree::kOrderedFraction) instead of sorting.
     std::size_t assignTreeOrders(const std::vector<Object>& objects, FrameState& frame) {
         return m_orders.assign(objects, frame, [&](std::uint32_t o) {
-            return frame.surviving[o].size() * BoxTree::kOrderedFraction >= frame.meshOf(o).triangles.size();
+            return !frame.hasWholeTree(o) &&
+                   frame.surviving[o].size() * BoxTree::kOrderedFraction >= frame.meshOf(o).triangles.size();
         }, m_pool);
     }
 
@@ -208,6 +227,7 @@ private:
     // What carries over between frames.
     StaticMeshCache m_statics;
     TriangleOrders m_orders;  ///< spatial orders of the meshes, kept between frames
+    MeshTrees m_trees;        ///< the CPU path's trees of whole meshes (static meshes' are kept in m_statics)
     LevelPipelines m_levels;  ///< holds the device's copy of the geometry and its resident region
     AutoLevels m_auto;        ///< GpuLevels::Auto: the timing trial and its decision
     AutoLevels::Path m_autoPath = AutoLevels::Path::Cpu;  ///< the path AutoLevels chose for this frame

@@ -1,8 +1,9 @@
-// What the culler keeps of static meshes (Object::staticKey) between frames: their validation and triangle boxes
-// (StaticMeshCache), and their place in the device's resident region, sent once (ResidentRegion).
+// What the culler keeps of static meshes (Object::staticKey) between frames: their validation, triangle boxes and box
+// tree (StaticMeshCache), and their place in the device's resident region, sent once (ResidentRegion).
 #pragma once
 
 #include "FrameObjects.h"
+#include "exact/BoxTree.h"
 #include "cullide/Object.h"
 #include "cullide/Result.h"
 
@@ -27,6 +28,8 @@ struct StaticEntry {
     std::string error;  ///< the rejection message, if it was rejected
     bool boxesReady = false;
     std::vector<Aabb> boxes;  ///< every triangle's world box, inflated by margin / 2 (when boxesReady)
+    bool treeReady = false;
+    BoxTree tree;  ///< the CPU path's tree of every triangle (MeshTrees; when treeReady)
     std::uint64_t lastFrame = 0;
     std::uint64_t regionEpoch = 0;  ///< == ResidentRegion::epoch(): its triangles are in the device's region
     std::uint32_t regionBaseTriangle = 0;

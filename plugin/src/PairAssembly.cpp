@@ -12,10 +12,12 @@ void PairAssembly::run(const FrameState& frame, const Settings& settings, ExactS
         pair.a = a;
         pair.b = b;
         if (frame.isMesh(a) && frame.isMesh(b)) {
-            if (frame.surviving[a].empty() || frame.surviving[b].empty()) continue;
+            // A mesh with a whole tree has no survivors yet (MeshTrees::listPairedTriangles): its tree decides.
+            auto none = [&](std::uint32_t o) { return !frame.hasWholeTree(o) && frame.surviving[o].empty(); };
+            if (none(a) || none(b)) continue;
             pair.hasTriangles = true;
             jobs.push_back({a, b, &frame.surviving[a], &frame.surviving[b], frame.boxesOf[a], frame.boxesOf[b],
-                            frame.order[a], frame.order[b]});
+                            frame.order[a], frame.order[b], frame.tree[a], frame.tree[b]});
             jobPair.push_back(result.pairs.size());
         } else if (frame.isMesh(a) || frame.isMesh(b)) {
             const std::uint32_t mesh = frame.isMesh(a) ? a : b;
@@ -23,7 +25,8 @@ void PairAssembly::run(const FrameState& frame, const Settings& settings, ExactS
             if (!frame.gpuLevels) {
                 // The mesh's surviving triangles include every one whose box overlaps this partner's: its tree
                 // answers in O(log n) (a landscape under hundreds of bodies).
-                boxJobs.push_back({&frame.surviving[mesh], frame.boxesOf[mesh], box, frame.order[mesh]});
+                boxJobs.push_back(
+                    {&frame.surviving[mesh], frame.boxesOf[mesh], box, frame.order[mesh], frame.tree[mesh]});
                 boxJobPair.push_back(result.pairs.size());
             } else if (!meshTouchesBox(frame.meshOf(mesh), box, settings.margin)) {  // the levels prune survivors
                 continue;

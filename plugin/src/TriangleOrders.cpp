@@ -54,19 +54,22 @@ bool TriangleOrders::current(const Entry& e, const Object& object) const {
     return object.staticKey != 0 || m_frame < e.dueFrame;
 }
 
-std::size_t TriangleOrders::assign(const std::vector<Object>& objects, FrameState& frame,
-                                   const std::function<bool(std::uint32_t)>& wanted, TaskPool& pool) {
+void TriangleOrders::beginFrame(std::size_t objectCount, FrameState& frame) {
     ++m_frame;
     for (auto it = m_entries.begin(); it != m_entries.end();)
         it = m_frame - it->second.lastFrame > kKeepFrames ? m_entries.erase(it) : std::next(it);
-    frame.order.assign(objects.size(), nullptr);
+    frame.order.assign(objectCount, nullptr);
+}
+
+std::size_t TriangleOrders::assign(const std::vector<Object>& objects, FrameState& frame,
+                                   const std::function<bool(std::uint32_t)>& wanted, TaskPool& pool) {
     struct Due {
         const TriangleMesh* mesh;
         Entry* entry;
     };
     std::vector<Due> due;  // meshes ordered now, each once
     for (std::uint32_t o = 0; o < objects.size(); ++o) {
-        if (!frame.isActiveMesh(o) || !wanted(o)) continue;
+        if (!frame.isActiveMesh(o) || frame.order[o] != nullptr || !wanted(o)) continue;
         const Object& object = objects[o];
         const auto [it, added] = m_entries.try_emplace(object.mesh);
         Entry& e = it->second;

@@ -28,8 +28,12 @@ public:
     /// Meshes with fewer triangles are ordered one per worker; larger ones one after another on every worker.
     static constexpr std::size_t kSpreadTriangles = 16384;
 
-    /// Starts a frame (call once per frame): drops unused orders, and sets frame.order[o] for each active mesh o
-    /// with wanted(o) to its kept order, computed now when it is missing or due (null for every other object).
+    /// Starts a frame (call once per frame, before assign): drops orders unused for kKeepFrames frames and clears
+    /// frame.order (one null entry per object).
+    void beginFrame(std::size_t objectCount, FrameState& frame);
+
+    /// Sets frame.order[o] for each active mesh o with wanted(o) to its kept order, computed now when it is missing
+    /// or due; other entries are left as they are (assign may run more than once a frame, for different meshes).
     /// Orders are kept by the caller's mesh, objects[o].mesh (instances of one mesh share one order; a transformed
     /// object's order is that of its mesh, which the transform does not change), and recomputed when its vertex or
     /// triangle count, staticKey or version changes.

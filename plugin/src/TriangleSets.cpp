@@ -28,7 +28,7 @@ void assignBoxStorage(FrameState& frame, TriangleScratch& scratch) {
     frame.boxesOf.assign(n, nullptr);
     scratch.needBoxes.assign(n, 0);
     for (std::uint32_t o = 0; o < n; ++o) {
-        if (!frame.isActiveMesh(o)) continue;
+        if (!frame.isActiveMesh(o) || frame.hasWholeTree(o)) continue;  // a whole tree holds its own boxes
         const std::size_t triangles = frame.meshOf(o).triangles.size();
         StaticEntry* e = frame.statics.entry[o];
         if (e != nullptr) {
@@ -125,12 +125,13 @@ void collectDirect(FrameState& frame, std::uint32_t groupSize, double margin, Ta
     const std::uint32_t k = groupSize;
     const std::size_t n = frame.valid.size();
     // Ranges of whole groups (the many-partner branch tests groups of k), enough of them for every worker.
+    // Meshes with a whole tree have their survivors already (MeshTrees).
+    auto take = [&](std::uint32_t o) { return frame.isActiveMesh(o) && !frame.hasWholeTree(o); };
     std::size_t triangles = 0;
     for (std::uint32_t o = 0; o < n; ++o)
-        if (frame.isActiveMesh(o)) triangles += frame.meshOf(o).triangles.size();
+        if (take(o)) triangles += frame.meshOf(o).triangles.size();
     const auto range = static_cast<std::uint32_t>(chunkFor(&pool, triangles, 1024, 8192));
-    splitIntoRanges(frame, [&](std::uint32_t o) { return frame.isActiveMesh(o); },
-                    k * std::max<std::uint32_t>(1, range / k), scratch.ranges);
+    splitIntoRanges(frame, take, k * std::max<std::uint32_t>(1, range / k), scratch.ranges);
     if (scratch.rangeKept.size() < scratch.ranges.size()) scratch.rangeKept.resize(scratch.ranges.size());
     // The union of each object's partners' boxes: one test rejects the triangles far from all of them.
     scratch.partnerUnion.assign(n, Aabb{});

@@ -188,6 +188,8 @@ nlohmann::ordered_json statsToJson(const cullide::Stats& s) {
     j["exact_tests"] = s.exactTests;
     j["exact_trees_refit"] = s.exactTreesRefit;
     j["exact_trees_sorted"] = s.exactTreesSorted;
+    j["exact_trees_whole"] = s.exactTreesWhole;
+    j["exact_trees_kept"] = s.exactTreesKept;
     j["mesh_orders_computed"] = s.meshOrdersComputed;
     j["intersecting_triangle_pairs"] = s.intersectingTrianglePairs;
     j["draws"] = s.draws;

@@ -124,7 +124,8 @@ TEST(NoGl, ALargePairsTrianglesAreExactAndSortedOnAnyThreadCount) {
 TEST(NoGl, KeptSpatialOrdersOnlyChangeSpeed) {
     // A rigid sphere (a transform) turning inside a static torus (staticKey), and a soup whose triangles are shuffled
     // in place every frame (the same mesh and counts: its kept order is stale every frame). The exact stage's trees
-    // follow the kept orders (refits); every frame's pairs must still be the reference's.
+    // follow the kept orders (refits, or whole-mesh trees built in the order); every frame's pairs must still be the
+    // reference's.
     const TriangleMesh sphere = scenes::makeSphere(0.5, 40, 20);
     const TriangleMesh torus = scenes::makeTorus(1.0, 0.4, 60, 30);
     TriangleMesh soup = randomSoups(17, 1, 600, 0.8)[0];
@@ -133,7 +134,7 @@ TEST(NoGl, KeptSpatialOrdersOnlyChangeSpeed) {
     std::unique_ptr<Culler> culler = createGpuCuller(withoutDevice(GpuLevels::Never));
     std::unique_ptr<Culler> reference = createReferenceCuller(withoutDevice(GpuLevels::Never));
     constexpr int kFrames = 40;
-    std::size_t refits = 0, orders = 0, expected = 0;
+    std::size_t refits = 0, orders = 0, expected = 0, kept = 0;
     for (int f = 0; f < kFrames; ++f) {
         Transform t;
         t.linear = Eigen::AngleAxisd(0.07 * f, Vec3(0.3, 0.2, 1.0).normalized()).toRotationMatrix();
@@ -153,11 +154,13 @@ TEST(NoGl, KeptSpatialOrdersOnlyChangeSpeed) {
         ASSERT_EQ(c.missed, 0u) << "frame " << f << ": " << c.firstMissed;
         ASSERT_EQ(c.spurious, 0u) << "frame " << f;
         expected += c.expected;
-        refits += got.stats.exactTreesRefit;
+        refits += got.stats.exactTreesRefit + got.stats.exactTreesWhole;
         orders += got.stats.meshOrdersComputed;
+        kept += got.stats.exactTreesKept;
     }
     EXPECT_GT(expected, 100u * kFrames) << "the scene must give pairs every frame";
-    EXPECT_GE(refits, 2u * kFrames) << "the sphere's and the soup's trees follow their kept orders";
+    EXPECT_GE(refits, 2u * kFrames + 1) << "the sphere's and the soup's trees follow their kept orders";
+    EXPECT_EQ(kept, kFrames - 1u) << "the static torus's tree is built once";
     // Three meshes, each recomputed at most every TriangleOrders::kRefreshFrames frames after a staggered first one
     // (the static torus only once).
     EXPECT_LE(orders, 3u * (1 + kFrames / 16));

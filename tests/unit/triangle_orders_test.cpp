@@ -19,6 +19,14 @@ FrameState activeFrame(std::size_t objects) {
     return frame;
 }
 
+/// A new frame of `orders` for `objects`, with the orders of the meshes for which wanted(o) holds.
+template <typename Wanted>
+std::size_t nextFrame(TriangleOrders& orders, const std::vector<Object>& objects, FrameState& frame,
+                      const Wanted& wanted, TaskPool& pool) {
+    orders.beginFrame(objects.size(), frame);
+    return orders.assign(objects, frame, wanted, pool);
+}
+
 /// `n` separate triangles along x, listed in a scrambled order.
 TriangleMesh triangleRow(std::uint32_t n) {
     TriangleMesh mesh;
@@ -64,14 +72,14 @@ TEST(TriangleOrders, KeptBetweenFramesAndSharedByInstances) {
     TriangleOrders orders;
     FrameState frame = activeFrame(objects.size());
     auto all = [](std::uint32_t) { return true; };
-    orders.assign(objects, frame, all, pool);
+    nextFrame(orders, objects, frame, all, pool);
     EXPECT_EQ(orders.computed(), 2u);
     ASSERT_NE(frame.order[0], nullptr);
     EXPECT_EQ(frame.order[0], frame.order[1]);
     std::vector<std::uint32_t> expected;
     spatialOrder(sphere, expected);
     EXPECT_EQ(*frame.order[0], expected);
-    orders.assign(objects, frame, all, pool);
+    nextFrame(orders, objects, frame, all, pool);
     EXPECT_EQ(orders.computed(), 2u);  // the same meshes: nothing recomputed
     EXPECT_EQ(*frame.order[0], expected);
 }
@@ -90,7 +98,7 @@ TEST(TriangleOrders, OnlyForActiveMeshesThatAreWanted) {
     frame.valid[3].isMesh = false;
     TaskPool pool(2);
     TriangleOrders orders;
-    orders.assign(objects, frame, [](std::uint32_t o) { return o != 2; }, pool);
+    nextFrame(orders, objects, frame, [](std::uint32_t o) { return o != 2; }, pool);
     EXPECT_NE(frame.order[0], nullptr);
     EXPECT_EQ(frame.order[1], nullptr);  // not active
     EXPECT_EQ(frame.order[2], nullptr);  // not wanted
@@ -113,12 +121,12 @@ TEST(TriangleOrders, RecomputedWhenTheMeshMayHaveChanged) {
     auto framesUntilRecomputed = [&](std::size_t limit) {
         const std::uint64_t before = orders.computed();
         for (std::size_t f = 1; f <= limit; ++f) {
-            orders.assign(objects, frame, all, pool);
+            nextFrame(orders, objects, frame, all, pool);
             if (orders.computed() != before) return f;
         }
         return limit + 1;
     };
-    orders.assign(objects, frame, all, pool);
+    nextFrame(orders, objects, frame, all, pool);
     // Without a staticKey: within two refresh periods (the first one is staggered), then every period.
     objects.pop_back();
     frame = activeFrame(1);
@@ -138,6 +146,27 @@ TEST(TriangleOrders, RecomputedWhenTheMeshMayHaveChanged) {
     EXPECT_EQ(framesUntilRecomputed(1), 1u);
 }
 
+TEST(TriangleOrders, AssignedTwiceInAFrameForDifferentMeshes) {
+    // The CPU path asks for the whole trees' orders first, then for the survivors' trees: both stay set, and a mesh
+    // asked for twice is not ordered twice.
+    const TriangleMesh a = triangleRow(10);
+    const TriangleMesh b = triangleRow(20);
+    std::vector<Object> objects(2);
+    objects[0].mesh = &a;
+    objects[1].mesh = &b;
+    FrameState frame = activeFrame(2);
+    TaskPool pool(1);
+    TriangleOrders orders;
+    orders.beginFrame(objects.size(), frame);
+    EXPECT_EQ(orders.assign(objects, frame, [](std::uint32_t o) { return o == 0; }, pool), 1u);
+    EXPECT_EQ(orders.assign(objects, frame, [](std::uint32_t) { return true; }, pool), 1u);
+    ASSERT_NE(frame.order[0], nullptr);
+    ASSERT_NE(frame.order[1], nullptr);
+    EXPECT_EQ(frame.order[1]->size(), b.triangles.size());
+    orders.beginFrame(objects.size(), frame);
+    EXPECT_EQ(frame.order[0], nullptr) << "a new frame starts without orders";
+}
+
 TEST(TriangleOrders, UnusedOrdersAreDropped) {
     const TriangleMesh a = triangleRow(10);
     const TriangleMesh b = triangleRow(20);
@@ -147,10 +176,10 @@ TEST(TriangleOrders, UnusedOrdersAreDropped) {
     FrameState frame = activeFrame(2);
     TaskPool pool(1);
     TriangleOrders orders;
-    orders.assign(objects, frame, [](std::uint32_t) { return true; }, pool);
+    nextFrame(orders, objects, frame, [](std::uint32_t) { return true; }, pool);
     EXPECT_EQ(orders.size(), 2u);
     for (std::uint64_t f = 0; f <= TriangleOrders::kKeepFrames; ++f)
-        orders.assign(objects, frame, [](std::uint32_t o) { return o == 0; }, pool);
+        nextFrame(orders, objects, frame, [](std::uint32_t o) { return o == 0; }, pool);
     EXPECT_EQ(orders.size(), 1u);
 }
 

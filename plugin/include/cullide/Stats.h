@@ -58,6 +58,11 @@ struct Stats {
     /// between frames (a refit, no sort: when the survivors are at least an eighth of the mesh), or sorted.
     std::size_t exactTreesRefit = 0;
     std::size_t exactTreesSorted = 0;
+    /// The CPU path's box trees of all of a mesh's triangles (in place of the two above for that mesh): built this
+    /// frame straight from the vertices (a mesh lying mostly near its partners), or kept from an earlier frame (a
+    /// static mesh, Object::staticKey: built once).
+    std::size_t exactTreesWhole = 0;
+    std::size_t exactTreesKept = 0;
     /// Spatial orders of whole meshes computed this frame (kept between frames; recomputed every 16 frames for
     /// meshes without Object::staticKey, and when a mesh's counts, key or version change).
     std::size_t meshOrdersComputed = 0;

@@ -1,6 +1,7 @@
 #include "BoxTree.h"
 
 #include "FloatRounding.h"
+#include "FrameObjects.h"
 #include "KeptCapacity.h"
 #include "Morton.h"
 #include "PoolOrHere.h"
@@ -27,6 +28,19 @@ void clearSlot(BoxTree::Block& block, std::uint32_t slot) {
     }
 }
 
+/// Leaf i: its double box and, in its block's slot, the float box around it.
+inline void setLeaf(Aabb* leafBox, BoxTree::Block* blocks, std::size_t i, const Vec3& lo, const Vec3& hi) {
+    Aabb& box = leafBox[i];
+    BoxTree::Block& block = blocks[i / BoxTree::kFanout];
+    const std::size_t slot = i % BoxTree::kFanout;
+    for (int k = 0; k < 3; ++k) {
+        box.min[k] = lo[k];
+        box.max[k] = hi[k];
+        block.lo[k][slot] = floatBelow(lo[k]);
+        block.hi[k][slot] = floatAbove(hi[k]);
+    }
+}
+
 std::uint32_t blocksFor(std::size_t nodes) {
     return static_cast<std::uint32_t>((nodes + BoxTree::kFanout - 1) / BoxTree::kFanout);
 }
@@ -43,19 +57,80 @@ std::size_t chunkCount(std::size_t n, std::size_t chunk) { return (n + chunk - 1
 void BoxTree::build(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles, TaskPool* pool,
                     const std::vector<std::uint32_t>* order) {
     const std::size_t n = triangles.size();
-    m_boxes = &boxes;
     resizeKeeping(m_leafTriangle, n);
     m_levelCount = 0;
     m_followedOrder = false;
     if (n == 0) return;
     m_followedOrder = canFollow(triangles, order, pool) && leavesInOrder(triangles, *order, pool);
     if (!m_followedOrder) sortLeaves(boxes, triangles, pool);
-    fillLeaves(pool);
+    fillLeaves(boxes, pool);
+    buildLevels(pool);
+}
+
+void BoxTree::buildWhole(const TriangleMesh& mesh, const std::vector<std::uint32_t>& order, double inflate,
+                         TaskPool* pool) {
+    const std::size_t n = order.size();
+    assignKeeping(m_leafTriangle, order.begin(), order.end());
+    m_levelCount = 0;
+    m_followedOrder = true;
+    if (n == 0) return;
+    resizeKeeping(m_leafBox, n);
+    if (m_levels.empty()) m_levels.emplace_back();
+    resizeKeeping(m_levels[0], blocksFor(n));
+    const std::uint32_t* leafTriangle = m_leafTriangle.data();
+    const TriangleIndices* triangles = mesh.triangles.data();
+    const Vec3* vertices = mesh.vertices.data();
+    Aabb* leafBox = m_leafBox.data();
+    Block* blocks = m_levels[0].data();
+    parallelForOrHere(pool, blocksFor(n), buildChunk(pool, n) / kFanout, [&](std::size_t begin, std::size_t end) {
+        // The leaves follow a spatial order: their triangles, and those triangles' vertices, are scattered in
+        // memory. Prefetch each triangle's indices 16 leaves ahead and its vertices 8 ahead.
+        constexpr std::size_t kIndicesAhead = 16, kVerticesAhead = 8;
+        const std::size_t last = std::min(n, end * kFanout);
+        for (std::size_t i = begin * kFanout; i < last; ++i) {
+            if (i + kIndicesAhead < last) __builtin_prefetch(&triangles[leafTriangle[i + kIndicesAhead]]);
+            if (i + kVerticesAhead < last) {
+                const TriangleIndices& ahead = triangles[leafTriangle[i + kVerticesAhead]];
+                for (int k = 0; k < 3; ++k) __builtin_prefetch(&vertices[ahead[k]]);
+            }
+            const TriangleIndices& tri = triangles[leafTriangle[i]];
+            const Vec3& p = vertices[tri[0]];
+            const Vec3& q = vertices[tri[1]];
+            const Vec3& r = vertices[tri[2]];
+            Vec3 lo, hi;
+            for (int k = 0; k < 3; ++k) {
+                lo[k] = std::min(std::min(p[k], q[k]), r[k]) - inflate;  // as triangleBounds
+                hi[k] = std::max(std::max(p[k], q[k]), r[k]) + inflate;
+            }
+            setLeaf(leafBox, blocks, i, lo, hi);
+        }
+    });
+    finishLeaves(n);
     buildLevels(pool);
 }
 
 std::size_t BoxTree::buildParallelism(const TaskPool& pool, std::size_t leaves) {
     return std::min<std::size_t>(pool.size(), chunkCount(leaves, buildChunk(&pool, leaves)));
+}
+
+void BoxTree::buildMany(TaskPool& pool, std::size_t count, const std::function<std::size_t(std::size_t)>& leaves,
+                        const std::function<void(std::size_t, TaskPool*)>& build) {
+    std::size_t total = 0, largest = 0;
+    double spreadSpan = 0.0;
+    for (std::size_t i = 0; i < count; ++i) {
+        const std::size_t n = leaves(i);
+        total += n;
+        largest = std::max(largest, n);
+        spreadSpan += static_cast<double>(n) / static_cast<double>(std::max<std::size_t>(1, buildParallelism(pool, n)));
+    }
+    const double taskSpan = std::max(static_cast<double>(largest), static_cast<double>(total) / pool.size());
+    if (count < pool.size() && spreadSpan < taskSpan) {
+        for (std::size_t i = 0; i < count; ++i) build(i, &pool);
+        return;
+    }
+    pool.parallelFor(count, 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) build(i, nullptr);
+    });
 }
 
 void BoxTree::sortLeaves(const std::vector<Aabb>& boxes, const std::vector<std::uint32_t>& triangles,
@@ -164,31 +239,31 @@ bool BoxTree::leavesInOrder(const std::vector<std::uint32_t>& triangles, const s
     return true;
 }
 
-void BoxTree::fillLeaves(TaskPool* pool) {
+void BoxTree::finishLeaves(std::size_t n) {
+    for (auto slot = static_cast<std::uint32_t>(n % kFanout); slot != 0 && slot < kFanout; ++slot)
+        clearSlot(m_levels[0].back(), slot);
+    m_levelCount = 1;
+    m_nodeCount.assign(1, n);
+}
+
+void BoxTree::fillLeaves(const std::vector<Aabb>& boxes, TaskPool* pool) {
     const std::size_t n = m_leafTriangle.size();
+    resizeKeeping(m_leafBox, n);
     if (m_levels.empty()) m_levels.emplace_back();
-    std::vector<Block>& leaves = m_levels[0];
-    resizeKeeping(leaves, blocksFor(n));
-    const Aabb* box = m_boxes->data();
+    resizeKeeping(m_levels[0], blocksFor(n));
+    const Aabb* box = boxes.data();
     const std::uint32_t* leafTriangle = m_leafTriangle.data();
-    Block* blocks = leaves.data();
-    parallelForOrHere(pool, leaves.size(), buildChunk(pool, n) / kFanout, [&](std::size_t begin, std::size_t end) {
+    Aabb* leafBox = m_leafBox.data();
+    Block* blocks = m_levels[0].data();
+    parallelForOrHere(pool, blocksFor(n), buildChunk(pool, n) / kFanout, [&](std::size_t begin, std::size_t end) {
         constexpr std::size_t kAhead = 16;  // leaves follow a spatial order: their boxes are scattered in memory
         for (std::size_t i = begin * kFanout, last = std::min(n, end * kFanout); i < last; ++i) {
             if (i + kAhead < last) __builtin_prefetch(&box[leafTriangle[i + kAhead]]);
             const Aabb& b = box[leafTriangle[i]];
-            Block& block = blocks[i / kFanout];
-            const auto slot = static_cast<std::uint32_t>(i % kFanout);
-            for (int k = 0; k < 3; ++k) {
-                block.lo[k][slot] = floatBelow(b.min[k]);
-                block.hi[k][slot] = floatAbove(b.max[k]);
-            }
+            setLeaf(leafBox, blocks, i, b.min, b.max);
         }
     });
-    for (auto slot = static_cast<std::uint32_t>(n % kFanout); slot != 0 && slot < kFanout; ++slot)
-        clearSlot(leaves.back(), slot);
-    m_levelCount = 1;
-    m_nodeCount.assign(1, n);
+    finishLeaves(n);
 }
 
 void BoxTree::buildLevels(TaskPool* pool) {
@@ -259,7 +334,7 @@ unsigned BoxTree::childMask(std::uint32_t level, std::uint32_t node, const Float
 }
 
 bool BoxTree::leavesOverlap(std::uint32_t leaf, const BoxTree& other, std::uint32_t otherLeaf) const {
-    return (*m_boxes)[m_leafTriangle[leaf]].overlaps((*other.m_boxes)[other.m_leafTriangle[otherLeaf]]);
+    return m_leafBox[leaf].overlaps(other.m_leafBox[otherLeaf]);
 }
 
 void BoxTree::descend(const BoxTree& a, const BoxTree& b, const NodePair& p, std::vector<NodePair>& pending,
@@ -322,7 +397,7 @@ bool BoxTree::anyOverlap(const Aabb& query, std::vector<NodePair>& stack) const 
         const NodePair p = stack.back();
         stack.pop_back();
         if (p.levelA == 0) {
-            if ((*m_boxes)[m_leafTriangle[p.nodeA]].overlaps(query)) return true;
+            if (m_leafBox[p.nodeA].overlaps(query)) return true;
             continue;
         }
         unsigned mask = childMask(p.levelA, p.nodeA, q);

@@ -1,4 +1,4 @@
-// A flat box tree over a subset of one mesh's triangles, rebuilt every frame in O(n), and the simultaneous descent
+// A flat box tree over a subset of one mesh's triangles (or all of them), built in O(n), and the simultaneous descent
 // of two such trees that yields every triangle pair whose boxes overlap, exactly once.
 #pragma once
 
@@ -7,6 +7,7 @@
 #include "cullide/Types.h"
 
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 namespace cullide {
@@ -39,7 +40,7 @@ public:
     };
 
     /// Leaves: `boxes[t]` for each t of `triangles`, in Morton order of their centres, ties in list order (the
-    /// order only affects speed, never the result). `boxes` must stay alive and unchanged until the last query.
+    /// order only affects speed, never the result). The tree keeps its own copy of the leaves' boxes.
     /// Boxes must be finite. With `pool`, each step of the build runs on its workers in chunks: the same tree
     /// for any number of workers (for large lists; a small one is cheaper built on one thread). `pool` must not be
     /// running a parallelFor already (it is not re-entrant).
@@ -50,14 +51,28 @@ public:
                const std::vector<std::uint32_t>* order = nullptr);
     /// A list shorter than 1/kOrderedFraction of the mesh's order is sorted: walking the whole order would cost more.
     static constexpr std::size_t kOrderedFraction = 8;
+    /// A tree of every triangle of `mesh`, leaves in `order` (a permutation of the mesh's triangles: TriangleOrders),
+    /// each leaf's box its triangle's inflated by `inflate`, computed here from the vertices (no box per triangle is
+    /// stored anywhere else). The mesh must be valid (indices in range, the triangles' coordinates finite). With
+    /// `pool`, as build(). The same pairs as build() over every triangle's box.
+    void buildWhole(const TriangleMesh& mesh, const std::vector<std::uint32_t>& order, double inflate,
+                    TaskPool* pool = nullptr);
     /// Whether the last build followed the order it was given.
     bool followedOrder() const { return m_followedOrder; }
     /// How many of `pool`'s workers a build of `leaves` leaves keeps busy (its chunks, at most the workers).
     static std::size_t buildParallelism(const TaskPool& pool, std::size_t leaves);
+    /// Builds `count` trees on `pool`: build(i, p) builds tree i, on p's workers or (p null) on the calling thread.
+    /// Either one tree per task, several at once, or (fewer trees than workers: one or two large meshes on a
+    /// many-core machine) one after another, each on every worker, when that ends sooner by an estimate in leaves:
+    /// the largest tree for one tree per task, each tree's leaves over the workers its chunks keep busy for the
+    /// other way. leaves(i) is tree i's leaf count.
+    static void buildMany(TaskPool& pool, std::size_t count, const std::function<std::size_t(std::size_t)>& leaves,
+                          const std::function<void(std::size_t, TaskPool*)>& build);
 
     bool empty() const { return m_leafTriangle.empty(); }
     /// The mesh triangle of each leaf, in leaf order.
     const std::vector<std::uint32_t>& leafTriangles() const { return m_leafTriangle; }
+
     std::size_t size() const { return m_leafTriangle.size(); }
 
     /// The overlapping node pairs of `a` and `b` after descending breadth first until there are at least `target`
@@ -82,7 +97,9 @@ private:
                    TaskPool* pool) const;
     bool leavesInOrder(const std::vector<std::uint32_t>& triangles, const std::vector<std::uint32_t>& order,
                        TaskPool* pool);
-    void fillLeaves(TaskPool* pool);
+    void fillLeaves(const std::vector<Aabb>& boxes, TaskPool* pool);
+    /// After the leaves' slots are written: the last block's unused slots emptied, the leaf level counted.
+    void finishLeaves(std::size_t n);
     void buildLevels(TaskPool* pool);
     FloatBox box(std::uint32_t level, std::uint32_t node) const;
     /// Bit i set when child i of `node` (at `level` > 0) overlaps `q`.
@@ -96,7 +113,7 @@ private:
     std::uint32_t m_levelCount = 0;           ///< levels in use; the top one holds the root alone; more are spare
     std::vector<std::size_t> m_nodeCount;      ///< nodes per level in use
     std::vector<std::uint32_t> m_leafTriangle;  ///< mesh triangle of each leaf
-    const std::vector<Aabb>* m_boxes = nullptr;  ///< the double boxes, by triangle
+    std::vector<Aabb> m_leafBox;                ///< the double box of each leaf, in leaf order
     std::vector<std::uint64_t> m_keys;           ///< build scratch: Morton code << 32 | position
     std::vector<std::uint64_t> m_keysTmp;
     std::vector<std::uint8_t> m_inList;          ///< build scratch, by triangle: 1 while in the list (then 0 again)
