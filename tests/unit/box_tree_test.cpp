@@ -2,7 +2,10 @@
 // whatever the split of the descent, for soups, duplicates, degenerate and huge boxes; and the outward float
 // rounding it relies on.
 #include "../../plugin/src/FloatRounding.h"
+#include "../../plugin/src/FrameObjects.h"
+#include "../../plugin/src/TriangleOrders.h"
 #include "../../plugin/src/exact/BoxTree.h"
+#include "cullide/scenes/Procedural.h"
 
 #include <gtest/gtest.h>
 
@@ -361,6 +364,54 @@ TEST(BoxTree, AnOrderThatCannotBeFollowedIsIgnored) {
             EXPECT_EQ(ta.leafTriangles(), sorted.leafTriangles()) << c.what;
             EXPECT_EQ(pairsOf(ta, tb), bruteForce(a, c.list, b, listB)) << c.what;
         }
+    }
+}
+
+TEST(BoxTree, AWholeMeshTreeIsTheTreeOfEveryTrianglesBoxInTheGivenOrder) {
+    // buildWhole computes its leaves' boxes from the vertices, inflated: the same pairs as a tree over every
+    // triangle's triangleBounds box must give (brute force), on any number of workers, with the order as its leaves.
+    // Random triangles near the sphere's surface meet it, some only through the inflation.
+    TriangleMesh sphere = scenes::makeSphere(1.0, 90, 45);
+    std::mt19937 rng(21);
+    std::uniform_real_distribution<double> jitter(-0.002, 0.002);
+    for (Vec3& v : sphere.vertices) v += Vec3(jitter(rng), jitter(rng), jitter(rng));
+    constexpr double kInflate = 0.01;
+    std::vector<Aabb> sphereBoxes(sphere.triangles.size()), sphereTight(sphere.triangles.size());
+    for (std::uint32_t t = 0; t < sphere.triangles.size(); ++t) {
+        sphereBoxes[t] = triangleBounds(sphere, t, kInflate);
+        sphereTight[t] = triangleBounds(sphere, t);
+    }
+    std::vector<Aabb> soup(3000);
+    std::normal_distribution<double> gauss;
+    for (Aabb& box : soup) {
+        const Vec3 at = Vec3(gauss(rng), gauss(rng), gauss(rng)).normalized() * (1.0 + 0.03 * gauss(rng));
+        box = {at, at + Vec3::Constant(0.004)};
+    }
+    std::vector<std::uint32_t> all(sphere.triangles.size()), allSoup(soup.size());
+    std::iota(all.begin(), all.end(), 0u);
+    std::iota(allSoup.begin(), allSoup.end(), 0u);
+    const auto expected = bruteForce(sphereBoxes, all, soup, allSoup);
+    ASSERT_GT(expected.size(), bruteForce(sphereTight, all, soup, allSoup).size()) << "pairs only the inflation makes";
+    std::vector<std::uint32_t> order;
+    spatialOrder(sphere, order);
+    BoxTree soupTree;
+    soupTree.build(soup, allSoup);
+    TaskPool three(3);
+    for (TaskPool* pool : {static_cast<TaskPool*>(nullptr), &three}) {
+        BoxTree whole;
+        whole.buildWhole(sphere, order, kInflate, pool);
+        EXPECT_EQ(whole.leafTriangles(), order);
+        for (const std::size_t target : {1u, 64u, 4096u}) {
+            std::vector<BoxTree::NodePair> frontier, stack;
+            BoxTree::split(whole, soupTree, target, frontier);
+            std::vector<TrianglePair> got;
+            for (const BoxTree::NodePair& p : frontier) BoxTree::leafPairs(whole, soupTree, p, stack, got);
+            std::sort(got.begin(), got.end());
+            EXPECT_EQ(got, expected) << "target " << target;
+        }
+        std::vector<BoxTree::NodePair> stack;
+        EXPECT_TRUE(whole.anyOverlap(soup[expected.front().b], stack));
+        EXPECT_FALSE(whole.anyOverlap(Aabb{Vec3::Constant(-0.1), Vec3::Constant(0.1)}, stack)) << "inside the shell";
     }
 }
 

@@ -167,6 +167,77 @@ TEST(NoGl, KeptSpatialOrdersOnlyChangeSpeed) {
     EXPECT_GE(orders, 2u);
 }
 
+TEST(NoGl, WholeMeshTreesMatchTheReference) {
+    // The CPU path's trees of whole meshes (MeshTrees), with a margin (their leaves are inflated like every box):
+    // - a static landscape (staticKey) under 24 spheres, its tree built once and kept, and built again when its
+    //   version changes (it is raised mid-run: a stale tree would miss and invent pairs);
+    // - a deforming torus around a sphere (its box mostly near its partner's): a tree from its vertices each frame;
+    // - an object whose box barely meets its partner's: no whole tree, the pre-pass and a tree of its survivors.
+    // Every frame's pairs must be the reference's, and every triangle of a pair in the PCS (compare()).
+    TriangleMesh landscape = scenes::makeTorus(4.0, 0.3, 120, 24);  // a ring of rock, flattened below
+    for (Vec3& v : landscape.vertices) v.z() *= 0.3;  // the ring lies in the xy plane: z is up
+    const TriangleMesh ball = scenes::makeSphere(0.2, 16, 8);
+    const TriangleMesh torusRest = scenes::makeTorus(0.6, 0.15, 48, 16);
+    TriangleMesh torus = torusRest;
+    const TriangleMesh far = scenes::makeSphere(0.3, 16, 8);
+    constexpr int kBalls = 24;
+    std::vector<Transform> poses(kBalls + 3);
+    Settings settings = withoutDevice(GpuLevels::Never);
+    settings.margin = 0.01;
+    std::unique_ptr<Culler> culler = createGpuCuller(settings);
+    std::unique_ptr<Culler> reference = createReferenceCuller(settings);
+    constexpr int kFrames = 24;
+    std::uint64_t version = 1;
+    std::size_t expected = 0, whole = 0, kept = 0, builtAgain = 0;
+    for (int f = 0; f < kFrames; ++f) {
+        if (f == kFrames / 2) {  // the landscape rises by a ball's radius: its kept tree is stale now
+            for (Vec3& v : landscape.vertices) v.z() += 0.2;
+            ++version;
+        }
+        std::vector<Object> objects(kBalls + 4);
+        objects[0].mesh = &landscape;
+        objects[0].staticKey = 7;
+        objects[0].version = version;
+        for (int i = 0; i < kBalls; ++i) {
+            const double angle = 6.2831853 * i / kBalls + 0.01 * f;
+            poses[i].translation = Vec3(4.0 * std::cos(angle), 4.0 * std::sin(angle), 0.12 + 0.004 * f);
+            objects[1 + i].mesh = &ball;
+            objects[1 + i].transform = &poses[i];
+        }
+        for (std::size_t k = 0; k < torus.vertices.size(); ++k) {
+            const Vec3& p = torusRest.vertices[k];
+            torus.vertices[k] = Vec3(p.x() * (1.0 + 0.05 * std::sin(0.3 * f + p.z())), p.y(), p.z()) +
+                                Vec3(20.0, 0.0, 0.0);
+        }
+        objects[kBalls + 1].mesh = &torus;
+        poses[kBalls].translation = Vec3(20.0 + 0.55 + 0.003 * f, 0.0, 0.0);
+        objects[kBalls + 2].mesh = &ball;
+        objects[kBalls + 2].transform = &poses[kBalls];
+        poses[kBalls + 1].translation = Vec3(-20.0, 0.0, 0.0);
+        poses[kBalls + 2].translation = Vec3(-20.0 + 0.59 - 0.002 * f, 0.0, 0.0);
+        objects[kBalls + 3].mesh = &far;
+        objects[kBalls + 3].transform = &poses[kBalls + 1];
+        objects.push_back(Object{});
+        objects.back().mesh = &far;
+        objects.back().transform = &poses[kBalls + 2];
+        Result want, got;
+        reference->run(objects, want);
+        culler->run(objects, got);
+        const Comparison c = compare(want, got);
+        ASSERT_EQ(c.missed, 0u) << "frame " << f << ": " << c.firstMissed;
+        ASSERT_EQ(c.spurious, 0u) << "frame " << f;
+        expected += c.expected;
+        whole += got.stats.exactTreesWhole;
+        kept += got.stats.exactTreesKept;
+        if (f == kFrames / 2) builtAgain = got.stats.exactTreesWhole;
+        EXPECT_GE(got.stats.exactTreesRefit + got.stats.exactTreesSorted, 1u) << "frame " << f << ": the far pair";
+    }
+    EXPECT_GT(expected, 50u * kFrames) << "the scene must give pairs every frame";
+    EXPECT_EQ(kept, kFrames - 2u) << "the landscape's tree, kept but for its two versions' first frames";
+    EXPECT_GE(builtAgain, 1u) << "the landscape's new version gets a new tree";
+    EXPECT_GE(whole, kFrames + 2u) << "the torus every frame, the landscape twice";
+}
+
 /// The notice lines ("cullide: ...") in captured standard error; lines of the EGL/Mesa libraries are not counted.
 std::size_t noticeLines(const std::string& text) {
     std::size_t lines = 0;
