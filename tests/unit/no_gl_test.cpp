@@ -121,6 +121,19 @@ TEST(NoGl, ALargePairsTrianglesAreExactAndSortedOnAnyThreadCount) {
     }
 }
 
+/// One frame of `objects` through both cullers: the culler's pairs must be the reference's, and every triangle of
+/// a pair in its PCS. Returns the reference's triangle pairs.
+std::size_t expectSameFrame(Culler& reference, Culler& culler, const std::vector<Object>& objects, Result& got,
+                            int frame) {
+    Result want;
+    reference.run(objects, want);
+    culler.run(objects, got);
+    const Comparison c = compare(want, got);
+    EXPECT_EQ(c.missed, 0u) << "frame " << frame << ": " << c.firstMissed;
+    EXPECT_EQ(c.spurious, 0u) << "frame " << frame;
+    return c.expected;
+}
+
 TEST(NoGl, KeptSpatialOrdersOnlyChangeSpeed) {
     // A rigid sphere (a transform) turning inside a static torus (staticKey), and a soup whose triangles are shuffled
     // in place every frame (the same mesh and counts: its kept order is stale every frame). The exact stage's trees
@@ -147,13 +160,8 @@ TEST(NoGl, KeptSpatialOrdersOnlyChangeSpeed) {
         objects[1].staticKey = 1;
         objects[1].version = 1;
         objects[2].mesh = &soup;
-        Result want, got;
-        reference->run(objects, want);
-        culler->run(objects, got);
-        const Comparison c = compare(want, got);
-        ASSERT_EQ(c.missed, 0u) << "frame " << f << ": " << c.firstMissed;
-        ASSERT_EQ(c.spurious, 0u) << "frame " << f;
-        expected += c.expected;
+        Result got;
+        expected += expectSameFrame(*reference, *culler, objects, got, f);
         refits += got.stats.exactTreesRefit + got.stats.exactTreesWhole;
         orders += got.stats.meshOrdersComputed;
         kept += got.stats.exactTreesKept;
@@ -220,13 +228,8 @@ TEST(NoGl, WholeMeshTreesMatchTheReference) {
         objects.push_back(Object{});
         objects.back().mesh = &far;
         objects.back().transform = &poses[kBalls + 2];
-        Result want, got;
-        reference->run(objects, want);
-        culler->run(objects, got);
-        const Comparison c = compare(want, got);
-        ASSERT_EQ(c.missed, 0u) << "frame " << f << ": " << c.firstMissed;
-        ASSERT_EQ(c.spurious, 0u) << "frame " << f;
-        expected += c.expected;
+        Result got;
+        expected += expectSameFrame(*reference, *culler, objects, got, f);
         whole += got.stats.exactTreesWhole;
         kept += got.stats.exactTreesKept;
         if (f == kFrames / 2) builtAgain = got.stats.exactTreesWhole;

@@ -5,7 +5,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <initializer_list>
 #include <numeric>
+#include <tuple>
 #include <vector>
 
 namespace cullide::test {
@@ -26,6 +28,29 @@ std::size_t nextFrame(TriangleOrders& orders, const std::vector<Object>& objects
     orders.beginFrame(objects.size(), frame);
     return orders.assign(objects, frame, wanted, pool);
 }
+
+/// One object per mesh, in world space.
+std::vector<Object> meshObjects(std::initializer_list<const TriangleMesh*> meshes) {
+    std::vector<Object> objects;
+    for (const TriangleMesh* mesh : meshes) {
+        objects.emplace_back();
+        objects.back().mesh = mesh;
+    }
+    return objects;
+}
+
+TriangleMesh triangleRow(std::uint32_t n);
+
+/// Two world-space row meshes in an active frame, with a cache of orders and a pool of one worker.
+struct TwoRows {
+    TriangleMesh a = triangleRow(10);
+    TriangleMesh b = triangleRow(20);
+    std::vector<Object> objects = meshObjects({&a, &b});
+    FrameState frame = activeFrame(2);
+    TaskPool pool{1};
+    TriangleOrders orders;
+    auto parts() { return std::tie(objects, frame, pool, orders); }  ///< references to each part
+};
 
 /// `n` separate triangles along x, listed in a scrambled order.
 TriangleMesh triangleRow(std::uint32_t n) {
@@ -149,33 +174,21 @@ TEST(TriangleOrders, RecomputedWhenTheMeshMayHaveChanged) {
 TEST(TriangleOrders, AssignedTwiceInAFrameForDifferentMeshes) {
     // The CPU path asks for the whole trees' orders first, then for the survivors' trees: both stay set, and a mesh
     // asked for twice is not ordered twice.
-    const TriangleMesh a = triangleRow(10);
-    const TriangleMesh b = triangleRow(20);
-    std::vector<Object> objects(2);
-    objects[0].mesh = &a;
-    objects[1].mesh = &b;
-    FrameState frame = activeFrame(2);
-    TaskPool pool(1);
-    TriangleOrders orders;
+    TwoRows rows;
+    auto [objects, frame, pool, orders] = rows.parts();  // references into rows
     orders.beginFrame(objects.size(), frame);
     EXPECT_EQ(orders.assign(objects, frame, [](std::uint32_t o) { return o == 0; }, pool), 1u);
     EXPECT_EQ(orders.assign(objects, frame, [](std::uint32_t) { return true; }, pool), 1u);
     ASSERT_NE(frame.order[0], nullptr);
     ASSERT_NE(frame.order[1], nullptr);
-    EXPECT_EQ(frame.order[1]->size(), b.triangles.size());
+    EXPECT_EQ(frame.order[1]->size(), rows.b.triangles.size());
     orders.beginFrame(objects.size(), frame);
     EXPECT_EQ(frame.order[0], nullptr) << "a new frame starts without orders";
 }
 
 TEST(TriangleOrders, UnusedOrdersAreDropped) {
-    const TriangleMesh a = triangleRow(10);
-    const TriangleMesh b = triangleRow(20);
-    std::vector<Object> objects(2);
-    objects[0].mesh = &a;
-    objects[1].mesh = &b;
-    FrameState frame = activeFrame(2);
-    TaskPool pool(1);
-    TriangleOrders orders;
+    TwoRows rows;
+    auto [objects, frame, pool, orders] = rows.parts();  // references into rows
     nextFrame(orders, objects, frame, [](std::uint32_t) { return true; }, pool);
     EXPECT_EQ(orders.size(), 2u);
     for (std::uint64_t f = 0; f <= TriangleOrders::kKeepFrames; ++f)
