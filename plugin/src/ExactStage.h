@@ -24,8 +24,8 @@ struct ExactJob {
     /// Optional: a spatial order of all of object a's triangles (TriangleOrders), which its box tree may follow.
     const std::vector<std::uint32_t>* orderA = nullptr;
     const std::vector<std::uint32_t>* orderB = nullptr;
-    /// Optional: a box tree of all of object a's triangles (MeshTrees), used instead of one over trianglesA (which
-    /// must then hold every triangle whose box overlaps object b's box: the tree's other leaves pair with nothing).
+    /// Optional: a box tree of all of object a's triangles (MeshTrees), used instead of one over trianglesA (then not
+    /// read). Its extra leaves change no pair: their boxes meet no partner's object box, so no partner triangle's.
     const BoxTree* treeA = nullptr;
     const BoxTree* treeB = nullptr;
 };
