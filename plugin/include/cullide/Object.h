@@ -24,9 +24,10 @@ struct Object {
     /// `version` changed by the caller whenever its vertices or triangles do. The culler keeps what it derives from
     /// such a mesh (its validation, its triangle boxes, its box tree: about 80 bytes per triangle) between frames and
     /// recomputes it only when (staticKey, version, vertex count, triangle count, transform) differ: changing the mesh
-    /// without changing `version` is an error (stale boxes can miss contacts). Entries unused for 240 frames are dropped. A key used by two objects of
-    /// one frame is cached for the first only. When GPU levels run, such a mesh is sent to the device once and
-    /// kept there while the scene stays around the same place (see docs/architecture.md).
+    /// without changing `version` is an error (stale boxes can miss contacts). Entries unused for 240 frames are
+    /// dropped. A key used by two objects of one frame is cached for the first only. When GPU levels run, such a mesh
+    /// is sent to the device once and kept there while the scene stays around the same place (see
+    /// docs/architecture.md).
     std::uint64_t staticKey = 0;
     std::uint64_t version = 0;
 };
