@@ -98,6 +98,8 @@ private:
     bool leavesInOrder(const std::vector<std::uint32_t>& triangles, const std::vector<std::uint32_t>& order,
                        TaskPool* pool);
     void fillLeaves(const std::vector<Aabb>& boxes, TaskPool* pool);
+    /// Storage for n leaves (their double boxes and float blocks), before their slots are written.
+    void startLeaves(std::size_t n);
     /// After the leaves' slots are written: the last block's unused slots emptied, the leaf level counted.
     void finishLeaves(std::size_t n);
     void buildLevels(TaskPool* pool);
