@@ -119,15 +119,13 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
     for (std::size_t j = 0; j < jobs.size(); ++j) totalLeaves += tree(jobListA[j]).size() + tree(jobListB[j]).size();
     const double perLeaf = 64.0 * m_pool.size() / static_cast<double>(std::max<std::size_t>(1, totalLeaves));
     std::vector<std::vector<BoxTree::NodePair>>& frontiers = m_scratch->frontiers;
-    if (frontiers.size() < jobs.size()) frontiers.resize(jobs.size());
-    m_pool.parallelFor(jobs.size(), 1, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t j = begin; j < end; ++j) {
-            const BoxTree& a = tree(jobListA[j]);
-            const BoxTree& b = tree(jobListB[j]);
-            const auto target = static_cast<std::size_t>(std::ceil(perLeaf * static_cast<double>(a.size() + b.size())));
-            BoxTree::split(a, b, target, frontiers[j]);
-        }
-    });
+    std::vector<BoxTree::SplitJob> splits(jobs.size());
+    for (std::size_t j = 0; j < jobs.size(); ++j) {
+        const BoxTree& a = tree(jobListA[j]);
+        const BoxTree& b = tree(jobListB[j]);
+        splits[j] = {&a, &b, static_cast<std::size_t>(std::ceil(perLeaf * static_cast<double>(a.size() + b.size())))};
+    }
+    BoxTree::splitMany(splits, &m_pool, frontiers);
     constexpr std::size_t kChunk = 16;  // node pairs per task
     std::vector<std::pair<std::size_t, std::size_t>> tasks;  // (job, first node pair)
     for (std::size_t j = 0; j < jobs.size(); ++j)

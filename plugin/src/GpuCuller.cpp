@@ -82,7 +82,7 @@ private:
         Timer exact;
         if (!frame.gpuLevels) stats.meshOrdersComputed += assignTreeOrders(objects, frame);
         m_assembly.run(frame, m_settings, m_exact, result);
-        if (!frame.gpuLevels) MeshTrees::listPairedTriangles(result, frame);
+        if (!frame.gpuLevels) m_trees.listPairedTriangles(result, frame, m_pool);
         stats.exactMs = exact.ms();
         stats.pcsObjects = result.pcs.size();
         stats.candidateObjectPairs = result.pairs.size();

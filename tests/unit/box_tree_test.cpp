@@ -192,6 +192,51 @@ TEST(BoxTree, BuiltOnWorkersTheSameTreeAsOnOneThread) {
     }
 }
 
+TEST(BoxTree, SplitManyIsSplitForEachJobOnAnyPool) {
+    // Several tree pairs split together, their rounds on a pool's workers: each job's node pairs must be split()'s,
+    // in its order, whatever the other jobs (a large one whose rounds are cut into chunks, small ones that stop
+    // early or only have leaf pairs, an empty tree, roots apart) and the number of workers.
+    std::mt19937 rng(29);
+    std::vector<BoxTree> trees(7);
+    const auto build = [&](BoxTree& tree, std::size_t n, double offset) {
+        auto boxes = randomBoxes(rng, n, 10.0, 0.5, 0.0);
+        for (Aabb& b : boxes) b = Aabb{b.min + Vec3::Constant(offset), b.max + Vec3::Constant(offset)};
+        tree.build(boxes, everyOther(n, 1));
+    };
+    build(trees[0], 20000, 0.0);
+    build(trees[1], 8000, 0.0);
+    build(trees[2], 3, 0.0);
+    build(trees[3], 60, 0.0);
+    build(trees[5], 50, 100.0);  // trees[4] stays empty
+    build(trees[6], 500, 0.0);
+    const std::vector<BoxTree::SplitJob> jobs{{&trees[0], &trees[1], 4096}, {&trees[2], &trees[3], 1000},
+                                              {&trees[3], &trees[1], 8},     {&trees[4], &trees[1], 64},
+                                              {&trees[5], &trees[0], 64},    {&trees[6], &trees[0], 1},
+                                              {&trees[1], &trees[6], 300}};
+    TaskPool one(1), three(3);
+    for (TaskPool* pool : {static_cast<TaskPool*>(nullptr), &one, &three}) {
+        std::vector<std::vector<BoxTree::NodePair>> got(2, std::vector<BoxTree::NodePair>(5));  // stale: replaced
+        BoxTree::splitMany(jobs, pool, got);
+        ASSERT_GE(got.size(), jobs.size());
+        std::size_t pairs = 0;
+        for (std::size_t j = 0; j < jobs.size(); ++j) {
+            std::vector<BoxTree::NodePair> want;
+            BoxTree::split(*jobs[j].a, *jobs[j].b, jobs[j].target, want);
+            ASSERT_EQ(got[j].size(), want.size()) << "job " << j;
+            for (std::size_t i = 0; i < want.size(); ++i) {
+                const auto& g = got[j][i];
+                const auto& w = want[i];
+                ASSERT_TRUE(g.levelA == w.levelA && g.nodeA == w.nodeA && g.levelB == w.levelB && g.nodeB == w.nodeB)
+                    << "job " << j << ", pair " << i;
+            }
+            pairs += want.size();
+        }
+        EXPECT_GE(got[0].size(), 4096u) << "the large job must reach its target";
+        EXPECT_TRUE(got[3].empty() && got[4].empty());
+        EXPECT_GT(pairs, 4096u + 100u);
+    }
+}
+
 TEST(BoxTree, LeavesInMortonOrderTiesInListOrder) {
     // Boxes along the x axis: their Morton order is their order along x. Each position holds three copies (equal
     // codes), listed in different chunks: they must stay in list order, whatever the number of workers.

@@ -278,9 +278,11 @@ void BoxTree::buildLevels(TaskPool* pool) {
         const std::vector<Block>& below = m_levels[m_levelCount - 1];
         std::vector<Block>& level = m_levels[m_levelCount];
         resizeKeeping(level, blocksFor(parents));
-        // Whole blocks per task: no two tasks write one block. Small levels on this thread (no dispatch).
-        TaskPool* levelPool = parents >= kBuildChunk ? pool : nullptr;
-        parallelForOrHere(levelPool, level.size(), kBuildChunk / kFanout, [&](std::size_t begin, std::size_t end) {
+        // Whole blocks per task: no two tasks write one block. Levels of less than two chunks on this thread (no
+        // dispatch); larger ones in chunks as the leaves' (a large tree's first level is most of this loop's work).
+        const std::size_t chunk = buildChunk(pool, parents);
+        TaskPool* levelPool = parents >= 2 * chunk ? pool : nullptr;
+        parallelForOrHere(levelPool, level.size(), chunk / kFanout, [&](std::size_t begin, std::size_t end) {
             for (std::size_t p = begin * kFanout; p < std::min(parents, end * kFanout); ++p) {
                 const Block& c = below[p];
                 Block& block = level[p / kFanout];
@@ -413,30 +415,94 @@ bool BoxTree::anyOverlap(const Aabb& query, std::vector<NodePair>& stack) const 
     return false;
 }
 
-void BoxTree::split(const BoxTree& a, const BoxTree& b, std::size_t target, std::vector<NodePair>& out) {
-    out.clear();
-    if (a.empty() || b.empty()) return;
-    const NodePair root{a.m_levelCount - 1, 0, b.m_levelCount - 1, 0};
-    const FloatBox boxA = a.box(root.levelA, 0);
-    const FloatBox boxB = b.box(root.levelB, 0);
+namespace {
+
+/// Whether the root boxes of `a` and `b` overlap (both trees non-empty).
+bool rootsOverlap(const BoxTree::FloatBox& boxA, const BoxTree::FloatBox& boxB) {
     for (int k = 0; k < 3; ++k)
-        if (boxA.lo[k] > boxB.hi[k] || boxB.lo[k] > boxA.hi[k]) return;
-    out.push_back(root);
-    std::vector<NodePair> next;
-    bool expanded = true;
-    while (out.size() < target && expanded) {
-        next.clear();
-        expanded = false;
-        for (const NodePair& p : out) {
-            if (p.levelA == 0 && p.levelB == 0) {
-                next.push_back(p);
-            } else {
-                descend(a, b, p, next, nullptr);
-                expanded = true;
-            }
-        }
-        out.swap(next);
+        if (boxA.lo[k] > boxB.hi[k] || boxB.lo[k] > boxA.hi[k]) return false;
+    return true;
+}
+
+}  // namespace
+
+void BoxTree::split(const BoxTree& a, const BoxTree& b, std::size_t target, std::vector<NodePair>& out) {
+    std::vector<std::vector<NodePair>> one;
+    splitMany({{&a, &b, target}}, nullptr, one);
+    out.swap(one[0]);
+}
+
+void BoxTree::splitMany(const std::vector<SplitJob>& jobs, TaskPool* pool, std::vector<std::vector<NodePair>>& out) {
+    // All jobs' node pairs in one list, job by job; a round rewrites it.
+    struct Entry {
+        std::uint32_t job;
+        NodePair pair;
+    };
+    // Working memory kept between calls (a frame's split is a few thousand entries; no allocation each frame),
+    // this thread's: the workers below reach it through these references.
+    struct Memory {
+        std::vector<Entry> list, next;
+        std::vector<std::vector<Entry>> chunkOut;  // a round's chunks: each chunk's own list, joined in order
+        std::vector<std::size_t> count;             // node pairs per job
+    };
+    thread_local Memory memory;
+    std::vector<Entry>& list = memory.list;
+    std::vector<Entry>& next = memory.next;
+    std::vector<std::vector<Entry>>& chunkOut = memory.chunkOut;
+    std::vector<std::size_t>& count = memory.count;
+    list.clear();
+    count.assign(jobs.size(), 0);
+    for (std::uint32_t j = 0; j < jobs.size(); ++j) {
+        const BoxTree& a = *jobs[j].a;
+        const BoxTree& b = *jobs[j].b;
+        if (a.empty() || b.empty()) continue;
+        const NodePair root{a.m_levelCount - 1, 0, b.m_levelCount - 1, 0};
+        if (!rootsOverlap(a.box(root.levelA, 0), b.box(root.levelB, 0))) continue;
+        list.push_back({j, root});
+        count[j] = 1;
     }
+    constexpr std::size_t kChunk = 32;  // node pairs per chunk of a round
+    auto expandRange = [&](std::size_t begin, std::size_t end, std::vector<Entry>& to) {
+        thread_local std::vector<NodePair> children;
+        for (std::size_t i = begin; i < end; ++i) {
+            const Entry& e = list[i];
+            const bool leaf = e.pair.levelA == 0 && e.pair.levelB == 0;
+            if (leaf || count[e.job] >= jobs[e.job].target) {
+                to.push_back(e);
+                continue;
+            }
+            children.clear();
+            descend(*jobs[e.job].a, *jobs[e.job].b, e.pair, children, nullptr);
+            for (const NodePair& c : children) to.push_back({e.job, c});
+        }
+    };
+    for (;;) {
+        // A round descends every pair but leaf pairs of each job with fewer pairs than its target; none: done.
+        bool any = false;
+        for (const Entry& e : list)
+            any = any || (!(e.pair.levelA == 0 && e.pair.levelB == 0) && count[e.job] < jobs[e.job].target);
+        if (!any) break;
+        next.clear();
+        const std::size_t chunks = (list.size() + kChunk - 1) / kChunk;
+        if (chunks < 2 || pool == nullptr) {
+            expandRange(0, list.size(), next);
+        } else {
+            if (chunkOut.size() < chunks) chunkOut.resize(chunks);
+            pool->parallelFor(chunks, 1, [&](std::size_t begin, std::size_t end) {
+                for (std::size_t c = begin; c < end; ++c) {
+                    chunkOut[c].clear();
+                    expandRange(c * kChunk, std::min(list.size(), (c + 1) * kChunk), chunkOut[c]);
+                }
+            });
+            for (std::size_t c = 0; c < chunks; ++c) next.insert(next.end(), chunkOut[c].begin(), chunkOut[c].end());
+        }
+        std::fill(count.begin(), count.end(), 0);
+        for (const Entry& e : next) ++count[e.job];
+        list.swap(next);
+    }
+    if (out.size() < jobs.size()) out.resize(jobs.size());
+    for (std::size_t j = 0; j < jobs.size(); ++j) out[j].clear();
+    for (const Entry& e : list) out[e.job].push_back(e.pair);
 }
 
 void BoxTree::leafPairs(const BoxTree& a, const BoxTree& b, const NodePair& start, std::vector<NodePair>& stack,

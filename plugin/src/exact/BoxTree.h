@@ -79,6 +79,16 @@ public:
     /// of them or only leaf pairs are left; together they cover every overlapping leaf pair exactly once. Empty
     /// when either tree is empty or the roots do not overlap.
     static void split(const BoxTree& a, const BoxTree& b, std::size_t target, std::vector<NodePair>& out);
+    /// Two trees to split, and the node pairs wanted (split()'s target).
+    struct SplitJob {
+        const BoxTree* a;
+        const BoxTree* b;
+        std::size_t target;
+    };
+    /// split() for each job, out[i] for jobs[i], all jobs' rounds together: each round descends every unfinished
+    /// job's node pairs one step, on `pool`'s workers when there are enough of them (a single pair of large trees
+    /// is split on every worker too; null: on this thread). The same node pairs as split(), in the same order.
+    static void splitMany(const std::vector<SplitJob>& jobs, TaskPool* pool, std::vector<std::vector<NodePair>>& out);
 
     /// Every (triangle of a, triangle of b) below `start` whose double boxes overlap (closed intervals, as
     /// Aabb::overlaps), each once, appended to `out`; `stack` is working memory. Float node boxes only prune:
