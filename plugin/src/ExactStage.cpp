@@ -19,10 +19,14 @@ struct ExactStage::Scratch {
     std::vector<const BoxTree*> treeOf;  ///< per input: its tree
     std::vector<std::vector<BoxTree::NodePair>> frontiers;  ///< per job
     std::vector<std::vector<TrianglePair>> taskOut;
+    std::vector<std::vector<TrianglePair>> groupOut;  ///< per group of a job's tasks: its hits, merged
     std::vector<std::uint8_t> hit;  ///< per candidate: the triangle test's answer
 };
 
 namespace {
+
+/// Tasks whose sorted hits are merged together first (on the workers), before a job merges its groups.
+constexpr std::size_t kRunsPerGroup = 16;
 
 /// The sorted lists runs[first .. last) merged into `out` (sorted), pairwise: log2(runs) passes over the pairs.
 void mergeRuns(const std::vector<std::vector<TrianglePair>>& runs, std::size_t first, std::size_t last,
@@ -171,24 +175,48 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
                                      mb.vertices[tb[1]], mb.vertices[tb[2]], margin);
         }
     });
-    // Each task keeps its hits, sorted, on the workers; then each job merges its tasks' runs (one large pair has
-    // hundreds of tasks: its results are not gathered and sorted on one thread).
-    m_pool.parallelFor(tasks.size(), chunkFor(&m_pool, tasks.size(), 1, 16), [&](std::size_t begin, std::size_t end) {
-        for (std::size_t t = begin; t < end; ++t) {
-            std::vector<TrianglePair>& list = taskOut[t];
-            std::size_t kept = 0;
-            for (std::size_t k = 0; k < list.size(); ++k)
-                if (hit[offsets[t] + k]) list[kept++] = list[k];
-            list.resize(kept);
-            std::sort(list.begin(), list.end());
+    // Each task keeps its hits, sorted, and each group of a job's consecutive tasks merges its tasks' runs, on the
+    // workers; then each job of several groups merges its groups' runs (one large pair has hundreds of tasks: its
+    // results are neither gathered and sorted nor merged in many passes on one thread).
+    std::vector<std::size_t> groupFirst;  // first task of each group, then the end
+    std::vector<std::size_t> jobGroups(jobs.size() + 1, 0);  // first group of each job, then the end
+    for (std::size_t j = 0; j < jobs.size(); ++j) {
+        jobGroups[j] = groupFirst.size();
+        for (std::size_t t = jobTasks[j]; t < jobTasks[j + 1]; t += kRunsPerGroup) groupFirst.push_back(t);
+    }
+    jobGroups[jobs.size()] = groupFirst.size();
+    groupFirst.push_back(tasks.size());
+    const std::size_t groups = groupFirst.size() - 1;
+    std::vector<std::vector<TrianglePair>>& groupOut = m_scratch->groupOut;
+    if (groupOut.size() < groups) groupOut.resize(groups);
+    bool severalGroups = false;
+    for (std::size_t j = 0; j < jobs.size(); ++j) {
+        results[j].candidates = offsets[jobTasks[j + 1]] - offsets[jobTasks[j]];
+        severalGroups = severalGroups || jobGroups[j + 1] - jobGroups[j] > 1;
+    }
+    m_pool.parallelFor(groups, chunkFor(&m_pool, groups, 1, 4), [&](std::size_t begin, std::size_t end) {
+        for (std::size_t g = begin; g < end; ++g) {
+            for (std::size_t t = groupFirst[g]; t < groupFirst[g + 1]; ++t) {
+                std::vector<TrianglePair>& list = taskOut[t];
+                std::size_t kept = 0;
+                for (std::size_t k = 0; k < list.size(); ++k)
+                    if (hit[offsets[t] + k]) list[kept++] = list[k];
+                list.resize(kept);
+                std::sort(list.begin(), list.end());
+            }
+            // A job's only group merges straight into the job's result.
+            const std::size_t j = tasks[groupFirst[g]].first;
+            const bool only = jobGroups[j + 1] - jobGroups[j] == 1;
+            mergeRuns(taskOut, groupFirst[g], groupFirst[g + 1], only ? results[j].triangles : groupOut[g]);
         }
     });
-    m_pool.parallelFor(jobs.size(), chunkFor(&m_pool, jobs.size(), 1, 16), [&](std::size_t begin, std::size_t end) {
-        for (std::size_t j = begin; j < end; ++j) {
-            results[j].candidates = offsets[jobTasks[j + 1]] - offsets[jobTasks[j]];
-            mergeRuns(taskOut, jobTasks[j], jobTasks[j + 1], results[j].triangles);
-        }
-    });
+    if (severalGroups) {
+        m_pool.parallelFor(jobs.size(), chunkFor(&m_pool, jobs.size(), 1, 16), [&](std::size_t begin, std::size_t end) {
+            for (std::size_t j = begin; j < end; ++j)
+                if (jobGroups[j + 1] - jobGroups[j] > 1)
+                    mergeRuns(groupOut, jobGroups[j], jobGroups[j + 1], results[j].triangles);
+        });
+    }
     if (exact)
         for (const ExactJobResult& r : results) stats.intersectingTrianglePairs += r.triangles.size();
     stats.candidateTrianglePairs += total;
