@@ -461,7 +461,8 @@ void BoxTree::splitMany(const std::vector<SplitJob>& jobs, TaskPool* pool, std::
         list.push_back({j, root});
         count[j] = 1;
     }
-    constexpr std::size_t kChunk = 32;  // node pairs per chunk of a round
+    constexpr std::size_t kChunk = 32;            // node pairs per chunk of a round
+    constexpr std::size_t kParallelRound = 128;   // smaller rounds on this thread: a dispatch would cost more
     auto expandRange = [&](std::size_t begin, std::size_t end, std::vector<Entry>& to) {
         thread_local std::vector<NodePair> children;
         for (std::size_t i = begin; i < end; ++i) {
@@ -484,7 +485,7 @@ void BoxTree::splitMany(const std::vector<SplitJob>& jobs, TaskPool* pool, std::
         if (!any) break;
         next.clear();
         const std::size_t chunks = (list.size() + kChunk - 1) / kChunk;
-        if (chunks < 2 || pool == nullptr) {
+        if (list.size() < kParallelRound || pool == nullptr) {
             expandRange(0, list.size(), next);
         } else {
             if (chunkOut.size() < chunks) chunkOut.resize(chunks);
