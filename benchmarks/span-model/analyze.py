@@ -31,14 +31,13 @@ for line in open(log):
 frames = frames[2:]  # skip warm-up
 addrs = sorted({r['addr'] for f in frames for r in f['regions']})
 names = {}
-if addrs:
-    out = subprocess.run(['addr2line', '-f', '-C', '-i', '-e', lib] + ['0x'+a for a in addrs], capture_output=True, text=True).stdout.split('\n')
-    # with -i, inlined frames give multiple entries; fallback: run one at a time
-    for a in addrs:
-        o = subprocess.run(['addr2line', '-i', '-f', '-C', '-s', '-e', lib, '0x%x' % (int(a,16)-1)], capture_output=True, text=True).stdout.strip().split('\n')
-        fr = [(o[i][:60], o[i+1]) for i in range(0, len(o)-1, 2)]
-        keep = [f for f in fr if 'std::' not in f[0] and 'parallelFor' not in f[0]]
-        names[a] = ' < '.join(x[0].split('(')[0][-40:] + '@' + x[1] for x in (keep or fr)[:2])
+for a in addrs:
+    # The call site: the innermost frames (inlined ones too) that are neither the standard library nor the pool.
+    o = subprocess.run(['addr2line', '-i', '-f', '-C', '-s', '-e', lib, '0x%x' % (int(a, 16) - 1)],
+                       capture_output=True, text=True).stdout.strip().split('\n')
+    fr = [(o[i][:60], o[i + 1]) for i in range(0, len(o) - 1, 2)]
+    keep = [f for f in fr if 'std::' not in f[0] and 'parallelFor' not in f[0]]
+    names[a] = ' < '.join(x[0].split('(')[0][-40:] + '@' + x[1] for x in (keep or fr)[:2])
 def makespan(chunks, P):
     w = [0.0]*P
     for c in chunks:
@@ -60,7 +59,8 @@ print(f"frames {n}; wall/frame {wall/n/1000:.3f} ms; serial {ser/n/1000:.3f} ms;
 for P in Ps: print(f"  P={P:2d}: predicted {(ser+tot[P])/n/1000:.3f} ms (regions {tot[P]/n/1000:.3f})")
 print("per region site (ms/frame at P=1, P=16; chunks/call):")
 for a, d in sorted(per.items(), key=lambda kv: -kv[1][16]):
-    print(f"  {d[1]/n/1000:7.3f} {d[16]/n/1000:7.3f}  calls {d['n']/n:4.1f} chunks {d['chunks']/max(1,d['n']):7.1f}  {names[a]}")
+    chunks = d['chunks'] / max(1, d['n'])
+    print(f"  {d[1]/n/1000:7.3f} {d[16]/n/1000:7.3f}  calls {d['n']/n:4.1f} chunks {chunks:7.1f}  {names[a]}")
 # serial gaps: average per position in frame
 gaps = collections.defaultdict(float)
 for f in frames:
