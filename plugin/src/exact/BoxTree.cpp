@@ -21,6 +21,13 @@ namespace {
 
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
+/// Whether two float boxes overlap (closed intervals).
+bool floatBoxesOverlap(const BoxTree::FloatBox& boxA, const BoxTree::FloatBox& boxB) {
+    for (int k = 0; k < 3; ++k)
+        if (boxA.lo[k] > boxB.hi[k] || boxB.lo[k] > boxA.hi[k]) return false;
+    return true;
+}
+
 void clearSlot(BoxTree::Block& block, std::uint32_t slot) {
     for (int k = 0; k < 3; ++k) {
         block.lo[k][slot] = kInf;
@@ -393,9 +400,7 @@ bool BoxTree::anyOverlap(const Aabb& query, std::vector<NodePair>& stack) const 
         q.lo[k] = floatBelow(query.min[k]);
         q.hi[k] = floatAbove(query.max[k]);
     }
-    const FloatBox root = box(m_levelCount - 1, 0);
-    for (int k = 0; k < 3; ++k)
-        if (root.lo[k] > q.hi[k] || q.lo[k] > root.hi[k]) return false;
+    if (!floatBoxesOverlap(box(m_levelCount - 1, 0), q)) return false;
     stack.clear();
     stack.push_back({m_levelCount - 1, 0, 0, 0});  // (level, node) in the A fields
     while (!stack.empty()) {
@@ -414,17 +419,6 @@ bool BoxTree::anyOverlap(const Aabb& query, std::vector<NodePair>& stack) const 
     }
     return false;
 }
-
-namespace {
-
-/// Whether the root boxes of `a` and `b` overlap (both trees non-empty).
-bool rootsOverlap(const BoxTree::FloatBox& boxA, const BoxTree::FloatBox& boxB) {
-    for (int k = 0; k < 3; ++k)
-        if (boxA.lo[k] > boxB.hi[k] || boxB.lo[k] > boxA.hi[k]) return false;
-    return true;
-}
-
-}  // namespace
 
 void BoxTree::split(const BoxTree& a, const BoxTree& b, std::size_t target, std::vector<NodePair>& out) {
     std::vector<std::vector<NodePair>> one;
@@ -457,18 +451,22 @@ void BoxTree::splitMany(const std::vector<SplitJob>& jobs, TaskPool* pool, std::
         const BoxTree& b = *jobs[j].b;
         if (a.empty() || b.empty()) continue;
         const NodePair root{a.m_levelCount - 1, 0, b.m_levelCount - 1, 0};
-        if (!rootsOverlap(a.box(root.levelA, 0), b.box(root.levelB, 0))) continue;
+        if (!floatBoxesOverlap(a.box(root.levelA, 0), b.box(root.levelB, 0))) continue;
         list.push_back({j, root});
         count[j] = 1;
     }
     constexpr std::size_t kChunk = 32;            // node pairs per chunk of a round
     constexpr std::size_t kParallelRound = 128;   // smaller rounds on this thread: a dispatch would cost more
+    // A round descends every pair but leaf pairs of each job with fewer pairs than its target (count at the round's
+    // start); the others are kept as they are.
+    auto descends = [&](const Entry& e) {
+        return !(e.pair.levelA == 0 && e.pair.levelB == 0) && count[e.job] < jobs[e.job].target;
+    };
     auto expandRange = [&](std::size_t begin, std::size_t end, std::vector<Entry>& to) {
         thread_local std::vector<NodePair> children;
         for (std::size_t i = begin; i < end; ++i) {
             const Entry& e = list[i];
-            const bool leaf = e.pair.levelA == 0 && e.pair.levelB == 0;
-            if (leaf || count[e.job] >= jobs[e.job].target) {
+            if (!descends(e)) {
                 to.push_back(e);
                 continue;
             }
@@ -478,11 +476,7 @@ void BoxTree::splitMany(const std::vector<SplitJob>& jobs, TaskPool* pool, std::
         }
     };
     for (;;) {
-        // A round descends every pair but leaf pairs of each job with fewer pairs than its target; none: done.
-        bool any = false;
-        for (const Entry& e : list)
-            any = any || (!(e.pair.levelA == 0 && e.pair.levelB == 0) && count[e.job] < jobs[e.job].target);
-        if (!any) break;
+        if (std::none_of(list.begin(), list.end(), descends)) break;
         next.clear();
         const std::size_t chunks = (list.size() + kChunk - 1) / kChunk;
         if (list.size() < kParallelRound || pool == nullptr) {
