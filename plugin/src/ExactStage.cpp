@@ -20,7 +20,7 @@ struct ExactStage::Scratch {
     std::vector<std::vector<BoxTree::NodePair>> frontiers;  ///< per job
     std::vector<std::vector<TrianglePair>> taskOut;
     std::vector<std::vector<TrianglePair>> groupOut;  ///< per group of a job's tasks: its hits, merged
-    std::vector<std::uint8_t> hit;  ///< per candidate: the triangle test's answer
+    std::vector<std::size_t> taskCandidates;  ///< per task: its candidates (box-overlapping triangle pairs)
 };
 
 namespace {
@@ -54,6 +54,19 @@ void mergeRuns(const std::vector<std::vector<TrianglePair>>& runs, std::size_t f
         bounds.resize(kept);
         out.swap(merged);
     }
+}
+
+/// Keeps the pairs of `pairs` (triangles of a, triangles of b) whose triangles are within `margin`, in order.
+void keepWithin(const TriangleMesh& a, const TriangleMesh& b, double margin, std::vector<TrianglePair>& pairs) {
+    std::size_t kept = 0;
+    for (const TrianglePair& p : pairs) {
+        const auto& ta = a.triangles[p.a];
+        const auto& tb = b.triangles[p.b];
+        if (trianglesWithin(a.vertices[ta[0]], a.vertices[ta[1]], a.vertices[ta[2]], b.vertices[tb[0]],
+                            b.vertices[tb[1]], b.vertices[tb[2]], margin))
+            pairs[kept++] = p;
+    }
+    pairs.resize(kept);
 }
 
 }  // namespace
@@ -134,8 +147,16 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
     std::vector<std::pair<std::size_t, std::size_t>> tasks;  // (job, first node pair)
     for (std::size_t j = 0; j < jobs.size(); ++j)
         for (std::size_t i = 0; i < frontiers[j].size(); i += kChunk) tasks.emplace_back(j, i);
+    std::vector<std::size_t> jobTasks(jobs.size() + 1, tasks.size());  // first task of each job (consecutive)
+    for (std::size_t t = tasks.size(); t-- > 0;) jobTasks[tasks[t].first] = t;
+    for (std::size_t j = jobs.size(); j-- > 0;) jobTasks[j] = std::min(jobTasks[j], jobTasks[j + 1]);
+    auto onlyTask = [&](std::size_t j) { return jobTasks[j + 1] - jobTasks[j] == 1; };
+    // Phase 2: each task descends its node pairs and tests its candidates at once (they are still in cache), keeping
+    // its hits, sorted; a job's only task keeps them as the job's result.
     std::vector<std::vector<TrianglePair>>& taskOut = m_scratch->taskOut;
     if (taskOut.size() < tasks.size()) taskOut.resize(tasks.size());
+    std::vector<std::size_t>& taskCandidates = m_scratch->taskCandidates;
+    taskCandidates.assign(tasks.size(), 0);
     m_pool.parallelFor(tasks.size(), 1, [&](std::size_t begin, std::size_t end) {
         // Working memory per thread: vectors of neighbouring tasks share cache lines, and a descent pushes and
         // pops millions of times a frame.
@@ -147,67 +168,39 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
             pairs.clear();
             for (std::size_t i = tasks[t].second, last = std::min(frontier.size(), i + kChunk); i < last; ++i)
                 BoxTree::leafPairs(tree(jobListA[j]), tree(jobListB[j]), frontier[i], stack, pairs);
-            assignKeeping(taskOut[t], pairs.begin(), pairs.end());
+            taskCandidates[t] = pairs.size();
+            if (exact) keepWithin(*objects[jobs[j].a].mesh, *objects[jobs[j].b].mesh, margin, pairs);
+            std::sort(pairs.begin(), pairs.end());
+            assignKeeping(onlyTask(j) ? results[j].triangles : taskOut[t], pairs.begin(), pairs.end());
         }
     });
-    // Phase 2: exact tests over all candidates, flattened so that one large pair still uses every worker. The
-    // candidates stay in the tasks' lists: a job's tasks are consecutive, its candidates those of its tasks in order.
-    std::vector<std::size_t> offsets(tasks.size() + 1, 0);  // first candidate of each task
-    for (std::size_t t = 0; t < tasks.size(); ++t) offsets[t + 1] = offsets[t] + taskOut[t].size();
-    const std::size_t total = offsets.back();
-    std::vector<std::size_t> jobTasks(jobs.size() + 1, tasks.size());  // first task of each job
-    for (std::size_t t = tasks.size(); t-- > 0;) jobTasks[tasks[t].first] = t;
-    for (std::size_t j = jobs.size(); j-- > 0;) jobTasks[j] = std::min(jobTasks[j], jobTasks[j + 1]);
-    std::vector<std::uint8_t>& hit = m_scratch->hit;
-    assignKeeping(hit, total, static_cast<std::uint8_t>(exact ? 0 : 1));
-    if (exact) m_pool.parallelFor(total, chunkFor(&m_pool, total, 256, 2048), [&](std::size_t begin, std::size_t end) {
-        std::size_t t = static_cast<std::size_t>(std::upper_bound(offsets.begin(), offsets.end(), begin) -
-                                                 offsets.begin()) - 1;
-        for (std::size_t k = begin; k < end; ++k) {
-            while (k >= offsets[t + 1]) ++t;
-            const ExactJob& job = jobs[tasks[t].first];
-            const TrianglePair& p = taskOut[t][k - offsets[t]];
-            const TriangleMesh& ma = *objects[job.a].mesh;
-            const TriangleMesh& mb = *objects[job.b].mesh;
-            const auto& ta = ma.triangles[p.a];
-            const auto& tb = mb.triangles[p.b];
-            hit[k] = trianglesWithin(ma.vertices[ta[0]], ma.vertices[ta[1]], ma.vertices[ta[2]], mb.vertices[tb[0]],
-                                     mb.vertices[tb[1]], mb.vertices[tb[2]], margin);
-        }
-    });
-    // Each task keeps its hits, sorted, and each group of a job's consecutive tasks merges its tasks' runs, on the
+    // Phase 3, for the jobs of several tasks: each group of a job's consecutive tasks merges its tasks' runs, on the
     // workers; then each job of several groups merges its groups' runs (one large pair has hundreds of tasks: its
     // results are neither gathered and sorted nor merged in many passes on one thread).
-    std::vector<std::size_t> groupFirst;  // first task of each group, then the end
+    std::vector<std::size_t> groupFirst, groupEnd;  // each group's tasks
     std::vector<std::size_t> jobGroups(jobs.size() + 1, 0);  // first group of each job, then the end
-    for (std::size_t j = 0; j < jobs.size(); ++j) {
-        jobGroups[j] = groupFirst.size();
-        for (std::size_t t = jobTasks[j]; t < jobTasks[j + 1]; t += kRunsPerGroup) groupFirst.push_back(t);
-    }
-    jobGroups[jobs.size()] = groupFirst.size();
-    groupFirst.push_back(tasks.size());
-    const std::size_t groups = groupFirst.size() - 1;
-    std::vector<std::vector<TrianglePair>>& groupOut = m_scratch->groupOut;
-    if (groupOut.size() < groups) groupOut.resize(groups);
+    std::size_t total = 0;
     bool severalGroups = false;
     for (std::size_t j = 0; j < jobs.size(); ++j) {
-        results[j].candidates = offsets[jobTasks[j + 1]] - offsets[jobTasks[j]];
-        severalGroups = severalGroups || jobGroups[j + 1] - jobGroups[j] > 1;
+        for (std::size_t t = jobTasks[j]; t < jobTasks[j + 1]; ++t) results[j].candidates += taskCandidates[t];
+        total += results[j].candidates;
+        jobGroups[j] = groupFirst.size();
+        for (std::size_t t = jobTasks[j]; t < jobTasks[j + 1] && !onlyTask(j); t += kRunsPerGroup) {
+            groupFirst.push_back(t);
+            groupEnd.push_back(std::min(jobTasks[j + 1], t + kRunsPerGroup));
+        }
+        severalGroups = severalGroups || groupFirst.size() - jobGroups[j] > 1;
     }
+    jobGroups[jobs.size()] = groupFirst.size();
+    const std::size_t groups = groupFirst.size();
+    std::vector<std::vector<TrianglePair>>& groupOut = m_scratch->groupOut;
+    if (groupOut.size() < groups) groupOut.resize(groups);
     m_pool.parallelFor(groups, chunkFor(&m_pool, groups, 1, 4), [&](std::size_t begin, std::size_t end) {
         for (std::size_t g = begin; g < end; ++g) {
-            for (std::size_t t = groupFirst[g]; t < groupFirst[g + 1]; ++t) {
-                std::vector<TrianglePair>& list = taskOut[t];
-                std::size_t kept = 0;
-                for (std::size_t k = 0; k < list.size(); ++k)
-                    if (hit[offsets[t] + k]) list[kept++] = list[k];
-                list.resize(kept);
-                std::sort(list.begin(), list.end());
-            }
             // A job's only group merges straight into the job's result.
             const std::size_t j = tasks[groupFirst[g]].first;
             const bool only = jobGroups[j + 1] - jobGroups[j] == 1;
-            mergeRuns(taskOut, groupFirst[g], groupFirst[g + 1], only ? results[j].triangles : groupOut[g]);
+            mergeRuns(taskOut, groupFirst[g], groupEnd[g], only ? results[j].triangles : groupOut[g]);
         }
     });
     if (severalGroups) {
