@@ -4,7 +4,7 @@
 #include "KeptCapacity.h"
 #include "PoolOrHere.h"
 #include "exact/BoxTree.h"
-#include "cullide/TriangleTest.h"
+#include "exact/CandidateTest.h"
 
 #include <algorithm>
 #include <array>
@@ -62,7 +62,7 @@ void keepWithin(const TriangleMesh& a, const TriangleMesh& b, double margin, std
     for (const TrianglePair& p : pairs) {
         const auto& ta = a.triangles[p.a];
         const auto& tb = b.triangles[p.b];
-        if (trianglesWithin(a.vertices[ta[0]], a.vertices[ta[1]], a.vertices[ta[2]], b.vertices[tb[0]],
+        if (candidateWithin(a.vertices[ta[0]], a.vertices[ta[1]], a.vertices[ta[2]], b.vertices[tb[0]],
                             b.vertices[tb[1]], b.vertices[tb[2]], margin))
             pairs[kept++] = p;
     }

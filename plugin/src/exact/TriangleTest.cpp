@@ -17,6 +17,7 @@
 // projection is injective on the plane. Collinear triangles fall back to exact segment-segment tests. Every decision
 // is a sign of an exact predicate or an exact comparison of input coordinates; nothing is allocated.
 #include "cullide/TriangleTest.h"
+#include "exact/CandidateTest.h"
 
 #include "exact/ExactPredicates.h"
 
@@ -426,8 +427,13 @@ double triangleDistance(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Ve
 
 bool trianglesWithin(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
                      const Vec3& b2, double margin) {
-    if (!(margin > 0.0)) return trianglesIntersect(a0, a1, a2, b0, b1, b2);
-    if (boxesDisjoint(a0, a1, a2, b0, b1, b2, margin)) return false;
+    if (boxesDisjoint(a0, a1, a2, b0, b1, b2, margin > 0.0 ? margin : 0.0)) return false;
+    return candidateWithin(a0, a1, a2, b0, b1, b2, margin);
+}
+
+bool candidateWithin(const Vec3& a0, const Vec3& a1, const Vec3& a2, const Vec3& b0, const Vec3& b1,
+                     const Vec3& b2, double margin) {
+    if (!(margin > 0.0)) return intersectExact(a0, a1, a2, b0, b1, b2);
     if (separatedByPlane(a0, a1, a2, b0, b1, b2, margin) || separatedByPlane(b0, b1, b2, a0, a1, a2, margin)) {
         return false;
     }
