@@ -314,14 +314,14 @@ void BoxTree::buildLevels(TaskPool* pool) {
     }
 }
 
-BoxTree::FloatBox BoxTree::box(std::uint32_t level, std::uint32_t node) const {
+inline BoxTree::FloatBox BoxTree::box(std::uint32_t level, std::uint32_t node) const {
     const Block& block = m_levels[level][node / kFanout];
     const std::uint32_t slot = node % kFanout;
     return {{block.lo[0][slot], block.lo[1][slot], block.lo[2][slot]},
             {block.hi[0][slot], block.hi[1][slot], block.hi[2][slot]}};
 }
 
-unsigned BoxTree::childMask(std::uint32_t level, std::uint32_t node, const FloatBox& q) const {
+inline unsigned BoxTree::childMask(std::uint32_t level, std::uint32_t node, const FloatBox& q) const {
     const Block& c = m_levels[level - 1][node];
     unsigned mask = 0;
 #ifdef CULLIDE_BOXTREE_SSE

@@ -113,9 +113,11 @@ private:
     /// After the leaves' slots are written: the last block's unused slots emptied, the leaf level counted.
     void finishLeaves(std::size_t n);
     void buildLevels(TaskPool* pool);
-    FloatBox box(std::uint32_t level, std::uint32_t node) const;
+    /// The two below are defined inline in BoxTree.cpp, the only place that calls them: they run for every node pair
+    /// of a descent (as calls, they cost env3's one-thread frame about a tenth).
+    inline FloatBox box(std::uint32_t level, std::uint32_t node) const;
     /// Bit i set when child i of `node` (at `level` > 0) overlaps `q`.
-    unsigned childMask(std::uint32_t level, std::uint32_t node, const FloatBox& q) const;
+    inline unsigned childMask(std::uint32_t level, std::uint32_t node, const FloatBox& q) const;
     /// Expands `p` (not a leaf pair): overlapping leaf pairs go to `out`, other overlapping node pairs to `pending`.
     static void descend(const BoxTree& a, const BoxTree& b, const NodePair& p, std::vector<NodePair>& pending,
                         std::vector<TrianglePair>* out);
