@@ -345,12 +345,12 @@ inline unsigned BoxTree::childMask(std::uint32_t level, std::uint32_t node, cons
     return mask & ((1u << children) - 1u);
 }
 
-bool BoxTree::leavesOverlap(std::uint32_t leaf, const BoxTree& other, std::uint32_t otherLeaf) const {
+inline bool BoxTree::leavesOverlap(std::uint32_t leaf, const BoxTree& other, std::uint32_t otherLeaf) const {
     return m_leafBox[leaf].overlaps(other.m_leafBox[otherLeaf]);
 }
 
-void BoxTree::descend(const BoxTree& a, const BoxTree& b, const NodePair& p, std::vector<NodePair>& pending,
-                      std::vector<TrianglePair>* out) {
+inline void BoxTree::descend(const BoxTree& a, const BoxTree& b, const NodePair& p,
+                             std::vector<NodePair>& pending, std::vector<TrianglePair>* out) {
     auto emit = [&](std::uint32_t levelA, std::uint32_t nodeA, std::uint32_t levelB, std::uint32_t nodeB) {
         if (levelA == 0 && levelB == 0 && out != nullptr) {
             if (a.leavesOverlap(nodeA, b, nodeB)) out->push_back({a.m_leafTriangle[nodeA], b.m_leafTriangle[nodeB]});

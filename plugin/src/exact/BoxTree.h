@@ -113,15 +113,15 @@ private:
     /// After the leaves' slots are written: the last block's unused slots emptied, the leaf level counted.
     void finishLeaves(std::size_t n);
     void buildLevels(TaskPool* pool);
-    /// The two below are defined inline in BoxTree.cpp, the only place that calls them: they run for every node pair
-    /// of a descent (as calls, they cost env3's one-thread frame about a tenth).
+    /// The inline members below are defined in BoxTree.cpp, the only place that calls them: they run for every node
+    /// pair of a descent (as calls, they cost env3's one-thread frame about a tenth).
     inline FloatBox box(std::uint32_t level, std::uint32_t node) const;
     /// Bit i set when child i of `node` (at `level` > 0) overlaps `q`.
     inline unsigned childMask(std::uint32_t level, std::uint32_t node, const FloatBox& q) const;
     /// Expands `p` (not a leaf pair): overlapping leaf pairs go to `out`, other overlapping node pairs to `pending`.
-    static void descend(const BoxTree& a, const BoxTree& b, const NodePair& p, std::vector<NodePair>& pending,
-                        std::vector<TrianglePair>* out);
-    bool leavesOverlap(std::uint32_t leaf, const BoxTree& other, std::uint32_t otherLeaf) const;
+    static inline void descend(const BoxTree& a, const BoxTree& b, const NodePair& p,
+                               std::vector<NodePair>& pending, std::vector<TrianglePair>* out);
+    inline bool leavesOverlap(std::uint32_t leaf, const BoxTree& other, std::uint32_t otherLeaf) const;
 
     std::vector<std::vector<Block>> m_levels;  ///< [l] holds the nodes of level l (0 = leaves) in blocks of eight
     std::uint32_t m_levelCount = 0;           ///< levels in use; the top one holds the root alone; more are spare
