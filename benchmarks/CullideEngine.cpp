@@ -54,6 +54,7 @@ void CullideEngine::run(const BenchFrame& frame, FrameOutput& out) {
     out.gpuDeviceBytes = s.gpuDeviceBytes;
     out.draws = s.draws;
     if (s.gpuTimingValid && !s.levels.empty()) out.gpuTimerMs = s.gpuMs;
+    out.pool = std::array<std::size_t, 3>{s.poolCalls, s.poolWorkerWakes, s.poolCallerSleeps};
     out.levels = nlohmann::json::array();
     for (const LevelStats& l : s.levels) {
         nlohmann::json level = {{"name", l.name}, {"items", l.itemsPerIteration}, {"draws", l.draws},

@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include <array>
 #include <cstddef>
 #include <memory>
 #include <optional>
@@ -34,6 +35,8 @@ struct FrameOutput {
     std::optional<double> gpuTimerMs;  ///< GPU time of the levels from timer queries, where valid (CULLIDE)
     nlohmann::json levels;           ///< per GPU level: items per iteration, draws, CPU and GPU ms (CULLIDE)
     long minorFaults = 0;  ///< the process's minor page faults during the frame (set by the harness, frame scenes)
+    /// The culler's worker pool during the frame (Stats::poolCalls, poolWorkerWakes, poolCallerSleeps; CULLIDE).
+    std::optional<std::array<std::size_t, 3>> pool;
 
     void clear() { *this = FrameOutput{}; }
 };

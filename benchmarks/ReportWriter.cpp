@@ -705,6 +705,13 @@ std::string threadCpu(const json& r, bool workers) {
     return count(static_cast<double>(n)) + " / " + fixed(cpu, 0) + " (busiest " + fixed(busiest, 0) + ")";
 }
 
+/// A record's pool loops, wake-ups and caller sleeps per frame (means), or "–" where it predates them.
+std::string poolWaits(const json& r) {
+    if (!r.contains("pool_calls_mean")) return "–";
+    return fixed(r.value("pool_calls_mean", 0.0), 1) + " / " + fixed(r.value("pool_worker_wakes_mean", 0.0), 2) +
+           " / " + fixed(r.value("pool_caller_sleeps_mean", 0.0), 2);
+}
+
 }  // namespace
 
 void ReportWriter::threads(const Class& c) {
@@ -713,9 +720,13 @@ void ReportWriter::threads(const Class& c) {
             "(`cullide-cpu`), same scene and frames: median frame ms, the exact stage's in brackets, and minor page "
             "faults per frame (memory touched for the first time: a few per frame in a steady state). Threads: the "
             "culler's workers (`cullide-worker`) and every other thread of the process (the main thread, a GL "
-            "driver's): count / CPU ms over the whole run (busiest thread), from `/proc` at the end of the run.\n\n"
-            "| scene | Auto, CPU frames: ms (exact) | faults | cullide-cpu: ms (exact) | faults | Auto: workers "
-            "| Auto: other threads |\n|---|---|---|---|---|---|---|\n";
+            "driver's): count / CPU ms over the whole run (busiest thread), from `/proc` at the end of the run. Pool: "
+            "`cullide-cpu`'s parallel loops per frame handed to the workers, and of those waits the wake-ups of "
+            "sleeping workers and the caller's own sleeps (`Stats::poolCalls`, `poolWorkerWakes`, "
+            "`poolCallerSleeps`; means over the timed frames).\n\n"
+            "| scene | Auto, CPU frames: ms (exact) | faults | cullide-cpu: ms (exact) | faults | cullide-cpu: pool "
+            "loops / wake-ups / caller sleeps | Auto: workers | Auto: other threads |\n"
+            "|---|---|---|---|---|---|---|---|\n";
     std::ostringstream rows;
     for (const auto& scene : scenes(c, "side")) {
         const json* a = find(c, "side", scene, "cullide");
@@ -732,10 +743,10 @@ void ReportWriter::threads(const Class& c) {
                    ms(medianWhere(stages.value("exact", json::array()), cpuFrame)) + ") | " +
                    count(medianWhere(r.value("frame_minor_faults", json::array()), cpuFrame));
         };
-        rows << "| " << scene << " | " << frames(*a, true) << " | " << frames(*p, false) << " | "
-             << threadCpu(*a, true) << " | " << threadCpu(*a, false) << " |\n";
+        rows << "| " << scene << " | " << frames(*a, true) << " | " << frames(*p, false) << " | " << poolWaits(*p)
+             << " | " << threadCpu(*a, true) << " | " << threadCpu(*a, false) << " |\n";
     }
-    m_md << (rows.str().empty() ? "| – | (these records predate the per-frame figures) | | | | | |\n" : rows.str())
+    m_md << (rows.str().empty() ? "| – | (these records predate the per-frame figures) | | | | | | |\n" : rows.str())
          << "\n";
     m_md << "The CULLIDE engines with `--threads N` (`Settings::threads`; 0 is every core), each its own process on "
             "the same frames: median ms per frame, the exact stage's in brackets.\n\n";

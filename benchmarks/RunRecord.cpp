@@ -33,6 +33,8 @@ void RunRecord::add(const FrameOutput& out, const PairSet* exact) {
     m_sumUploaded += out.bytesUploaded;
     m_draws.push_back(static_cast<double>(out.draws));
     if (out.gpuTimerMs) m_gpuTimerMs.push_back(*out.gpuTimerMs);
+    if (out.pool)
+        for (int i = 0; i < 3; ++i) m_pool[i].push_back(static_cast<double>((*out.pool)[static_cast<std::size_t>(i)]));
     if (!out.levels.is_null()) m_lastLevels = out.levels;
     if (exact != nullptr) {
         m_compared = true;
@@ -76,6 +78,18 @@ void RunRecord::write(nlohmann::json& r) const {
     r["draws_median"] = median(m_draws);
     std::vector<double> faults(m_faults.begin(), m_faults.end());
     r["minor_faults_median"] = median(faults);  // per frame or step: memory freshly touched (see frame_minor_faults)
+    if (!m_pool[0].empty()) {
+        // Per frame: the culler's parallel loops and the wake-ups they waited for (Stats::poolCalls and the rest).
+        // Means: a sleep a few frames in ten would vanish in a median.
+        auto mean = [](const std::vector<double>& v) {
+            double sum = 0.0;
+            for (double x : v) sum += x;
+            return sum / static_cast<double>(v.size());
+        };
+        r["pool_calls_mean"] = mean(m_pool[0]);
+        r["pool_worker_wakes_mean"] = mean(m_pool[1]);
+        r["pool_caller_sleeps_mean"] = mean(m_pool[2]);
+    }
     // GPU timer: only when every timed frame had a valid one (a median of some frames would read as all).
     if (!m_gpuTimerMs.empty() && m_gpuTimerMs.size() == m_total.size()) r["gpu_timer_ms_median"] = median(m_gpuTimerMs);
     if (!m_lastLevels.is_null() && !m_lastLevels.empty()) r["levels_last_frame"] = m_lastLevels;

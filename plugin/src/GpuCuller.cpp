@@ -58,6 +58,8 @@ private:
     /// One frame: every overlapping pair, or only those listed in `only`.
     void runFrame(const std::vector<Object>& objects, const std::vector<ObjectIndexPair>* only, Result& result) {
         Timer total;
+        const TaskPool::Busy busy(m_pool);  // workers woken now, polling through the frame's serial steps
+        const TaskPool::Counters poolBefore = m_pool.counters();
         m_frame.surviving.swap(result.pcsTriangles);  // the lists handed out last frame: reused, capacity and all
         result.clear();
         Stats& stats = result.stats;
@@ -88,9 +90,17 @@ private:
         stats.candidateObjectPairs = result.pairs.size();
         result.pcsTriangles.swap(frame.surviving);  // reassigned at the start of the next frame
         stats.gpuDeviceBytes = m_backend ? m_backend->deviceBytes() : 0;
+        countPool(poolBefore, stats);
         stats.totalMs = total.ms();
         if (autoActive) recordAutoFrame(stats);
         frame.objects = nullptr;
+    }
+
+    void countPool(const TaskPool::Counters& before, Stats& stats) const {
+        const TaskPool::Counters now = m_pool.counters();
+        stats.poolCalls = now.calls - before.calls;
+        stats.poolWorkerWakes = now.workerWakes - before.workerWakes;
+        stats.poolCallerSleeps = now.callerSleeps - before.callerSleeps;
     }
 
     /// The CPU box pre-pass: validation (static meshes' kept from earlier frames), the overlapping object pairs

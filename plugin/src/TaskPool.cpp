@@ -32,12 +32,14 @@ unsigned allowedCpus() {
     return std::max(1u, std::thread::hardware_concurrency());
 }
 
-/// Polls `ready` for up to TaskPool::kSpin: a few pause instructions between reads, the rest of the time slice
-/// handed back between rounds (a machine with more threads than cores, or a GL driver's threads, still run).
+/// Polls `ready` for up to TaskPool::kSpin, or kBusySpin while a Busy scope is open (`busy` non-zero: read on
+/// every round, so a poll begun in a frame ends soon after the frame does): a few pause instructions between reads,
+/// the rest of the time slice handed back between rounds (a machine with more threads than cores, or a GL driver's
+/// threads, still run).
 template <typename Ready>
-bool pollFor(bool spin, const Ready& ready) {
+bool pollFor(bool spin, const std::atomic<unsigned>& busy, const Ready& ready) {
     if (!spin) return ready();
-    const auto until = std::chrono::steady_clock::now() + TaskPool::kSpin;
+    const auto start = std::chrono::steady_clock::now();
     for (;;) {
         for (int i = 0; i < 64; ++i) {
             if (ready()) return true;
@@ -45,7 +47,8 @@ bool pollFor(bool spin, const Ready& ready) {
             _mm_pause();
 #endif
         }
-        if (std::chrono::steady_clock::now() >= until) return ready();
+        const auto limit = busy.load(std::memory_order_relaxed) != 0 ? TaskPool::kBusySpin : TaskPool::kSpin;
+        if (std::chrono::steady_clock::now() - start >= limit) return ready();
         std::this_thread::yield();
     }
 }
@@ -118,11 +121,18 @@ TaskPool::~TaskPool() {
 
 bool TaskPool::waitForJob(std::uint64_t seen) {
     auto ready = [&] { return m_stop.load() || m_generation.load() != seen; };
-    if (!pollFor(m_spin, ready)) {
+    while (!pollFor(m_spin, m_busy, ready)) {
         std::unique_lock<std::mutex> lock(m_mutex);
+        const std::uint64_t nudges = m_nudges.load();
         m_sleepers.fetch_add(1);  // before the predicate's check: a caller that misses it sees a sleeper
-        m_wake.wait(lock, ready);
+        m_wake.wait(lock, [&] { return ready() || m_nudges.load() != nudges; });
         m_sleepers.fetch_sub(1);
+        const bool nudged = m_nudges.load() != nudges;  // a Busy scope started this wake-up ahead of the job
+        if (ready()) {
+            if (!nudged) m_workerWakes.fetch_add(1, std::memory_order_relaxed);
+            break;
+        }
+        // Woken by a Busy scope: poll again, for its longer time.
     }
     return !m_stop.load();
 }
@@ -143,6 +153,25 @@ void TaskPool::workerLoop() {
     }
 }
 
+TaskPool::Counters TaskPool::counters() const {
+    Counters c;
+    c.calls = m_calls.load(std::memory_order_relaxed);
+    c.workerWakes = m_workerWakes.load(std::memory_order_relaxed);
+    c.callerSleeps = m_callerSleeps.load(std::memory_order_relaxed);
+    return c;
+}
+
+TaskPool::Busy::Busy(TaskPool& pool) : m_pool(pool) {
+    if (m_pool.m_busy.fetch_add(1) != 0 || !m_pool.m_spin || m_pool.m_sleepers.load() == 0) return;
+    {
+        const std::lock_guard<std::mutex> lock(m_pool.m_mutex);  // a worker between its check and its wait waits now
+        m_pool.m_nudges.fetch_add(1);
+    }
+    m_pool.m_wake.notify_all();
+}
+
+TaskPool::Busy::~Busy() { m_pool.m_busy.fetch_sub(1); }
+
 void TaskPool::wakeWorkers(std::size_t wanted) {
     const unsigned sleepers = m_sleepers.load();
     if (sleepers == 0) return;
@@ -151,8 +180,9 @@ void TaskPool::wakeWorkers(std::size_t wanted) {
 }
 
 void TaskPool::waitFinished(Job& job) {
-    if (pollFor(m_spin, [&] { return job.done(); })) return;
+    if (pollFor(m_spin, m_busy, [&] { return job.done(); })) return;
     std::unique_lock<std::mutex> lock(m_mutex);
+    m_callerSleeps.fetch_add(1, std::memory_order_relaxed);
     job.callerAsleep.store(true);  // before the predicate's check: the worker that ends the job then notifies
     m_done.wait(lock, [&] { return job.done(); });
 }
@@ -170,6 +200,7 @@ void TaskPool::parallelFor(std::size_t count, std::size_t chunk,
         if (count > 0) fn(0, count);
         return;
     }
+    m_calls.fetch_add(1, std::memory_order_relaxed);
     Job job(fn, count, std::max<std::size_t>(1, chunk));
     m_job.store(&job);
     m_generation.fetch_add(1);

@@ -3,6 +3,7 @@
 // levels are demanded (GpuLevels::Always, Pipeline::Paper) does a missing device throw GlUnavailableError. The
 // device is made unusable with a device preference that cannot exist ("99"), which the EGL code refuses.
 #include "Compare.h"
+#include "cullide/TaskPool.h"
 #include "cullide/scenes/Procedural.h"
 
 #include <gtest/gtest.h>
@@ -13,6 +14,7 @@
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 namespace cullide::test {
 namespace {
@@ -119,6 +121,34 @@ TEST(NoGl, ALargePairsTrianglesAreExactAndSortedOnAnyThreadCount) {
         }
         EXPECT_GT(result.stats.candidateTrianglePairs, 4 * c.expected / 3) << "no work left for the split";
     }
+}
+
+TEST(NoGl, AFrameWakesItsWorkersAheadOfItsLoops) {
+    // Between frames the workers sleep (the application runs). A frame wakes them when it starts, so its parallel
+    // loops find them polling: Stats counts the wake-ups a loop had to wait for, and a frame should have none.
+    std::vector<TriangleMesh> meshes = randomSoups(11, 1, 3000, 0.5);
+    meshes.push_back(meshes[0]);
+    for (Vec3& v : meshes[1].vertices) v.x() += 0.01;
+    const auto objects = asObjects(meshes);
+    Settings settings = withoutDevice(GpuLevels::Never);
+    settings.threads = 2;
+    const auto culler = createGpuCuller(settings);
+    Result result;
+    culler->run(objects, result);
+    // A loaded machine may keep a thread off its CPU for a while: half the frames, in one of a few rounds.
+    std::size_t calls = 0, wakes = 0, framesWithout = 0;
+    for (int round = 0; round < 3 && framesWithout < 4; ++round) {
+        calls = wakes = framesWithout = 0;
+        for (int frame = 0; frame < 8; ++frame) {
+            std::this_thread::sleep_for(TaskPool::kSpin * 20);  // the workers fall asleep
+            culler->run(objects, result);
+            calls += result.stats.poolCalls;
+            wakes += result.stats.poolWorkerWakes;
+            framesWithout += result.stats.poolWorkerWakes == 0 ? 1 : 0;
+        }
+    }
+    EXPECT_GE(calls, 8u) << "the frame must hand loops to its workers";
+    EXPECT_GE(framesWithout, 4u) << wakes << " wake-ups in 8 frames";  // without the early wake-up: 0 or 1
 }
 
 /// One frame of `objects` through both cullers: the culler's pairs must be the reference's, and every triangle of

@@ -8,6 +8,7 @@
 #include <atomic>
 #include <chrono>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <string>
@@ -16,6 +17,7 @@
 
 #if defined(__linux__)
 #include <pthread.h>
+#include <sched.h>
 #include <time.h>
 #endif
 
@@ -100,7 +102,54 @@ TEST(TaskPool, BackToBackAndAfterSleepingEveryIndexOnce) {
     }
 }
 
+TEST(TaskPool, CountsOnlyTheCallsHandedToTheWorkers) {
+    TaskPool pool(3);
+    const std::uint64_t before = pool.counters().calls;
+    pool.parallelFor(5, 10, [](std::size_t, std::size_t) {});  // one chunk: the caller alone
+    pool.parallelFor(0, 1, [](std::size_t, std::size_t) {});
+    EXPECT_EQ(pool.counters().calls, before);
+    pool.parallelFor(64, 1, [](std::size_t, std::size_t) {});
+    EXPECT_EQ(pool.counters().calls, before + 1);
+    TaskPool alone(1);
+    alone.parallelFor(64, 1, [](std::size_t, std::size_t) {});
+    EXPECT_EQ(alone.counters().calls, 0u);
+}
+
 #if defined(__linux__)
+/// The CPUs this process may run on (a pool polls only when it has no more threads than that).
+unsigned allowedCpus() {
+    cpu_set_t set;
+    CPU_ZERO(&set);
+    return sched_getaffinity(0, sizeof set, &set) == 0 ? static_cast<unsigned>(CPU_COUNT(&set)) : 1u;
+}
+
+TEST(TaskPool, ABusyScopeWakesTheWorkersAheadOfItsLoops) {
+    // A loop that finds its workers asleep waits for their wake-ups (counted); a Busy scope wakes them when it
+    // opens, while the caller does its serial work, so its loops find them polling.
+    if (allowedCpus() < 2) GTEST_SKIP() << "one CPU: a pool of two threads does not poll";
+    TaskPool pool(2);
+    auto wakesOver = [&](bool busy) {
+        const std::uint64_t before = pool.counters().workerWakes;
+        for (int i = 0; i < 5; ++i) {
+            std::this_thread::sleep_for(TaskPool::kSpin * 100);  // every worker asleep, even on a loaded machine
+            std::optional<TaskPool::Busy> scope;
+            if (busy) scope.emplace(pool);
+            std::this_thread::sleep_for(TaskPool::kSpin * 2);  // the caller's serial work
+            pool.parallelFor(4, 1, [](std::size_t, std::size_t) {
+                std::this_thread::sleep_for(std::chrono::microseconds(500));
+            });
+        }
+        std::this_thread::sleep_for(TaskPool::kSpin * 20);  // a late wake-up is counted too
+        return pool.counters().workerWakes - before;
+    };
+    // A loaded machine may keep a thread off its CPU for longer than these sleeps: a few attempts each.
+    std::uint64_t without = 0, with = 1;
+    for (int attempt = 0; attempt < 4 && without < 3; ++attempt) without = wakesOver(false);
+    for (int attempt = 0; attempt < 4 && with != 0; ++attempt) with = wakesOver(true);
+    EXPECT_GE(without, 3u);
+    EXPECT_EQ(with, 0u);
+}
+
 TEST(TaskPool, IdleWorkersSleep) {
     // Polling is bounded: a pool between frames must not keep cores busy. Two threads: no more than the CPUs of
     // any test machine, so the worker polls after the call (a larger pool on a small machine sleeps at once).
@@ -132,18 +181,22 @@ TEST(TaskPool, CallerWaitingForALongChunkSleeps) {
     for (int attempt = 0; attempt < 20; ++attempt) {
         std::atomic<bool> callerTookTheShortOne{false};
         const double before = threadCpuMs();
+        const std::uint64_t sleepsBefore = pool.counters().callerSleeps;
+        std::atomic<bool> workerTookTheLongOne{false};
         pool.parallelFor(2, 1, [&](std::size_t begin, std::size_t) {
             // The first chunk claimed is short, the second long: the caller usually claims first.
             const bool shortOne = begin == 0;
             if (shortOne && std::this_thread::get_id() == caller) callerTookTheShortOne.store(true);
+            if (!shortOne && std::this_thread::get_id() != caller) workerTookTheLongOne.store(true);
             std::this_thread::sleep_for(std::chrono::milliseconds(shortOne ? 1 : 150));
         });
         const double used = threadCpuMs() - before;
-        if (!callerTookTheShortOne.load()) continue;
+        if (!callerTookTheShortOne.load() || !workerTookTheLongOne.load()) continue;
         EXPECT_LT(used, 50.0);  // polling all along would be ~150 ms
+        EXPECT_EQ(pool.counters().callerSleeps, sleepsBefore + 1);
         return;
     }
-    GTEST_SKIP() << "the caller never took the short chunk";
+    GTEST_SKIP() << "the caller never took the short chunk while a worker took the long one";
 }
 #endif
 

@@ -68,6 +68,13 @@ struct Stats {
     std::size_t meshOrdersComputed = 0;
     std::size_t intersectingTrianglePairs = 0;  ///< exact pairs found (0 with Settings::exactTriangles false)
     std::size_t draws = 0;
+    /// The culler's worker pool this frame (TaskPool::Counters): parallel loops handed to the workers, sleeping
+    /// workers a loop had to wake, and times the calling thread slept waiting for the workers. Each wake-up sits on
+    /// a loop's critical path (costly on virtual machines); the frame wakes its workers at its start and they poll
+    /// through its serial steps, so a steady frame should have none.
+    std::size_t poolCalls = 0;
+    std::size_t poolWorkerWakes = 0;
+    std::size_t poolCallerSleeps = 0;
     /// GpuLevels::Auto with a GL device: "measuring" (the first four frames of a scene, and again after its triangle
     /// count halved or doubled, at most once per 120 frames, alternate the CPU path and the GPU levels and time
     /// them), then "gpu" or "cpu", the faster of the two. Empty where nothing was decided (GpuLevels::Always or

@@ -20,11 +20,38 @@ class TaskPool {
 public:
     /// The name each worker thread gets where the platform has thread names (Linux: 15 characters at most).
     static constexpr const char* kWorkerName = "cullide-worker";
-    /// How long an idle worker (and a caller waiting for the last chunks) keeps polling before it sleeps. A frame
-    /// runs a few dozen parallelFor calls with short serial steps between them; waking a sleeping thread costs
-    /// tens of microseconds each time, so workers stay awake across those steps, and sleep between frames. Only
+    /// How long an idle worker (and a caller waiting for the last chunks) keeps polling before it sleeps, outside
+    /// a Busy scope: back-to-back calls find the workers awake, and they sleep soon between frames (where the
+    /// application's own threads, or the Bullet adapter's narrow-phase pool, want the cores). Polling happens only
     /// when the pool has no more threads than the process has CPUs; otherwise they sleep at once.
     static constexpr std::chrono::microseconds kSpin{100};
+    /// The same, while a Busy scope is open (a culler frame: a few dozen parallelFor calls with serial steps between
+    /// them). A wake-up costs a futex call and, on a virtual machine, an interrupt to a halted virtual CPU (tens to
+    /// hundreds of microseconds, on a loop's critical path), so within a frame threads poll through its serial
+    /// steps. Checked on every round of polling: when the scope closes, polls fall back to kSpin.
+    static constexpr std::chrono::microseconds kBusySpin{2000};
+
+    /// What the pool's threads did since it was made (Stats reports them per frame).
+    struct Counters {
+        std::uint64_t calls = 0;         ///< parallelFor calls handed to the workers (not run on the caller alone)
+        std::uint64_t workerWakes = 0;  ///< times a parallelFor woke a sleeping worker (not a Busy scope's wake-up)
+        std::uint64_t callerSleeps = 0;  ///< times a caller slept waiting for the workers' last chunks
+    };
+
+    /// While one exists, threads poll for kBusySpin instead of kSpin, and its constructor wakes the sleeping
+    /// workers, so that their wake-ups overlap the caller's serial work before its first parallelFor. For a span of
+    /// many parallelFor calls with short serial steps between them (one culler frame). Scopes may nest; open and
+    /// close them on the thread that calls parallelFor.
+    class Busy {
+    public:
+        explicit Busy(TaskPool& pool);
+        ~Busy();
+        Busy(const Busy&) = delete;
+        Busy& operator=(const Busy&) = delete;
+
+    private:
+        TaskPool& m_pool;
+    };
 
     /// `threads` = total workers including the calling thread; 0 = the CPUs this process may run on (its affinity
     /// mask where the platform has one, else the hardware concurrency).
@@ -42,6 +69,7 @@ public:
     void parallelFor(std::size_t count, std::size_t chunk, const std::function<void(std::size_t, std::size_t)>& fn,
                      const std::function<void()>& first);
     unsigned size() const { return static_cast<unsigned>(m_workers.size()) + 1; }
+    Counters counters() const;
 
 private:
     struct Job;
@@ -60,6 +88,11 @@ private:
     std::atomic<unsigned> m_sleepers{0};  ///< workers asleep on m_wake
     std::atomic<bool> m_stop{false};
     bool m_spin = true;  ///< idle threads poll before they sleep (see kSpin)
+    std::atomic<unsigned> m_busy{0};  ///< open Busy scopes
+    std::atomic<std::uint64_t> m_nudges{0};  ///< moved on (under m_mutex) to wake sleeping workers without a job
+    std::atomic<std::uint64_t> m_calls{0};
+    std::atomic<std::uint64_t> m_workerWakes{0};
+    std::atomic<std::uint64_t> m_callerSleeps{0};
     std::mutex m_mutex;  ///< only for sleeping and waking
     std::condition_variable m_wake;
     std::condition_variable m_done;
