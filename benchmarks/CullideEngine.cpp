@@ -58,7 +58,8 @@ void CullideEngine::run(const BenchFrame& frame, FrameOutput& out) {
     out.levels = nlohmann::json::array();
     for (const LevelStats& l : s.levels) {
         nlohmann::json level = {{"name", l.name}, {"items", l.itemsPerIteration}, {"draws", l.draws},
-                                {"cpu_ms", l.cpuMs}, {"setup_ms", l.setupMs}, {"wait_ms", l.waitMs}};
+                                {"cpu_ms", l.cpuMs}, {"setup_ms", l.setupMs}, {"setup_send_ms", l.setupSendMs},
+                                {"records", l.records}, {"record_builds", l.recordBuilds}, {"wait_ms", l.waitMs}};
         if (l.gpuTimingValid) level["gpu_ms"] = l.gpuMs;
         out.levels.push_back(level);
     }

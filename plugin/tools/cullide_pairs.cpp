@@ -177,6 +177,9 @@ nlohmann::ordered_json statsToJson(const cullide::Stats& s) {
         lj["draws"] = l.draws;
         lj["cpu_ms"] = l.cpuMs;
         lj["setup_ms"] = l.setupMs;
+        lj["setup_send_ms"] = l.setupSendMs;
+        lj["records"] = l.records;
+        lj["record_builds"] = l.recordBuilds;
         lj["wait_ms"] = l.waitMs;
         lj["gpu_ms"] = gpuTime(l.gpuMs, l.gpuTimingValid);
         levels.push_back(std::move(lj));

@@ -27,9 +27,14 @@ void expectValidOrAbsent(const Stats& stats, const std::string& what) {
     for (const LevelStats& level : stats.levels) {
         // The GL back-end's split of the level's CPU time: its set-up and its read-back waits are parts of it.
         // A level that drew ran on the device, so it built and sent its records first.
+        // Sending is part of the set-up; every item has a primitive, every primitive at least one record.
         if (level.draws > 0) {
             EXPECT_GT(level.setupMs, 0.0) << what << ", level " << level.name;
+            EXPECT_GT(level.setupSendMs, 0.0) << what << ", level " << level.name;
+            EXPECT_GE(level.recordBuilds, 1u) << what << ", level " << level.name;
+            EXPECT_GE(level.records, level.itemsPerIteration.front()) << what << ", level " << level.name;
         }
+        EXPECT_LE(level.setupSendMs, level.setupMs) << what << ", level " << level.name;
         EXPECT_GE(level.waitMs, 0.0) << what << ", level " << level.name;
         EXPECT_LE(level.setupMs + level.waitMs, level.cpuMs) << what << ", level " << level.name;
         if (level.gpuTimingValid) {

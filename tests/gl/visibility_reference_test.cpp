@@ -72,6 +72,33 @@ TEST_P(VisibilityLockstep, GlKeepsExactlyWhatTheReferenceKeeps) {
     EXPECT_GT(log.itemsPruned, log.itemsIn / 10) << log.summary();
 }
 
+/// Two crossing quads, each two triangles wider than half the view: at 512² each triangle covers more pixels of
+/// its views than one compute invocation may scan (CULLIDE_MAX_LOOP_ITERATIONS), so its records must be bands. A
+/// band count from too small a footprint shows as an overflow, which the lockstep check counts as a mismatch.
+TEST(VisibilityBands, LargeTrianglesAreSplitIntoBandsAndKeptAsTheReferenceKeepsThem) {
+    LockstepCase c{Pipeline::Auto, Mode::Reliable, Backend::Compute, 512};
+    const Settings settings = lockstepSettings(c);
+    CULLIDE_GPU_CULLER_OR_SKIP(probe, settings);
+    TriangleMesh flat, upright;
+    flat.vertices = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
+    upright.vertices = {{0, -1, -1}, {0, 1, -1}, {0, 1, 1}, {0, -1, 1}};
+    flat.triangles = upright.triangles = {{0, 1, 2}, {0, 2, 3}};
+    auto log = std::make_shared<LockstepLog>();
+    std::unique_ptr<Culler> culler = createGpuCuller(settings, lockstepFactory(log));
+    Result r;
+    culler->run(asObjects({flat, upright}), r);
+    EXPECT_EQ(r.stats.gpuFallbacks, 0u) << r.stats.gpuError;
+    EXPECT_EQ(log->mismatches, 0u) << log->summary();
+    bool sawTriangles = false;
+    for (const LevelStats& level : r.stats.levels) {
+        if (level.name != "triangles") continue;
+        sawTriangles = true;
+        EXPECT_GT(level.records, 4 * level.itemsPerIteration.front()) << "too few bands for the quads' triangles";
+    }
+    EXPECT_TRUE(sawTriangles);
+    EXPECT_EQ(r.pairs.size(), 1u);
+}
+
 INSTANTIATE_TEST_SUITE_P(
     Matrix, VisibilityLockstep,
     ::testing::Values(LockstepCase{Pipeline::Auto, Mode::Reliable, Backend::Compute, 16},

@@ -18,6 +18,12 @@ struct LevelStats {
     /// Of cpuMs, GL back-end: building and sending the level's item data and records (at its start, and again where
     /// the view shrank enough to refit the records' bands).
     double setupMs = 0.0;
+    /// Of setupMs, the GL calls that send the item data and records to the device (the rest builds them on the CPU).
+    double setupSendMs = 0.0;
+    /// GL back-end: records sent for the level's iterations (one per primitive; on the compute back-end one per band
+    /// of a primitive's footprint), over all builds, and the builds: one at the start, one per refit of the bands.
+    std::size_t records = 0;
+    std::size_t recordBuilds = 0;
     /// Of cpuMs, GL back-end: blocked in read-backs (each iteration's counters, the level's alive set), i.e. waiting
     /// for the device to finish the work submitted before. The rest of cpuMs is issuing commands and the level loop.
     double waitMs = 0.0;

@@ -123,7 +123,7 @@ struct VisibilityPass::Impl {
     std::vector<std::uint32_t> bandScratch;  ///< bands (records) of each alive primitive
     std::vector<double> chunkSums;           ///< footprint pixels per chunk of items
     std::vector<std::size_t> chunkFirst;     ///< first record of each chunk of items (and the total)
-    std::vector<float> boundsScratch;
+    std::vector<float> boundsScratch;  ///< the level's item float boxes (uploadItems), kept until its end
     std::vector<std::uint32_t> aliveScratch;
     std::vector<std::uint8_t> recordAlive;  ///< the alive set the records are built from (all at a level's start)
     const GpuGeometry* geometry = nullptr;
@@ -238,9 +238,8 @@ struct VisibilityPass::Impl {
 
     /// Sends what the survivor pass needs of the level's items: their owners, float boxes (rounded outwards) and
     /// the alive set (every item).
-    void uploadItems(const LevelItems& items, TaskPool& pool, Stats& stats) {
+    void uploadItems(const LevelItems& items, TaskPool& pool, LevelStats& level, Stats& stats) {
         const std::size_t n = items.size();
-        uploadBuffer(buffers[kOwners], capacity[kOwners], items.owner.data(), n * 4);
         boundsScratch.resize(6 * n);
         pool.parallelFor(n, kSetupChunk, [&](std::size_t begin, std::size_t end) {
             for (std::size_t i = begin; i < end; ++i) {
@@ -251,6 +250,8 @@ struct VisibilityPass::Impl {
                 }
             }
         });
+        const auto send = Clock::now();
+        uploadBuffer(buffers[kOwners], capacity[kOwners], items.owner.data(), n * 4);
         uploadBuffer(buffers[kItemBounds], capacity[kItemBounds], boundsScratch.data(), boundsScratch.size() * 4);
         stats.bytesUploaded += n * 4 + boundsScratch.size() * 4;
         reserveBuffer(buffers[kFlags], capacity[kFlags], n * 4);
@@ -258,12 +259,20 @@ struct VisibilityPass::Impl {
         const GLuint one = 1;
         glClearNamedBufferSubData(buffers[kAlive], GL_R32UI, 0, static_cast<GLsizeiptr>(n * 4), GL_RED_INTEGER,
                                   GL_UNSIGNED_INT, &one);
+        level.setupSendMs += msSince(send);
     }
 
-    /// Pixels of primitive `ref`'s largest footprint over the three views of `view` (its bounding rectangle grown
-    /// by the tested square and a pixel of rounding on each side).
-    double footprintPixels(std::uint32_t ref, const View& view) const {
-        const Vec3 size = primExtent(ref);
+    /// The extent of item i's float box (uploadItems): for an item of one primitive (a triangle level's triangle, a
+    /// box) at least that primitive's extent — its float positions or box lie in it — read in item order, where
+    /// primExtent gathers the triangle's vertices from all over the cluster's geometry.
+    Vec3 itemExtent(std::size_t i) const {
+        const float* f = &boundsScratch[6 * i];
+        return Vec3(double{f[3]} - f[0], double{f[4]} - f[1], double{f[5]} - f[2]);
+    }
+
+    /// Pixels of the largest footprint over the three views of `view` of a primitive of extent `size` (its bounding
+    /// rectangle grown by the tested square and a pixel of rounding on each side).
+    static double footprintPixels(const Vec3& size, const View& view) {
         double pixels = 0.0;
         for (int a = 0; a < 3; ++a) {
             const int u = (a + 1) % 3, v = (a + 2) % 3;
@@ -279,7 +288,7 @@ struct VisibilityPass::Impl {
     /// chunks of items (the same records, in the same order, for any number of threads): footprints, then bands
     /// and each chunk's record count, then the records at each chunk's offset.
     std::size_t buildRecords(const LevelItems& items, const std::vector<std::uint8_t>& alive, const View& view,
-                             TaskPool& pool, Stats& stats) {
+                             TaskPool& pool, LevelStats& level, Stats& stats) {
         const bool split = settings.backend == Backend::Compute;
         const std::size_t chunks = (items.size() + kSetupChunk - 1) / kSetupChunk;
         auto forChunks = [&](auto&& perItem) {
@@ -292,8 +301,11 @@ struct VisibilityPass::Impl {
         chunkSums.assign(chunks, 0.0);
         footprintScratch.resize(split ? items.prims.size() : 0);
         if (split) forChunks([&](std::size_t c, std::size_t i) {
-            for (std::uint32_t p = items.primBegin[i]; p < items.primBegin[i + 1]; ++p) {
-                footprintScratch[p] = footprintPixels(items.prims[p], view);
+            const std::uint32_t first = items.primBegin[i], end = items.primBegin[i + 1];
+            for (std::uint32_t p = first; p < end; ++p) {
+                // A larger extent only means more, shorter bands: never an overflow.
+                footprintScratch[p] = footprintPixels(end - first == 1 ? itemExtent(i) : primExtent(items.prims[p]),
+                                                      view);
                 chunkSums[c] += footprintScratch[p];
             }
         });
@@ -322,8 +334,12 @@ struct VisibilityPass::Impl {
                 }
             }
         });
+        const auto send = Clock::now();
         uploadBuffer(buffers[kPrims], capacity[kPrims], primScratch.data(), primScratch.size() * 4);
+        level.setupSendMs += msSince(send);
         stats.bytesUploaded += primScratch.size() * 4;
+        level.records += primScratch.size() / 4;
+        level.recordBuilds += 1;
         return primScratch.size() / 4;
     }
 
@@ -512,9 +528,9 @@ void VisibilityPass::beginLevel(const LevelItems& items, const View& view, TaskP
     s.context.makeCurrent();
     const auto t0 = Clock::now();
     s.levelItems = &items;
-    s.uploadItems(items, pool, stats);
+    s.uploadItems(items, pool, level, stats);
     s.recordAlive.assign(items.size(), 1);
-    s.recordCount = s.buildRecords(items, s.recordAlive, view, pool, stats);
+    s.recordCount = s.buildRecords(items, s.recordAlive, view, pool, level, stats);
     s.recordedView = view.box;
     level.setupMs += msSince(t0);
 }
@@ -526,7 +542,7 @@ IterationResult VisibilityPass::iterate(const View& view, std::uint32_t idBits, 
     if (recordsStale(view.box, s.recordedView)) {
         s.readAlive(s.levelItems->size(), s.recordAlive, level, stats);
         const auto t0 = Clock::now();
-        s.recordCount = s.buildRecords(*s.levelItems, s.recordAlive, view, pool, stats);
+        s.recordCount = s.buildRecords(*s.levelItems, s.recordAlive, view, pool, level, stats);
         s.recordedView = view.box;
         level.setupMs += msSince(t0);
     }
