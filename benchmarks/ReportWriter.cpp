@@ -637,8 +637,9 @@ void ReportWriter::gpuLevels(const Class& c) {
             "levels forced: the levels' wall time (CPU side included: records, uploads, waiting for the flags), "
             "their GPU time from timer queries (– where the driver's timer is absent or implausible) and the "
             "draws and dispatches per frame (medians); per level, the last frame's items per iteration and its "
-            "CPU / GPU ms, and of the CPU ms the set-up (item data and records built and sent) and the time blocked "
-            "in read-backs (waiting for the device); the rest is issuing commands.\n\n| scene | Auto decision | "
+            "CPU / GPU ms, and of the CPU ms the set-up (item data and records built and sent; of it, the GL calls "
+            "that send them, and the records sent) and the time blocked in read-backs (waiting for the device); the "
+            "rest is issuing commands.\n\n| scene | Auto decision | "
             "trial: CPU path ms | trial: GPU levels ms | engine | levels "
             "wall ms | levels GPU ms | draws | per level (last frame): items per iteration, CPU / GPU ms |\n"
             "|---|---|---|---|---|---|---|---|---|\n";
@@ -660,9 +661,13 @@ void ReportWriter::gpuLevels(const Class& c) {
                 levels += (levels.empty() ? "" : "; ") + l.value("name", std::string()) + " " + items + ", " +
                           ms(l.value("cpu_ms", 0.0)) + " / " +
                           (l.contains("gpu_ms") ? ms(l.value("gpu_ms", 0.0)) : std::string("–"));
+                // Set-up split into sending (GL calls) and building on the CPU, where the record has it.
                 if (l.contains("setup_ms"))
-                    levels += " (set-up " + ms(l.value("setup_ms", 0.0)) + ", waiting " + ms(l.value("wait_ms", 0.0)) +
-                              ")";
+                    levels += " (set-up " + ms(l.value("setup_ms", 0.0)) +
+                              (l.contains("setup_send_ms") ? " of which sending " + ms(l.value("setup_send_ms", 0.0)) +
+                                                                 ", " + count(l.value("records", 0.0)) + " records"
+                                                           : std::string()) +
+                              ", waiting " + ms(l.value("wait_ms", 0.0)) + ")";
             }
             rows << "| " << scene << " | " << a->value("auto_decision", std::string()) << " | "
                  << ms(a->value("auto_cpu_ms", 0.0)) << " | " << ms(a->value("auto_gpu_ms", 0.0)) << " | " << e
