@@ -25,9 +25,9 @@ double bound(double cpuMs) { return 1.05 * cpuMs + 2.0; }
 void expectValidOrAbsent(const Stats& stats, const std::string& what) {
     bool allLevelsValid = true;
     for (const LevelStats& level : stats.levels) {
-        // The GL back-end's split of the level's CPU time: its set-up and its read-back waits are parts of it.
-        // A level that drew ran on the device, so it built and sent its records first.
-        // Sending is part of the set-up; every item has a primitive, every primitive at least one record.
+        // The GL back-end's split of the level's CPU time: its set-up (of which sending) and its read-back waits
+        // are parts of it. A level that drew ran on the device, so it built and sent its records first: at least
+        // one record per item (every item has a primitive, every primitive at least one record).
         if (level.draws > 0) {
             EXPECT_GT(level.setupMs, 0.0) << what << ", level " << level.name;
             EXPECT_GT(level.setupSendMs, 0.0) << what << ", level " << level.name;

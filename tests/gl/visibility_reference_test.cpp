@@ -76,8 +76,7 @@ TEST_P(VisibilityLockstep, GlKeepsExactlyWhatTheReferenceKeeps) {
 /// its views than one compute invocation may scan (CULLIDE_MAX_LOOP_ITERATIONS), so its records must be bands. A
 /// band count from too small a footprint shows as an overflow, which the lockstep check counts as a mismatch.
 TEST(VisibilityBands, LargeTrianglesAreSplitIntoBandsAndKeptAsTheReferenceKeepsThem) {
-    LockstepCase c{Pipeline::Auto, Mode::Reliable, Backend::Compute, 512};
-    const Settings settings = lockstepSettings(c);
+    const Settings settings = lockstepSettings({Pipeline::Auto, Mode::Reliable, Backend::Compute, 512});
     CULLIDE_GPU_CULLER_OR_SKIP(probe, settings);
     TriangleMesh flat, upright;
     flat.vertices = {{-1, -1, 0}, {1, -1, 0}, {1, 1, 0}, {-1, 1, 0}};
