@@ -15,6 +15,11 @@
 #define CULLIDE_SSBO_ALIVE 8       /* uint[itemCount]: 1 = the item is still in the level's set (kept on the device) */
 #define CULLIDE_SSBO_ITEM_BOUNDS 9 /* float[6 * itemCount]: item box, min xyz, max xyz (upload-origin relative) */
 #define CULLIDE_SSBO_PRIMS_OUT 10  /* uvec4[primCount]: compact.comp: the records of the items still alive */
+/* The record build (build.comp): */
+#define CULLIDE_SSBO_PRIM_BEGIN 11 /* uint[itemCount + 1]: item i's primitives are ITEM_PRIMS[begin[i] .. begin[i + 1]) */
+#define CULLIDE_SSBO_ITEM_PRIMS 12 /* uint[itemPrimCount]: primitive references (triangle, or box | CULLIDE_PRIM_BOX_BIT) */
+#define CULLIDE_SSBO_BANDS 13      /* uint[itemPrimCount]: each primitive's footprint (float bits), then its bands */
+#define CULLIDE_SSBO_BUILD 14      /* uint[CULLIDE_BUILD_GROUPS + work groups]: see CULLIDE_BUILD_* */
 
 /* Counters, reset before every iteration. */
 #define CULLIDE_COUNTER_OVERFLOWS 0 /* compute invocations that would exceed CULLIDE_MAX_LOOP_ITERATIONS */
@@ -25,6 +30,20 @@
 #define CULLIDE_COUNTER_HI 7        /* 3 entries: max xyz of their boxes, likewise */
 #define CULLIDE_COUNTER_RECORDS 10  /* records compact.comp kept */
 #define CULLIDE_COUNTER_COUNT 11
+
+/* The record build's buffer. Per work group of the per-primitive passes, CULLIDE_BUILD_GROUPS + g holds its footprint sum
+ * (float bits, FOOTPRINTS), then its record count (COUNT), then its first record (OFFSETS). */
+#define CULLIDE_BUILD_TOTAL 0      /* records of the alive items (OFFSETS) */
+#define CULLIDE_BUILD_APPROX 1     /* the same as a float (bits): no wrap-around, for the C++ side's size limit */
+#define CULLIDE_BUILD_PER_BAND 2   /* pixels per band (float bits, SCALE) */
+#define CULLIDE_BUILD_GROUPS 4
+
+/* Passes of build.comp (CULLIDE_LOC_PASS). FOOTPRINTS and SCALE run on the compute back-end only. */
+#define CULLIDE_BUILD_PASS_FOOTPRINTS 0 /* per primitive: its largest footprint; the work group's sum */
+#define CULLIDE_BUILD_PASS_SCALE 1      /* one work group: pixels per band from the sum over all primitives */
+#define CULLIDE_BUILD_PASS_COUNT 2      /* per primitive: its bands; the work group's records */
+#define CULLIDE_BUILD_PASS_OFFSETS 3    /* one work group: each work group's first record, the total */
+#define CULLIDE_BUILD_PASS_WRITE 4      /* per primitive: its records, in item order */
 
 /* Per-pixel images (r32ui), three views side by side: width 3 * resolution, height resolution. */
 #define CULLIDE_IMAGE_NEAR1 0  /* min over items of (quantized nearest depth << idBits | owner) */
@@ -46,11 +65,21 @@
 #define CULLIDE_LOC_AXES 10         /* uint: bit mask of the view axes in use (x = 1, y = 2, z = 4) */
 #define CULLIDE_LOC_PRIM_BASE 11    /* uint: first primitive of this dispatch (dispatches are split at the group-count limit) */
 #define CULLIDE_LOC_REQUIRED 12     /* uint: survive.comp: the flag bits an item needs to stay alive */
+#define CULLIDE_LOC_BANDS 13        /* int: build.comp: CULLIDE_BANDS_* */
+#define CULLIDE_LOC_GROUPS 14       /* uint: build.comp: work groups of its per-primitive passes */
+#define CULLIDE_LOC_ITEM_COUNT 15   /* uint: build.comp: the level's items */
+
+#define CULLIDE_BANDS_NONE 0        /* one record per primitive (raster back-end) */
+#define CULLIDE_BANDS_LONG 1        /* bands of CULLIDE_PIXELS_PER_INVOCATION pixels (software renderers) */
+#define CULLIDE_BANDS_SHORT 2       /* bands for about CULLIDE_TARGET_INVOCATIONS records (hardware GPUs) */
 
 #define CULLIDE_COMPUTE_GROUP_SIZE 64 /* local_size_x of cull.comp */
-/* The C++ side splits a primitive's footprint into bands of at most this many pixels per compute invocation (on a
- * hardware GPU far fewer: enough bands to fill the device, see VisibilityPass.cpp)... */
+/* The record build splits a primitive's footprint into bands of at most this many pixels per compute invocation (on
+ * a hardware GPU far fewer: enough bands to fill the device, see build.comp)... */
 #define CULLIDE_PIXELS_PER_INVOCATION 4096
+/* ...on a hardware GPU bands as short as needed for about this many records, but at least this many pixels. */
+#define CULLIDE_TARGET_INVOCATIONS 131072.0
+#define CULLIDE_MIN_PIXELS_PER_INVOCATION 32.0
 /* ...so no invocation comes near llvmpipe's limit of 65535 loop iterations per invocation (shared by all loops;
  * past it loops silently stop). An invocation that would still exceed this bound does nothing and counts itself
  * in CULLIDE_COUNTER_OVERFLOWS; that iteration prunes nothing (conservative) and the level ends. */

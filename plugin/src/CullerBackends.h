@@ -14,8 +14,15 @@ namespace cullide {
 /// Makes the backend for a culler's settings; may throw GlUnavailableError (no usable GL device).
 using PruningBackendFactory = std::function<std::unique_ptr<PruningBackend>(const Settings&)>;
 
+/// Knobs of the GL backend that only tests turn.
+struct GlBackendOptions {
+    /// The compute back-end's bands as on a hardware GPU (about CULLIDE_TARGET_INVOCATIONS records per build) on a
+    /// software renderer too, which otherwise scans 4,096 pixels per band: so that llvmpipe runs the GPU's records.
+    bool shortBands = false;
+};
+
 /// The GL visibility test (gl/VisibilityPass). Throws GlUnavailableError without a usable GL device.
-std::unique_ptr<PruningBackend> createGlPruningBackend(const Settings& settings);
+std::unique_ptr<PruningBackend> createGlPruningBackend(const Settings& settings, const GlBackendOptions& options = {});
 
 /// The CPU reference of the visibility test (ReferenceVisibility.h): no GL, single-threaded, exact same answers.
 std::unique_ptr<PruningBackend> createReferencePruningBackend(const Settings& settings);

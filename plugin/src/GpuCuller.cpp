@@ -259,7 +259,7 @@ std::unique_ptr<Culler> createGpuCuller(const Settings& settings, const PruningB
 }
 
 std::unique_ptr<Culler> createGpuCuller(const Settings& settings) {
-    return createGpuCuller(settings, createGlPruningBackend);
+    return createGpuCuller(settings, [](const Settings& s) { return createGlPruningBackend(s); });
 }
 
 }  // namespace cullide

@@ -103,9 +103,9 @@ std::string LockstepLog::summary() const {
     return s.str();
 }
 
-PruningBackendFactory lockstepFactory(std::shared_ptr<LockstepLog> log) {
-    return [log](const Settings& settings) -> std::unique_ptr<PruningBackend> {
-        return std::make_unique<LockstepBackend>(createGlPruningBackend(settings),
+PruningBackendFactory lockstepFactory(std::shared_ptr<LockstepLog> log, GlBackendOptions options) {
+    return [log, options](const Settings& settings) -> std::unique_ptr<PruningBackend> {
+        return std::make_unique<LockstepBackend>(createGlPruningBackend(settings, options),
                                                  createReferencePruningBackend(settings), log);
     };
 }

@@ -24,7 +24,8 @@ struct LockstepLog {
     std::string summary() const;
 };
 
-/// A factory for createGpuCuller(settings, factory): each culler gets a lockstep backend writing into `log`.
-PruningBackendFactory lockstepFactory(std::shared_ptr<LockstepLog> log);
+/// A factory for createGpuCuller(settings, factory): each culler gets a lockstep backend writing into `log`, around a
+/// GL backend made with `options`.
+PruningBackendFactory lockstepFactory(std::shared_ptr<LockstepLog> log, GlBackendOptions options = {});
 
 }  // namespace cullide::test

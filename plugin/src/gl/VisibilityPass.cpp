@@ -59,21 +59,12 @@ std::size_t uploadAfterPrefix(GLuint buffer, std::size_t& capacity, std::size_t&
 constexpr double kTimerFactor = 1.02;
 constexpr double kTimerSlackMs = 0.25;
 
-/// Compute back-end: pixels of a primitive's footprint scanned per invocation. Software renderers (llvmpipe) run
-/// a few invocations per core, so long bands cost nothing there and keep the records few. A GPU needs the work
-/// spread over many threads: a band of 4,096 pixels is 4,096 dependent image atomics in one thread, which made the
-/// group level take 7-18 ms of GPU time per frame on an H100 (docs/performance.md). There, bands are as short as
-/// needed for about kTargetInvocations records (each run on three view axes), but at least kMinPixelsPerInvocation
-/// pixels, so that the per-iteration record upload stays bounded.
-constexpr double kTargetInvocations = 131072.0;
-constexpr double kMinPixelsPerInvocation = 32.0;
-double pixelsPerInvocation(double footprintPixels, bool software) {
-    if (software) return CULLIDE_PIXELS_PER_INVOCATION;
-    return std::clamp(std::ceil(footprintPixels / kTargetInvocations), kMinPixelsPerInvocation,
-                      double{CULLIDE_PIXELS_PER_INVOCATION});
-}
+/// Records of one build beyond which the level gives up (BackendError: that frame prunes nothing): 64 Mi records,
+/// 1 GiB of device memory. A build makes about (primitives + max(CULLIDE_TARGET_INVOCATIONS, footprint pixels /
+/// CULLIDE_PIXELS_PER_INVOCATION)) records on a hardware GPU, primitives + footprint pixels / 4,096 on llvmpipe.
+constexpr double kMaxRecords = 67108864.0;
 
-/// Items per task of the level set-up (item boxes, records): a task outweighs its hand-off to a worker.
+/// Items per task of the level set-up (item boxes): a task outweighs its hand-off to a worker.
 constexpr std::size_t kSetupChunk = 4096;
 
 enum Buffer {
@@ -88,6 +79,10 @@ enum Buffer {
     kCounters,
     kAlive,
     kItemBounds,
+    kPrimBegin,
+    kItemPrims,
+    kBands,
+    kBuild,
     kBufferCount
 };
 constexpr std::size_t kRecordBytes = 7 * 16;  // PrimRecord in common.glsl
@@ -110,6 +105,8 @@ struct VisibilityPass::Impl {
     GLuint setupProgram = 0;  // raster back-end only
     GLuint surviveProgram = 0;
     GLuint compactProgram = 0;
+    GLuint buildProgram = 0;
+    int bands = CULLIDE_BANDS_NONE;  ///< build.comp's CULLIDE_BANDS_* for this back-end and device
     GLuint vao = 0;
     GLuint framebuffer = 0;
     GLuint images[4] = {};
@@ -118,35 +115,16 @@ struct VisibilityPass::Impl {
     std::size_t valid[kBufferCount] = {};  ///< bytes of the buffer that hold the last upload (positions, indices)
     GLuint timer = 0;
     std::size_t maxGroups = 65535;  ///< GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]
-    std::vector<std::uint32_t> primScratch;
-    std::vector<double> footprintScratch;  ///< compute back-end: pixels of each alive primitive's largest footprint
-    std::vector<std::uint32_t> bandScratch;  ///< bands (records) of each alive primitive
-    std::vector<double> chunkSums;           ///< footprint pixels per chunk of items
-    std::vector<std::size_t> chunkFirst;     ///< first record of each chunk of items (and the total)
-    std::vector<float> boundsScratch;  ///< the level's item float boxes (uploadItems), kept until its end
+    std::vector<float> boundsScratch;  ///< the level's item float boxes (uploadItems)
     std::vector<std::uint32_t> aliveScratch;
-    std::vector<std::uint8_t> recordAlive;  ///< the alive set the records are built from (all at a level's start)
     const GpuGeometry* geometry = nullptr;
     // The level being pruned (beginLevel .. its last iterate).
     const LevelItems* levelItems = nullptr;
     std::size_t recordCount = 0;  ///< records of the alive items, in kPrims
-    Aabb recordedView;          ///< the view the records' bands were fitted to
+    bool recordsPending = false;  ///< counted (countRecords), not yet written: the next iteration writes them first
+    Aabb recordedView;            ///< the view the records' bands were fitted to
 
-    /// Extent of a primitive (a box, or a triangle of the uploaded geometry).
-    Vec3 primExtent(std::uint32_t ref) const {
-        Aabb b;
-        if (ref & CULLIDE_PRIM_BOX_BIT) {
-            const float* f = &geometry->boxes[6 * (ref & ~CULLIDE_PRIM_BOX_BIT)];
-            return Vec3(f[3] - f[0], f[4] - f[1], f[5] - f[2]);
-        }
-        for (int k = 0; k < 3; ++k) {
-            const float* v = &geometry->positions[3 * geometry->indices[3 * ref + static_cast<std::uint32_t>(k)]];
-            b.grow(Vec3(v[0], v[1], v[2]));
-        }
-        return b.extent();
-    }
-
-    Impl(std::unique_ptr<EglContext> c, const Settings& s)
+    Impl(std::unique_ptr<EglContext> c, const Settings& s, const GlBackendOptions& options)
         : ownContext(std::move(c)), context(*ownContext), settings(s) {
         context.makeCurrent();
         if (settings.backend == Backend::Compute) {
@@ -168,6 +146,9 @@ struct VisibilityPass::Impl {
         }
         surviveProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"survive.comp"})}, "the survivor program");
         compactProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"compact.comp"})}, "the compaction program");
+        buildProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"build.comp"})}, "the record build program");
+        if (settings.backend == Backend::Compute)
+            bands = context.isSoftware() && !options.shortBands ? CULLIDE_BANDS_LONG : CULLIDE_BANDS_SHORT;
         glCreateVertexArrays(1, &vao);
         glCreateBuffers(kBufferCount, buffers);
         const GLsizei width = 3 * settings.resolution;
@@ -196,6 +177,7 @@ struct VisibilityPass::Impl {
         if (setupProgram) glDeleteProgram(setupProgram);
         glDeleteProgram(surviveProgram);
         glDeleteProgram(compactProgram);
+        glDeleteProgram(buildProgram);
     }
 
     /// `count` invocations (times `layers` in y) in dispatches of at most GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]
@@ -236,8 +218,8 @@ struct VisibilityPass::Impl {
         glUniform1ui(CULLIDE_LOC_AXES, settings.axes);
     }
 
-    /// Sends what the survivor pass needs of the level's items: their owners, float boxes (rounded outwards) and
-    /// the alive set (every item).
+    /// Sends what the record build and the survivor pass need of the level's items: their primitives, owners and
+    /// float boxes (rounded outwards), and the alive set (every item).
     void uploadItems(const LevelItems& items, TaskPool& pool, LevelStats& level, Stats& stats) {
         const std::size_t n = items.size();
         boundsScratch.resize(6 * n);
@@ -253,7 +235,9 @@ struct VisibilityPass::Impl {
         const auto send = Clock::now();
         uploadBuffer(buffers[kOwners], capacity[kOwners], items.owner.data(), n * 4);
         uploadBuffer(buffers[kItemBounds], capacity[kItemBounds], boundsScratch.data(), boundsScratch.size() * 4);
-        stats.bytesUploaded += n * 4 + boundsScratch.size() * 4;
+        uploadBuffer(buffers[kPrimBegin], capacity[kPrimBegin], items.primBegin.data(), items.primBegin.size() * 4);
+        uploadBuffer(buffers[kItemPrims], capacity[kItemPrims], items.prims.data(), items.prims.size() * 4);
+        stats.bytesUploaded += (n + items.primBegin.size() + items.prims.size() + boundsScratch.size()) * 4;
         reserveBuffer(buffers[kFlags], capacity[kFlags], n * 4);
         reserveBuffer(buffers[kAlive], capacity[kAlive], n * 4);
         const GLuint one = 1;
@@ -262,85 +246,83 @@ struct VisibilityPass::Impl {
         level.setupSendMs += msSince(send);
     }
 
-    /// The extent of item i's float box (uploadItems): for an item of one primitive (a triangle level's triangle, a
-    /// box) at least that primitive's extent — its float positions or box lie in it — read in item order, where
-    /// primExtent gathers the triangle's vertices from all over the cluster's geometry.
-    Vec3 itemExtent(std::size_t i) const {
-        const float* f = &boundsScratch[6 * i];
-        return Vec3(double{f[3]} - f[0], double{f[4]} - f[1], double{f[5]} - f[2]);
+    /// Binds the shader storage buffers every program reads and writes.
+    void bindBuffers() const {
+        const std::pair<GLuint, Buffer> bindings[] = {
+            {CULLIDE_SSBO_POSITIONS, kPositions},   {CULLIDE_SSBO_INDICES, kIndices},
+            {CULLIDE_SSBO_BOXES, kBoxes},           {CULLIDE_SSBO_PRIMS, kPrims},
+            {CULLIDE_SSBO_ITEM_OWNER, kOwners},     {CULLIDE_SSBO_FLAGS, kFlags},
+            {CULLIDE_SSBO_COUNTERS, kCounters},     {CULLIDE_SSBO_ALIVE, kAlive},
+            {CULLIDE_SSBO_ITEM_BOUNDS, kItemBounds}, {CULLIDE_SSBO_PRIM_BEGIN, kPrimBegin},
+            {CULLIDE_SSBO_ITEM_PRIMS, kItemPrims},  {CULLIDE_SSBO_BANDS, kBands},
+            {CULLIDE_SSBO_BUILD, kBuild}};
+        for (const auto& [binding, buffer] : bindings) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffers[buffer]);
     }
 
-    /// Pixels of the largest footprint over the three views of `view` of a primitive of extent `size` (its bounding
-    /// rectangle grown by the tested square and a pixel of rounding on each side).
-    static double footprintPixels(const Vec3& size, const View& view) {
-        double pixels = 0.0;
-        for (int a = 0; a < 3; ++a) {
-            const int u = (a + 1) % 3, v = (a + 2) % 3;
-            pixels = std::max(pixels, (size[u] * view.pixelScale[u] + 2.0 * view.halfSize[u] + 3.0) *
-                                          (size[v] * view.pixelScale[v] + 2.0 * view.halfSize[v] + 3.0));
+    /// One pass of build.comp over `invocations` invocations.
+    void buildPass(int pass, std::size_t invocations, LevelStats& level, Stats& stats) const {
+        glUniform1i(CULLIDE_LOC_PASS, pass);
+        dispatchAll(invocations, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        level.draws += 1;
+        stats.draws += 1;
+    }
+
+    /// Counts the records of the alive items for `view` on the device (build.comp up to its OFFSETS pass) and reads
+    /// back their number, to size the record buffers and the passes; writeRecords writes them. On the compute
+    /// back-end each primitive is split into bands of its largest footprint over the three views. The passes'
+    /// GPU time counts as the level's, the read-back as its waiting.
+    void countRecords(std::size_t itemCount, std::size_t primCount, const View& view, LevelStats& level,
+                      Stats& stats) {
+        const std::size_t groups = (primCount + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
+        reserveBuffer(buffers[kBands], capacity[kBands], primCount * 4);
+        reserveBuffer(buffers[kBuild], capacity[kBuild], (CULLIDE_BUILD_GROUPS + groups) * 4);
+        bindBuffers();
+        glUseProgram(buildProgram);
+        glUniform3fv(CULLIDE_LOC_PIXEL_SCALE, 1, view.pixelScale);
+        glUniform3fv(CULLIDE_LOC_HALF_SIZE, 1, view.halfSize);
+        setBuildUniforms(itemCount, primCount);
+        glUniform1ui(CULLIDE_LOC_GROUPS, static_cast<GLuint>(groups));
+        const auto timedSpan = Clock::now();
+        if (timer) glBeginQuery(GL_TIME_ELAPSED, timer);
+        if (bands != CULLIDE_BANDS_NONE) {
+            buildPass(CULLIDE_BUILD_PASS_FOOTPRINTS, primCount, level, stats);
+            buildPass(CULLIDE_BUILD_PASS_SCALE, 1, level, stats);
         }
-        return pixels;
+        buildPass(CULLIDE_BUILD_PASS_COUNT, primCount, level, stats);
+        buildPass(CULLIDE_BUILD_PASS_OFFSETS, 1, level, stats);
+        if (timer) glEndQuery(GL_TIME_ELAPSED);
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        GLuint total[2] = {};
+        const auto waitStart = Clock::now();
+        glGetNamedBufferSubData(buffers[kBuild], 4 * CULLIDE_BUILD_TOTAL, sizeof total, total);
+        level.waitMs += msSince(waitStart);
+        stats.bytesReadBack += sizeof total;
+        recordGpuTime(timer ? timerResultMs(timer, msSince(timedSpan)) : -1.0, level, stats);
+        checkGlError("counting a level's records");
+        float approx = 0.0f;
+        std::memcpy(&approx, &total[1], sizeof approx);
+        if (!(approx <= kMaxRecords))  // also NaN
+            throw BackendError("a level needs about " + std::to_string(approx) + " records, over the limit of " +
+                               std::to_string(static_cast<std::size_t>(kMaxRecords)));
+        recordCount = total[0];
+        recordsPending = true;
+        level.records += recordCount;
+        level.recordBuilds += 1;
     }
 
-    /// The records of the alive items' primitives for `view`; on the compute back-end each primitive is split into
-    /// bands of at most pixelsPerInvocation() pixels of its largest footprint over the three views. Returns the
-    /// record count. Records of items that die later stay: the shaders skip them. Built on the workers in fixed
-    /// chunks of items (the same records, in the same order, for any number of threads): footprints, then bands
-    /// and each chunk's record count, then the records at each chunk's offset.
-    std::size_t buildRecords(const LevelItems& items, const std::vector<std::uint8_t>& alive, const View& view,
-                             TaskPool& pool, LevelStats& level, Stats& stats) {
-        const bool split = settings.backend == Backend::Compute;
-        const std::size_t chunks = (items.size() + kSetupChunk - 1) / kSetupChunk;
-        auto forChunks = [&](auto&& perItem) {
-            pool.parallelFor(chunks, 1, [&](std::size_t begin, std::size_t end) {
-                for (std::size_t c = begin; c < end; ++c)
-                    for (std::size_t i = c * kSetupChunk, last = std::min(items.size(), i + kSetupChunk); i < last; ++i)
-                        if (alive[i]) perItem(c, i);
-            });
-        };
-        chunkSums.assign(chunks, 0.0);
-        footprintScratch.resize(split ? items.prims.size() : 0);
-        if (split) forChunks([&](std::size_t c, std::size_t i) {
-            const std::uint32_t first = items.primBegin[i], end = items.primBegin[i + 1];
-            for (std::uint32_t p = first; p < end; ++p) {
-                // A larger extent only means more, shorter bands: never an overflow.
-                footprintScratch[p] = footprintPixels(end - first == 1 ? itemExtent(i) : primExtent(items.prims[p]),
-                                                      view);
-                chunkSums[c] += footprintScratch[p];
-            }
-        });
-        double footprint = 0.0;
-        for (const double pixels : chunkSums) footprint += pixels;
-        const double perInvocation = pixelsPerInvocation(footprint, context.isSoftware());
-        bandScratch.resize(items.prims.size());
-        chunkFirst.assign(chunks + 1, 0);
-        forChunks([&](std::size_t c, std::size_t i) {
-            for (std::uint32_t p = items.primBegin[i]; p < items.primBegin[i + 1]; ++p) {
-                const double bands = split ? std::min(1e6, std::ceil(footprintScratch[p] / perInvocation)) : 1.0;
-                bandScratch[p] = std::max(static_cast<std::uint32_t>(bands), 1u);
-                chunkFirst[c + 1] += bandScratch[p];
-            }
-        });
-        for (std::size_t c = 0; c < chunks; ++c) chunkFirst[c + 1] += chunkFirst[c];
-        primScratch.resize(4 * chunkFirst[chunks]);
-        forChunks([&](std::size_t c, std::size_t i) {  // chunkFirst[c] becomes chunk c's write cursor
-            for (std::uint32_t p = items.primBegin[i]; p < items.primBegin[i + 1]; ++p) {
-                for (std::uint32_t band = 0; band < bandScratch[p]; ++band) {
-                    std::uint32_t* record = &primScratch[4 * chunkFirst[c]++];
-                    record[0] = items.prims[p];
-                    record[1] = static_cast<std::uint32_t>(i);
-                    record[2] = band;
-                    record[3] = bandScratch[p];
-                }
-            }
-        });
-        const auto send = Clock::now();
-        uploadBuffer(buffers[kPrims], capacity[kPrims], primScratch.data(), primScratch.size() * 4);
-        level.setupSendMs += msSince(send);
-        stats.bytesUploaded += primScratch.size() * 4;
-        level.records += primScratch.size() / 4;
-        level.recordBuilds += 1;
-        return primScratch.size() / 4;
+    /// build.comp's WRITE pass: the counted records into kPrims (bound by prepareIteration).
+    void writeRecords(std::size_t itemCount, std::size_t primCount, LevelStats& level, Stats& stats) {
+        glUseProgram(buildProgram);
+        setBuildUniforms(itemCount, primCount);
+        buildPass(CULLIDE_BUILD_PASS_WRITE, primCount, level, stats);
+        recordsPending = false;
+    }
+
+    void setBuildUniforms(std::size_t itemCount, std::size_t primCount) const {
+        glUniform1ui(CULLIDE_LOC_ITEM_COUNT, static_cast<GLuint>(itemCount));
+        glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(primCount));
+        glUniform1i(CULLIDE_LOC_BANDS, bands);
     }
 
     /// Binds what every pass reads and writes and clears the images, the flags and the counters.
@@ -358,13 +340,8 @@ struct VisibilityPass::Impl {
         glNamedBufferSubData(buffers[kCounters], 0, sizeof counters, counters);
         for (GLuint unit = 0; unit < 4; ++unit)
             glBindImageTexture(unit, images[unit], 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32UI);
-        const std::pair<GLuint, Buffer> bindings[] = {
-            {CULLIDE_SSBO_POSITIONS, kPositions}, {CULLIDE_SSBO_INDICES, kIndices},
-            {CULLIDE_SSBO_BOXES, kBoxes},         {CULLIDE_SSBO_PRIMS, kPrims},
-            {CULLIDE_SSBO_ITEM_OWNER, kOwners},   {CULLIDE_SSBO_FLAGS, kFlags},
-            {CULLIDE_SSBO_COUNTERS, kCounters},   {CULLIDE_SSBO_ALIVE, kAlive},
-            {CULLIDE_SSBO_ITEM_BOUNDS, kItemBounds}};
-        for (const auto& [binding, buffer] : bindings) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffers[buffer]);
+        reserveBuffer(buffers[kPrims], capacity[kPrims], recordCount * 16);
+        bindBuffers();
         glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
         glViewport(0, 0, 3 * settings.resolution, settings.resolution);
         glDisable(GL_DEPTH_TEST);
@@ -372,13 +349,15 @@ struct VisibilityPass::Impl {
         glBindVertexArray(vao);
     }
 
-    /// One iteration on the device: the three passes over the alive items' records, the survivor pass, and the
-    /// compaction of the records to those of the items still alive. Reads back only the counters (44 bytes).
+    /// One iteration on the device: the records first where they were just counted, the three passes over the
+    /// alive items' records, the survivor pass, and the compaction of the records to those of the items still
+    /// alive. Reads back only the counters (44 bytes).
     IterationResult runIteration(const View& view, std::uint32_t idBits, std::size_t itemCount, LevelStats& level,
                                  Stats& stats) {
         prepareIteration(itemCount);
         const auto timedSpan = Clock::now();
         if (timer) glBeginQuery(GL_TIME_ELAPSED, timer);
+        if (recordsPending) writeRecords(itemCount, levelItems->prims.size(), level, stats);
         if (settings.backend == Backend::Raster) {
             reserveBuffer(buffers[kRecords], capacity[kRecords], 3 * recordCount * kRecordBytes);
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_RECORDS, buffers[kRecords]);
@@ -475,8 +454,8 @@ struct VisibilityPass::Impl {
     }
 };
 
-VisibilityPass::VisibilityPass(const Settings& settings)
-    : m_impl(std::make_unique<Impl>(std::make_unique<EglContext>(settings.device), settings)) {}
+VisibilityPass::VisibilityPass(const Settings& settings, const GlBackendOptions& options)
+    : m_impl(std::make_unique<Impl>(std::make_unique<EglContext>(settings.device), settings, options)) {}
 
 VisibilityPass::~VisibilityPass() = default;
 
@@ -529,20 +508,18 @@ void VisibilityPass::beginLevel(const LevelItems& items, const View& view, TaskP
     const auto t0 = Clock::now();
     s.levelItems = &items;
     s.uploadItems(items, pool, level, stats);
-    s.recordAlive.assign(items.size(), 1);
-    s.recordCount = s.buildRecords(items, s.recordAlive, view, pool, level, stats);
+    s.countRecords(items.size(), items.prims.size(), view, level, stats);
     s.recordedView = view.box;
     level.setupMs += msSince(t0);
 }
 
-IterationResult VisibilityPass::iterate(const View& view, std::uint32_t idBits, TaskPool& pool, LevelStats& level,
+IterationResult VisibilityPass::iterate(const View& view, std::uint32_t idBits, TaskPool& /*pool*/, LevelStats& level,
                                         Stats& stats) {
     Impl& s = *m_impl;
     s.context.makeCurrent();
     if (recordsStale(view.box, s.recordedView)) {
-        s.readAlive(s.levelItems->size(), s.recordAlive, level, stats);
         const auto t0 = Clock::now();
-        s.recordCount = s.buildRecords(*s.levelItems, s.recordAlive, view, pool, level, stats);
+        s.countRecords(s.levelItems->size(), s.levelItems->prims.size(), view, level, stats);
         s.recordedView = view.box;
         level.setupMs += msSince(t0);
     }
@@ -559,8 +536,8 @@ void VisibilityPass::readAlive(std::vector<std::uint8_t>& alive, LevelStats& lev
 
 namespace cullide {
 
-std::unique_ptr<PruningBackend> createGlPruningBackend(const Settings& settings) {
-    return std::make_unique<gl::VisibilityPass>(settings);
+std::unique_ptr<PruningBackend> createGlPruningBackend(const Settings& settings, const GlBackendOptions& options) {
+    return std::make_unique<gl::VisibilityPass>(settings, options);
 }
 
 }  // namespace cullide

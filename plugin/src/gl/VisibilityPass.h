@@ -1,8 +1,9 @@
 // The image-space visibility test of CULLIDE on the GPU (OpenGL 4.5 through headless EGL): the PruningBackend that
-// production runs. The iterations' alive set, records and counters stay on the device; an iteration reads back
-// 44 bytes of counters, a level its alive set once.
+// production runs. The iterations' alive set, records and counters stay on the device; the records are built there
+// (build.comp); an iteration reads back 44 bytes of counters, a record build 8 bytes, a level its alive set once.
 #pragma once
 
+#include "CullerBackends.h"
 #include "PruningBackend.h"
 #include "cullide/Settings.h"
 
@@ -16,7 +17,7 @@ class VisibilityPass final : public PruningBackend {
 public:
     /// Opens the EGL context (Settings::device) and builds the programs of Settings::backend. Throws
     /// GlUnavailableError without a usable GL device.
-    explicit VisibilityPass(const Settings& settings);
+    explicit VisibilityPass(const Settings& settings, const GlBackendOptions& options = {});
     ~VisibilityPass() override;
 
     void upload(const GpuGeometry& geometry, Stats& stats) override;

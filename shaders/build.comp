@@ -1,0 +1,154 @@
+// The level's records, built on the device: at the level's start, and again where the view shrank enough to refit
+// the bands (VisibilityPass.cpp). A record is (primitive reference, item, band, bands); on the compute back-end each
+// primitive of an alive item is split into bands of its largest footprint over the three views, so that no
+// invocation of cull.comp scans more than CULLIDE_PIXELS_PER_INVOCATION pixels. Five passes of this program
+// (CULLIDE_LOC_PASS), the others one invocation per primitive of the level's items (alive or not; a primitive
+// finds its item by binary search: an item of a whole mesh has too many primitives for one invocation's loops):
+//   FOOTPRINTS  each primitive's footprint; each work group's sum            (compute back-end only)
+//   SCALE       one work group: pixels per band from the sum over all items  (compute back-end only)
+//   COUNT       each primitive's bands (none for a pruned item's); each work group's records
+//   OFFSETS     one work group: each work group's first record; the total, which the C++ side reads back
+//   WRITE       each primitive's records at its work group's first record plus those of the group's before it
+// The records come out in item order, primitive order, band order: the same for the same set and view.
+layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
+layout(std430, binding = CULLIDE_SSBO_POSITIONS) readonly buffer Positions { float positions[]; };
+layout(std430, binding = CULLIDE_SSBO_INDICES) readonly buffer Indices { uint indices[]; };
+layout(std430, binding = CULLIDE_SSBO_BOXES) readonly buffer Boxes { float boxes[]; };
+layout(std430, binding = CULLIDE_SSBO_ALIVE) readonly buffer Alive { uint alive[]; };
+layout(std430, binding = CULLIDE_SSBO_PRIM_BEGIN) readonly buffer PrimBegin { uint primBegin[]; };
+layout(std430, binding = CULLIDE_SSBO_ITEM_PRIMS) readonly buffer ItemPrims { uint itemPrims[]; };
+layout(std430, binding = CULLIDE_SSBO_BANDS) buffer Bands { uint bands[]; };
+layout(std430, binding = CULLIDE_SSBO_BUILD) buffer Build { uint build[]; };
+layout(std430, binding = CULLIDE_SSBO_PRIMS) writeonly buffer Prims { uvec4 prims[]; };
+
+layout(location = CULLIDE_LOC_PASS) uniform int u_pass;
+layout(location = CULLIDE_LOC_PIXEL_SCALE) uniform vec3 u_pixelScale;
+layout(location = CULLIDE_LOC_HALF_SIZE) uniform vec3 u_halfSize;
+layout(location = CULLIDE_LOC_PRIM_COUNT) uniform uint u_primCount;  // of the level's items, all of them
+layout(location = CULLIDE_LOC_PRIM_BASE) uniform uint u_primBase;
+layout(location = CULLIDE_LOC_ITEM_COUNT) uniform uint u_itemCount;
+layout(location = CULLIDE_LOC_BANDS) uniform int u_bands;
+layout(location = CULLIDE_LOC_GROUPS) uniform uint u_groups;
+
+const uint kLanes = uint(CULLIDE_COMPUTE_GROUP_SIZE);
+shared uint s_scan[CULLIDE_COMPUTE_GROUP_SIZE];
+shared float s_sum[CULLIDE_COMPUTE_GROUP_SIZE];
+
+// Inclusive prefix sum over the work group's lanes (every lane must call it).
+uint inclusiveScan(uint value) {
+    uint lane = gl_LocalInvocationID.x;
+    s_scan[lane] = value;
+    barrier();
+    for (uint offset = 1u; offset < kLanes; offset <<= 1u) {
+        uint before = lane >= offset ? s_scan[lane - offset] : 0u;
+        barrier();
+        s_scan[lane] += before;
+        barrier();
+    }
+    uint sum = s_scan[lane];
+    barrier();
+    return sum;
+}
+
+// Sum over the work group's lanes, returned to every lane (every lane must call it).
+float groupSum(float value) {
+    uint lane = gl_LocalInvocationID.x;
+    s_sum[lane] = value;
+    barrier();
+    for (uint stride = kLanes / 2u; stride > 0u; stride >>= 1u) {
+        if (lane < stride) s_sum[lane] += s_sum[lane + stride];
+        barrier();
+    }
+    float sum = s_sum[0];
+    barrier();
+    return sum;
+}
+
+vec3 vertexAt(uint i) { return vec3(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]); }
+
+// Extent of a primitive: a box of the upload, or a triangle of its positions.
+vec3 primExtent(uint ref) {
+    if ((ref & CULLIDE_PRIM_BOX_BIT) != 0u) {
+        uint b = (ref & ~CULLIDE_PRIM_BOX_BIT) * 6u;
+        return vec3(boxes[b + 3u] - boxes[b], boxes[b + 4u] - boxes[b + 1u], boxes[b + 5u] - boxes[b + 2u]);
+    }
+    uint t = ref * 3u;
+    vec3 a = vertexAt(indices[t]);
+    vec3 b = vertexAt(indices[t + 1u]);
+    vec3 c = vertexAt(indices[t + 2u]);
+    return max(max(a, b), c) - min(min(a, b), c);
+}
+
+// Pixels of the largest of a primitive's three footprints: its bounding rectangle grown by the tested square and a
+// pixel of rounding on each side. The three views are written out (no loop over vector components).
+float footprintOf(vec3 size) {
+    vec3 side = size * u_pixelScale + 2.0 * u_halfSize + vec3(3.0);
+    return max(max(side.y * side.z, side.z * side.x), side.x * side.y);
+}
+
+uint bandsOf(float footprint, float perBand) {
+    return uint(clamp(ceil(footprint / perBand), 1.0, 1.0e6));
+}
+
+// The item primitive p belongs to: the last i with primBegin[i] <= p (binary search over the items).
+uint itemOf(uint p) {
+    uint lo = 0u;
+    uint hi = u_itemCount;  // primBegin[lo] <= p < primBegin[hi]
+    while (hi - lo > 1u) {
+        uint mid = lo + (hi - lo) / 2u;
+        if (primBegin[mid] <= p) lo = mid; else hi = mid;
+    }
+    return lo;
+}
+
+void main() {
+    uint lane = gl_LocalInvocationID.x;
+    uint group = u_primBase / kLanes + gl_WorkGroupID.x;
+    uint p = u_primBase + gl_GlobalInvocationID.x;
+    uint item = p < u_primCount ? itemOf(p) : 0u;
+    bool live = p < u_primCount && alive[item] != 0u;
+    if (u_pass == CULLIDE_BUILD_PASS_FOOTPRINTS) {
+        float pixels = live ? footprintOf(primExtent(itemPrims[p])) : 0.0;
+        if (p < u_primCount) bands[p] = floatBitsToUint(pixels);
+        float sum = groupSum(pixels);
+        if (lane == 0u) build[CULLIDE_BUILD_GROUPS + group] = floatBitsToUint(sum);
+    } else if (u_pass == CULLIDE_BUILD_PASS_SCALE) {
+        float sum = 0.0;
+        for (uint g = lane; g < u_groups; g += kLanes) sum += uintBitsToFloat(build[CULLIDE_BUILD_GROUPS + g]);
+        sum = groupSum(sum);
+        float perBand = float(CULLIDE_PIXELS_PER_INVOCATION);
+        if (u_bands == CULLIDE_BANDS_SHORT)
+            perBand = clamp(ceil(sum / CULLIDE_TARGET_INVOCATIONS), CULLIDE_MIN_PIXELS_PER_INVOCATION, perBand);
+        if (lane == 0u) build[CULLIDE_BUILD_PER_BAND] = floatBitsToUint(perBand);
+    } else if (u_pass == CULLIDE_BUILD_PASS_COUNT) {
+        uint n = 0u;
+        if (live) {
+            n = u_bands == CULLIDE_BANDS_NONE ? 1u
+                                              : bandsOf(uintBitsToFloat(bands[p]),
+                                                        uintBitsToFloat(build[CULLIDE_BUILD_PER_BAND]));
+        }
+        if (p < u_primCount) bands[p] = n;
+        uint sum = inclusiveScan(n);
+        if (lane == kLanes - 1u) build[CULLIDE_BUILD_GROUPS + group] = sum;
+    } else if (u_pass == CULLIDE_BUILD_PASS_OFFSETS) {
+        uint carry = 0u;
+        float approx = 0.0;
+        for (uint base = 0u; base < u_groups; base += kLanes) {
+            uint g = base + lane;
+            uint count = g < u_groups ? build[CULLIDE_BUILD_GROUPS + g] : 0u;
+            uint sum = inclusiveScan(count);
+            if (g < u_groups) build[CULLIDE_BUILD_GROUPS + g] = carry + sum - count;
+            approx += groupSum(float(count));
+            carry += s_scan[kLanes - 1u];  // the chunk's total: inclusiveScan leaves it in the last lane
+            barrier();
+        }
+        if (lane == 0u) {
+            build[CULLIDE_BUILD_TOTAL] = carry;
+            build[CULLIDE_BUILD_APPROX] = floatBitsToUint(approx);
+        }
+    } else if (u_pass == CULLIDE_BUILD_PASS_WRITE) {
+        uint n = p < u_primCount ? bands[p] : 0u;
+        uint record = build[CULLIDE_BUILD_GROUPS + group] + inclusiveScan(n) - n;
+        for (uint band = 0u; band < n; ++band) prims[record + band] = uvec4(itemPrims[p], item, band, n);
+    }
+}
