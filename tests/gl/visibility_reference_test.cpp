@@ -98,6 +98,35 @@ TEST(VisibilityBands, LargeTrianglesAreSplitIntoBandsAndKeptAsTheReferenceKeepsT
     EXPECT_EQ(r.pairs.size(), 1u);
 }
 
+/// The records a hardware GPU builds (bands of about 32 pixels: many records per primitive), built and run on this
+/// device, which otherwise makes one 4,096-pixel band of each: the band arithmetic of the record build, its sums
+/// over many records per primitive and the passes over bands run here as on a GPU. Both pipelines: the paper's
+/// items of whole objects and of groups have many primitives each.
+TEST(VisibilityBands, ShortBandsAsOnAGpuKeepWhatTheReferenceKeeps) {
+    for (const Pipeline pipeline : {Pipeline::Auto, Pipeline::Paper}) {
+        const Settings settings = lockstepSettings({pipeline, Mode::Reliable, Backend::Compute, 256});
+        CULLIDE_GPU_CULLER_OR_SKIP(probe, settings);
+        auto log = std::make_shared<LockstepLog>();
+        GlBackendOptions options;
+        options.shortBands = true;
+        std::unique_ptr<Culler> culler = createGpuCuller(settings, lockstepFactory(log, options));
+        std::size_t records = 0, items = 0;
+        for (std::uint64_t seed = 1; seed <= 2; ++seed) {
+            Result r;
+            culler->run(asObjects(randomSoups(seed, 12, 60, 0.2)), r);
+            EXPECT_EQ(r.stats.gpuFallbacks, 0u) << r.stats.gpuError;
+            for (const LevelStats& level : r.stats.levels) {
+                records += level.records;
+                items += level.itemsPerIteration.front();
+            }
+        }
+        EXPECT_EQ(log->mismatches, 0u) << log->summary();
+        EXPECT_GE(log->iterations, 4u) << log->summary();
+        EXPECT_GT(log->itemsPruned, 0u) << log->summary();
+        EXPECT_GT(records, 8 * items) << "bands as long as on llvmpipe";
+    }
+}
+
 INSTANTIATE_TEST_SUITE_P(
     Matrix, VisibilityLockstep,
     ::testing::Values(LockstepCase{Pipeline::Auto, Mode::Reliable, Backend::Compute, 16},
