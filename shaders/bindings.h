@@ -13,7 +13,8 @@
 #define CULLIDE_SSBO_RECORDS 6     /* PrimRecord[3 * primCount]: per (view axis, primitive) setup, raster back-end */
 #define CULLIDE_SSBO_COUNTERS 7    /* uint[CULLIDE_COUNTER_COUNT]: per iteration, see CULLIDE_COUNTER_* */
 #define CULLIDE_SSBO_ALIVE 8       /* uint[itemCount]: 1 = the item is still in the level's set (kept on the device) */
-#define CULLIDE_SSBO_ITEM_BOUNDS 9 /* float[6 * itemCount]: item box, min xyz, max xyz (upload-origin relative) */
+#define CULLIDE_SSBO_ITEM_BOUNDS 9 /* uint[6 * itemCount]: item boxes (build.comp), order-preserving float bits: min xyz
+                                      * of every item (3 per item), then max xyz of every item */
 #define CULLIDE_SSBO_PRIMS_OUT 10  /* uvec4[primCount]: compact.comp: the records of the items still alive */
 /* The record build (build.comp): */
 #define CULLIDE_SSBO_PRIM_BEGIN 11 /* uint[itemCount + 1]: item i's primitives are ITEM_PRIMS[begin[i] .. begin[i + 1]) */
@@ -44,6 +45,7 @@
 #define CULLIDE_BUILD_PASS_COUNT 2      /* per primitive: its bands; the work group's records */
 #define CULLIDE_BUILD_PASS_OFFSETS 3    /* one work group: each work group's first record, the total */
 #define CULLIDE_BUILD_PASS_WRITE 4      /* per primitive: its records, in item order */
+#define CULLIDE_BUILD_PASS_BOUNDS 5     /* per primitive: its box into its item's (at the level's start) */
 
 /* Per-pixel images (r32ui), three views side by side: width 3 * resolution, height resolution. */
 #define CULLIDE_IMAGE_NEAR1 0  /* min over items of (quantized nearest depth << idBits | owner) */

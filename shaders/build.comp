@@ -9,6 +9,7 @@
 //   COUNT       each primitive's bands (none for a pruned item's); each work group's records
 //   OFFSETS     one work group: each work group's first record; the total, which the C++ side reads back
 //   WRITE       each primitive's records at its work group's first record plus those of the group's before it
+// and, once per level before them, BOUNDS: each primitive's box into its item's, for survive.comp.
 // The records come out in item order, primitive order, band order: the same for the same set and view.
 layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
 layout(std430, binding = CULLIDE_SSBO_POSITIONS) readonly buffer Positions { float positions[]; };
@@ -20,6 +21,7 @@ layout(std430, binding = CULLIDE_SSBO_ITEM_PRIMS) readonly buffer ItemPrims { ui
 layout(std430, binding = CULLIDE_SSBO_BANDS) buffer Bands { uint bands[]; };
 layout(std430, binding = CULLIDE_SSBO_BUILD) buffer Build { uint build[]; };
 layout(std430, binding = CULLIDE_SSBO_PRIMS) writeonly buffer Prims { uvec4 prims[]; };
+layout(std430, binding = CULLIDE_SSBO_ITEM_BOUNDS) buffer Bounds { uint bounds[]; };
 
 layout(location = CULLIDE_LOC_PASS) uniform int u_pass;
 layout(location = CULLIDE_LOC_PIXEL_SCALE) uniform vec3 u_pixelScale;
@@ -66,17 +68,33 @@ float groupSum(float value) {
 
 vec3 vertexAt(uint i) { return vec3(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]); }
 
-// Extent of a primitive: a box of the upload, or a triangle of its positions.
-vec3 primExtent(uint ref) {
+// The box of a primitive: a box of the upload, or a triangle of its positions.
+void primBox(uint ref, out vec3 lo, out vec3 hi) {
     if ((ref & CULLIDE_PRIM_BOX_BIT) != 0u) {
         uint b = (ref & ~CULLIDE_PRIM_BOX_BIT) * 6u;
-        return vec3(boxes[b + 3u] - boxes[b], boxes[b + 4u] - boxes[b + 1u], boxes[b + 5u] - boxes[b + 2u]);
+        lo = vec3(boxes[b], boxes[b + 1u], boxes[b + 2u]);
+        hi = vec3(boxes[b + 3u], boxes[b + 4u], boxes[b + 5u]);
+        return;
     }
     uint t = ref * 3u;
     vec3 a = vertexAt(indices[t]);
     vec3 b = vertexAt(indices[t + 1u]);
     vec3 c = vertexAt(indices[t + 2u]);
-    return max(max(a, b), c) - min(min(a, b), c);
+    lo = min(min(a, b), c);
+    hi = max(max(a, b), c);
+}
+
+vec3 primExtent(uint ref) {
+    vec3 lo;
+    vec3 hi;
+    primBox(ref, lo, hi);
+    return hi - lo;
+}
+
+// Float bits whose unsigned order is the floats' order (for atomicMin / atomicMax; survive.comp gathers them).
+uint orderedBits(float f) {
+    uint u = floatBitsToUint(f);
+    return (u & 0x80000000u) != 0u ? ~u : (u | 0x80000000u);
 }
 
 // Pixels of the largest of a primitive's three footprints: its bounding rectangle grown by the tested square and a
@@ -145,6 +163,22 @@ void main() {
         if (lane == 0u) {
             build[CULLIDE_BUILD_TOTAL] = carry;
             build[CULLIDE_BUILD_APPROX] = floatBitsToUint(approx);
+        }
+    } else if (u_pass == CULLIDE_BUILD_PASS_BOUNDS) {
+        // Into the item's box, cleared by the C++ side. The axes are written out: NVIDIA's compiler (driver 580.159)
+        // crashed on a loop of atomics indexed by the loop variable (survive.comp).
+        if (p < u_primCount) {
+            vec3 lo;
+            vec3 hi;
+            primBox(itemPrims[p], lo, hi);
+            uint at = 3u * item;
+            uint top = 3u * (u_itemCount + item);
+            atomicMin(bounds[at], orderedBits(lo.x));
+            atomicMin(bounds[at + 1u], orderedBits(lo.y));
+            atomicMin(bounds[at + 2u], orderedBits(lo.z));
+            atomicMax(bounds[top], orderedBits(hi.x));
+            atomicMax(bounds[top + 1u], orderedBits(hi.y));
+            atomicMax(bounds[top + 2u], orderedBits(hi.z));
         }
     } else if (u_pass == CULLIDE_BUILD_PASS_WRITE) {
         uint n = p < u_primCount ? bands[p] : 0u;

@@ -5,17 +5,11 @@ layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
 layout(std430, binding = CULLIDE_SSBO_FLAGS) readonly buffer Flags { uint flags[]; };
 layout(std430, binding = CULLIDE_SSBO_ALIVE) buffer Alive { uint alive[]; };
 layout(std430, binding = CULLIDE_SSBO_ITEM_OWNER) readonly buffer Owners { uint owners[]; };
-layout(std430, binding = CULLIDE_SSBO_ITEM_BOUNDS) readonly buffer Bounds { float bounds[]; };
+layout(std430, binding = CULLIDE_SSBO_ITEM_BOUNDS) readonly buffer Bounds { uint bounds[]; };
 layout(std430, binding = CULLIDE_SSBO_COUNTERS) coherent buffer Counters { uint counters[]; };
 layout(location = CULLIDE_LOC_PRIM_COUNT) uniform uint u_itemCount;
 layout(location = CULLIDE_LOC_PRIM_BASE) uniform uint u_itemBase;
 layout(location = CULLIDE_LOC_REQUIRED) uniform uint u_required;
-
-// Float bits whose unsigned order is the floats' order (for atomicMin / atomicMax).
-uint orderedBits(float f) {
-    uint u = floatBitsToUint(f);
-    return (u & 0x80000000u) != 0u ? ~u : (u | 0x80000000u);
-}
 
 // Per work group first (shared-memory atomics), then one global atomic per counter and group. The three axes are
 // written out: NVIDIA's GLSL compiler (driver 580.159) crashes the process linking this program when they are a
@@ -39,12 +33,12 @@ void main() {
             atomicAdd(s_counters[CULLIDE_COUNTER_ALIVE], 1u);
             atomicMin(s_counters[CULLIDE_COUNTER_OWNER_MIN], owners[i]);
             atomicMax(s_counters[CULLIDE_COUNTER_OWNER_MAX], owners[i]);
-            atomicMin(s_counters[CULLIDE_COUNTER_LO + 0], orderedBits(bounds[6u * i + 0u]));
-            atomicMin(s_counters[CULLIDE_COUNTER_LO + 1], orderedBits(bounds[6u * i + 1u]));
-            atomicMin(s_counters[CULLIDE_COUNTER_LO + 2], orderedBits(bounds[6u * i + 2u]));
-            atomicMax(s_counters[CULLIDE_COUNTER_HI + 0], orderedBits(bounds[6u * i + 3u]));
-            atomicMax(s_counters[CULLIDE_COUNTER_HI + 1], orderedBits(bounds[6u * i + 4u]));
-            atomicMax(s_counters[CULLIDE_COUNTER_HI + 2], orderedBits(bounds[6u * i + 5u]));
+            atomicMin(s_counters[CULLIDE_COUNTER_LO + 0], bounds[3u * i + 0u]);
+            atomicMin(s_counters[CULLIDE_COUNTER_LO + 1], bounds[3u * i + 1u]);
+            atomicMin(s_counters[CULLIDE_COUNTER_LO + 2], bounds[3u * i + 2u]);
+            atomicMax(s_counters[CULLIDE_COUNTER_HI + 0], bounds[3u * (u_itemCount + i) + 0u]);
+            atomicMax(s_counters[CULLIDE_COUNTER_HI + 1], bounds[3u * (u_itemCount + i) + 1u]);
+            atomicMax(s_counters[CULLIDE_COUNTER_HI + 2], bounds[3u * (u_itemCount + i) + 2u]);
         }
     }
     barrier();

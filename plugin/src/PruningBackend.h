@@ -63,7 +63,7 @@ struct IterationResult {
     std::uint32_t alive = 0;
     std::uint32_t ownerMin = 0;  ///< smallest and largest owner among the alive items (unset when none)
     std::uint32_t ownerMax = 0;
-    Aabb bounds;  ///< of the alive items' float boxes (floatDown / floatUp of LevelItems::bounds)
+    Aabb bounds;  ///< of the alive items' boxes as uploaded (deviceBoundsOf, VisibilityLevel.h)
 };
 
 /// A backend failure in the middle of a frame (a GL error). The culler finishes that frame without pruning: every

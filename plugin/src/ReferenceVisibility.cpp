@@ -256,7 +256,7 @@ IterationResult ReferenceVisibility::iterate(const View& view, std::uint32_t idB
         ++r.alive;
         r.ownerMin = std::min(r.ownerMin, items.owner[i]);
         r.ownerMax = std::max(r.ownerMax, items.owner[i]);
-        r.bounds.grow(floatBoundsOf(items, i));
+        r.bounds.grow(deviceBoundsOf(*m_geometry, items, i));
     }
     return r;
 }

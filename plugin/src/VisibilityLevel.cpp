@@ -1,6 +1,6 @@
 #include "VisibilityLevel.h"
 
-#include "FloatRounding.h"
+#include "bindings.h"
 #include "KeptCapacity.h"
 #include "cullide/Timer.h"
 
@@ -13,7 +13,10 @@ View fitView(const Aabb& bounds, const Settings& settings, double coordinateBoun
     View v;
     const double margin = 0.5 * settings.margin;
     const double scale = std::max(bounds.extent().maxCoeff(), 1e-30);
-    v.box = bounds.inflated(margin + 1e-4 * scale);
+    // After the first iteration the bounds are the boxes of the uploaded float vertices (deviceBoundsOf), rounded to
+    // nearest: a true vertex may lie half an ulp of its coordinate outside. 2^-22 of the largest coordinate is more.
+    const double largest = std::max(coordinateBound, bounds.min.cwiseAbs().cwiseMax(bounds.max.cwiseAbs()).maxCoeff());
+    v.box = bounds.inflated(margin + 1e-4 * scale + std::ldexp(largest, -22));
     Vec3 extent = v.box.extent();
     const double minExtent = std::max(1e-6 * extent.maxCoeff(), 1e-30);
     for (int a = 0; a < 3; ++a) {
@@ -66,11 +69,20 @@ std::size_t distinctOwners(const LevelItems& items) {
     return owners;
 }
 
-Aabb floatBoundsOf(const LevelItems& items, std::size_t i) {
+Aabb deviceBoundsOf(const GpuGeometry& geometry, const LevelItems& items, std::size_t i) {
     Aabb b;
-    for (int a = 0; a < 3; ++a) {
-        b.min[a] = floatDown(items.bounds[i].min[a]);
-        b.max[a] = floatUp(items.bounds[i].max[a]);
+    for (std::uint32_t p = items.primBegin[i]; p < items.primBegin[i + 1]; ++p) {
+        const std::uint32_t ref = items.prims[p];
+        if (ref & CULLIDE_PRIM_BOX_BIT) {
+            const float* f = &geometry.boxes[6 * std::size_t{ref & ~CULLIDE_PRIM_BOX_BIT}];
+            b.grow(Vec3(f[0], f[1], f[2]));
+            b.grow(Vec3(f[3], f[4], f[5]));
+            continue;
+        }
+        for (std::size_t k = 0; k < 3; ++k) {
+            const float* v = &geometry.positions[3 * std::size_t{geometry.indices[3 * std::size_t{ref} + k]}];
+            b.grow(Vec3(v[0], v[1], v[2]));
+        }
     }
     return b;
 }

@@ -12,8 +12,9 @@
 namespace cullide {
 
 /// The view of an iteration over items whose bounds are `bounds` (relative to the upload origin): the box grown by
-/// half the margin (each item is dilated by half: together the full margin) and 1e-4 of its extent, no axis thinner
-/// than 1e-6 of the largest, and per world axis the float parameters of the shaders. The reliable-mode slack
+/// half the margin (each item is dilated by half: together the full margin), 1e-4 of its extent and 2^-22 of the
+/// largest coordinate (the rounding of the float vertices that later iterations' bounds are made of), no axis
+/// thinner than 1e-6 of the largest, and per world axis the float parameters of the shaders. The reliable-mode slack
 /// (halfSize beyond half a pixel plus the margin, depthPad beyond the margin) covers the float error of positions
 /// up to `coordinateBound` from the origin and of the projection: 2^-18 (1 + B / extent) with B the larger of
 /// coordinateBound and the box's own coordinates.
@@ -31,8 +32,9 @@ std::uint32_t requiredFlags(unsigned axes);
 /// Distinct owners among the items, or 0 when owner ids need more than 16 bits (the level then prunes nothing).
 std::size_t distinctOwners(const LevelItems& items);
 
-/// The box of item `i` as the device holds it: float, rounded outwards.
-Aabb floatBoundsOf(const LevelItems& items, std::size_t i);
+/// The box of item `i` as the device builds it (build.comp): over its primitives as uploaded (float vertices, float
+/// boxes), so exact in float. The iterations after the first fit their views to these (IterationResult::bounds).
+Aabb deviceBoundsOf(const GpuGeometry& geometry, const LevelItems& items, std::size_t i);
 
 /// Runs one level on `backend`: survivors[i] is 1 when item i may intersect an item of another owner. At most
 /// Settings::maxIterations iterations, each fitted to the items still alive; the loop stops when the set stops

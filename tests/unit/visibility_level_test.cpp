@@ -7,6 +7,7 @@
 #include "LevelPipelines.h"
 #include "ReferenceVisibility.h"
 #include "VisibilityLevel.h"
+#include "bindings.h"
 #include "cullide/scenes/Environments.h"
 
 #include <gtest/gtest.h>
@@ -56,8 +57,12 @@ TEST(VisibilityLevel, FlatBoundsGetAThicknessAndFarCoordinatesMoreSlack) {
     for (int a = 0; a < 3; ++a) {
         EXPECT_GT(far.halfSize[a], near.halfSize[a]) << a;
         EXPECT_GT(far.depthPad[a], near.depthPad[a]) << a;
-        // 2^-18 (1 + B / e) of the extent: B = 1e6, e ~ 1.0002: about 3.8 of a unit, i.e. ~977 pixels.
-        EXPECT_GT(far.halfSize[a], 900.0f) << a;
+        // 2^-18 (1 + B / e) of the extent e: B = 1e6, so about 3.8 units whatever the extent.
+        EXPECT_GT(far.halfSize[a] / far.pixelScale[a], 3.5f) << a;
+        // Later iterations' bounds come from float vertices rounded to nearest: the view covers more than the half
+        // ulp (1/32 at 1e6) by which a true vertex may lie outside.
+        EXPECT_LE(far.box.min[a], -std::ldexp(1e6, -23)) << a;
+        EXPECT_GE(far.box.max[a], 1.0 + std::ldexp(1e6, -23)) << a;
     }
 }
 
@@ -86,16 +91,24 @@ TEST(VisibilityLevel, OwnerPackingAndSurvivalRule) {
     EXPECT_EQ(distinctOwners(LevelItems{}), 0u);
 }
 
-TEST(VisibilityLevel, FloatBoundsContainTheDoubleBounds) {
+/// The boxes the views are fitted to are those of the primitives as uploaded: an item of two triangles, one of a
+/// box, one of a triangle and a box.
+TEST(VisibilityLevel, DeviceBoundsAreTheBoxesOfTheUploadedPrimitives) {
+    GpuGeometry g;
+    g.positions = {0.1f, -2.0f, 0.0f, 1.0f, 0.0f, 0.5f, 0.0f, 3.0f, -1e-30f, -4.0f, 0.25f, 7.0f};
+    g.indices = {0, 1, 2, 1, 2, 3};
+    g.boxes = {-1.0f, -1.0f, -1.0f, 0.5f, 0.5f, 1e30f};
     LevelItems items;
-    items.owner.push_back(0);
-    items.bounds.push_back(Aabb{Vec3(0.1, -1e-30, 1.0 / 3.0), Vec3(0.2, 1e-30, 1e39)});
-    const Aabb f = floatBoundsOf(items, 0);
-    for (int a = 0; a < 3; ++a) {
-        EXPECT_LE(f.min[a], items.bounds[0].min[a]);
-        EXPECT_GE(f.max[a], items.bounds[0].max[a]);
-        EXPECT_EQ(static_cast<double>(static_cast<float>(f.min[a])), f.min[a]);
-    }
+    items.owner = {0, 1, 2};
+    items.primBegin = {0, 2, 3, 5};
+    items.prims = {0, 1, CULLIDE_PRIM_BOX_BIT, 0, CULLIDE_PRIM_BOX_BIT};
+    const Aabb a = deviceBoundsOf(g, items, 0), b = deviceBoundsOf(g, items, 1), c = deviceBoundsOf(g, items, 2);
+    EXPECT_EQ(a.min, Vec3(-4.0, -2.0, double{-1e-30f}));
+    EXPECT_EQ(a.max, Vec3(1.0, 3.0, 7.0));
+    EXPECT_EQ(b.min, Vec3(-1.0, -1.0, -1.0));
+    EXPECT_EQ(b.max, Vec3(0.5, 0.5, double{1e30f}));
+    EXPECT_EQ(c.min, Vec3(-1.0, -2.0, -1.0));
+    EXPECT_EQ(c.max, Vec3(1.0, 3.0, double{1e30f}));
 }
 
 Settings referenceLevels(Pipeline pipeline, Mode mode, int resolution) {

@@ -15,19 +15,20 @@ struct LevelStats {
     std::size_t primitivesDrawn = 0;        ///< primitives submitted (all passes, all axes)
     std::size_t draws = 0;
     double cpuMs = 0.0;                     ///< wall time spent on the CPU side of the level (incl. waiting)
-    /// Of cpuMs, GL back-end: building and sending the level's item data and records (at its start, and again where
-    /// the view shrank enough to refit the records' bands).
+    /// Of cpuMs, GL back-end: sending the level's items and building their boxes and records on the device, up to
+    /// the read-back of the record count (at its start, and again where the view shrank enough to refit the bands).
     double setupMs = 0.0;
-    /// Of setupMs, the GL calls that send the item data and records to the device (the rest builds them on the CPU).
+    /// Of setupMs, the GL calls that send the items (primitives, owners) and clear their device state.
     double setupSendMs = 0.0;
-    /// GL back-end: records sent for the level's iterations (one per primitive; on the compute back-end one per band
+    /// GL back-end: records built for the level's iterations (one per primitive; on the compute back-end one per band
     /// of a primitive's footprint), over all builds, and the builds: one at the start, one per refit of the bands.
     std::size_t records = 0;
     std::size_t recordBuilds = 0;
-    /// Of cpuMs, GL back-end: blocked in read-backs (each iteration's counters, the level's alive set), i.e. waiting
-    /// for the device to finish the work submitted before. The rest of cpuMs is issuing commands and the level loop.
+    /// Of cpuMs, GL back-end: blocked in read-backs (each iteration's counters, each record build's count, the
+    /// level's alive set), i.e. waiting for the device to finish the work submitted before. The rest of cpuMs is
+    /// issuing commands and the level loop.
     double waitMs = 0.0;
-    /// GPU time of the level's iterations from timer queries. Only meaningful with gpuTimingValid; 0 otherwise.
+    /// GPU time of the level's iterations and record builds from timer queries. Only meaningful with gpuTimingValid; 0 otherwise.
     double gpuMs = 0.0;
     /// true when every iteration of the level was timed by an available, plausible timer-query result (at most
     /// the CPU wall time of the same span): false without timer queries and where a driver reports nonsense

@@ -64,9 +64,6 @@ constexpr double kTimerSlackMs = 0.25;
 /// CULLIDE_PIXELS_PER_INVOCATION)) records on a hardware GPU, primitives + footprint pixels / 4,096 on llvmpipe.
 constexpr double kMaxRecords = 67108864.0;
 
-/// Items per task of the level set-up (item boxes): a task outweighs its hand-off to a worker.
-constexpr std::size_t kSetupChunk = 4096;
-
 enum Buffer {
     kPositions,
     kIndices,
@@ -115,7 +112,6 @@ struct VisibilityPass::Impl {
     std::size_t valid[kBufferCount] = {};  ///< bytes of the buffer that hold the last upload (positions, indices)
     GLuint timer = 0;
     std::size_t maxGroups = 65535;  ///< GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]
-    std::vector<float> boundsScratch;  ///< the level's item float boxes (uploadItems)
     std::vector<std::uint32_t> aliveScratch;
     const GpuGeometry* geometry = nullptr;
     // The level being pruned (beginLevel .. its last iterate).
@@ -218,31 +214,25 @@ struct VisibilityPass::Impl {
         glUniform1ui(CULLIDE_LOC_AXES, settings.axes);
     }
 
-    /// Sends what the record build and the survivor pass need of the level's items: their primitives, owners and
-    /// float boxes (rounded outwards), and the alive set (every item).
-    void uploadItems(const LevelItems& items, TaskPool& pool, LevelStats& level, Stats& stats) {
+    /// Sends what the record build and the survivor pass need of the level's items (their primitives and owners)
+    /// and clears their boxes (built by countRecords) and the alive set (every item alive).
+    void uploadItems(const LevelItems& items, LevelStats& level, Stats& stats) {
         const std::size_t n = items.size();
-        boundsScratch.resize(6 * n);
-        pool.parallelFor(n, kSetupChunk, [&](std::size_t begin, std::size_t end) {
-            for (std::size_t i = begin; i < end; ++i) {
-                const Aabb b = floatBoundsOf(items, i);  // exact floats: the casts below do not round
-                for (int a = 0; a < 3; ++a) {
-                    boundsScratch[6 * i + static_cast<std::size_t>(a)] = static_cast<float>(b.min[a]);
-                    boundsScratch[6 * i + 3 + static_cast<std::size_t>(a)] = static_cast<float>(b.max[a]);
-                }
-            }
-        });
         const auto send = Clock::now();
         uploadBuffer(buffers[kOwners], capacity[kOwners], items.owner.data(), n * 4);
-        uploadBuffer(buffers[kItemBounds], capacity[kItemBounds], boundsScratch.data(), boundsScratch.size() * 4);
         uploadBuffer(buffers[kPrimBegin], capacity[kPrimBegin], items.primBegin.data(), items.primBegin.size() * 4);
         uploadBuffer(buffers[kItemPrims], capacity[kItemPrims], items.prims.data(), items.prims.size() * 4);
-        stats.bytesUploaded += (n + items.primBegin.size() + items.prims.size() + boundsScratch.size()) * 4;
+        stats.bytesUploaded += (n + items.primBegin.size() + items.prims.size()) * 4;
         reserveBuffer(buffers[kFlags], capacity[kFlags], n * 4);
         reserveBuffer(buffers[kAlive], capacity[kAlive], n * 4);
-        const GLuint one = 1;
+        reserveBuffer(buffers[kItemBounds], capacity[kItemBounds], n * 24);
+        const GLuint one = 1, empty[2] = {0xFFFFFFFFu, 0u};
         glClearNamedBufferSubData(buffers[kAlive], GL_R32UI, 0, static_cast<GLsizeiptr>(n * 4), GL_RED_INTEGER,
                                   GL_UNSIGNED_INT, &one);
+        glClearNamedBufferSubData(buffers[kItemBounds], GL_R32UI, 0, static_cast<GLsizeiptr>(n * 12), GL_RED_INTEGER,
+                                  GL_UNSIGNED_INT, &empty[0]);
+        glClearNamedBufferSubData(buffers[kItemBounds], GL_R32UI, static_cast<GLintptr>(n * 12),
+                                  static_cast<GLsizeiptr>(n * 12), GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
         level.setupSendMs += msSince(send);
     }
 
@@ -268,12 +258,13 @@ struct VisibilityPass::Impl {
         stats.draws += 1;
     }
 
-    /// Counts the records of the alive items for `view` on the device (build.comp up to its OFFSETS pass) and reads
-    /// back their number, to size the record buffers and the passes; writeRecords writes them. On the compute
-    /// back-end each primitive is split into bands of its largest footprint over the three views. The passes'
-    /// GPU time counts as the level's, the read-back as its waiting.
-    void countRecords(std::size_t itemCount, std::size_t primCount, const View& view, LevelStats& level,
-                      Stats& stats) {
+    /// Counts the records of the alive items for `view` on the device (build.comp up to its OFFSETS pass; first
+    /// its BOUNDS pass where `withBounds`: at a level's start) and reads back their number, to size the record
+    /// buffers and the passes; writeRecords writes them. On the compute back-end each primitive is split into
+    /// bands of its largest footprint over the three views. The passes' GPU time counts as the level's, the
+    /// read-back as its waiting.
+    void countRecords(std::size_t itemCount, std::size_t primCount, const View& view, bool withBounds,
+                      LevelStats& level, Stats& stats) {
         const std::size_t groups = (primCount + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
         reserveBuffer(buffers[kBands], capacity[kBands], primCount * 4);
         reserveBuffer(buffers[kBuild], capacity[kBuild], (CULLIDE_BUILD_GROUPS + groups) * 4);
@@ -285,6 +276,7 @@ struct VisibilityPass::Impl {
         glUniform1ui(CULLIDE_LOC_GROUPS, static_cast<GLuint>(groups));
         const auto timedSpan = Clock::now();
         if (timer) glBeginQuery(GL_TIME_ELAPSED, timer);
+        if (withBounds) buildPass(CULLIDE_BUILD_PASS_BOUNDS, primCount, level, stats);
         if (bands != CULLIDE_BANDS_NONE) {
             buildPass(CULLIDE_BUILD_PASS_FOOTPRINTS, primCount, level, stats);
             buildPass(CULLIDE_BUILD_PASS_SCALE, 1, level, stats);
@@ -501,14 +493,14 @@ bool recordsStale(const Aabb& view, const Aabb& recordedView) {
 
 }  // namespace
 
-void VisibilityPass::beginLevel(const LevelItems& items, const View& view, TaskPool& pool, LevelStats& level,
+void VisibilityPass::beginLevel(const LevelItems& items, const View& view, TaskPool& /*pool*/, LevelStats& level,
                                 Stats& stats) {
     Impl& s = *m_impl;
     s.context.makeCurrent();
     const auto t0 = Clock::now();
     s.levelItems = &items;
-    s.uploadItems(items, pool, level, stats);
-    s.countRecords(items.size(), items.prims.size(), view, level, stats);
+    s.uploadItems(items, level, stats);
+    s.countRecords(items.size(), items.prims.size(), view, true, level, stats);
     s.recordedView = view.box;
     level.setupMs += msSince(t0);
 }
@@ -519,7 +511,7 @@ IterationResult VisibilityPass::iterate(const View& view, std::uint32_t idBits, 
     s.context.makeCurrent();
     if (recordsStale(view.box, s.recordedView)) {
         const auto t0 = Clock::now();
-        s.countRecords(s.levelItems->size(), s.levelItems->prims.size(), view, level, stats);
+        s.countRecords(s.levelItems->size(), s.levelItems->prims.size(), view, false, level, stats);
         s.recordedView = view.box;
         level.setupMs += msSince(t0);
     }
