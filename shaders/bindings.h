@@ -17,8 +17,8 @@
                                       * of every item (3 per item), then max xyz of every item */
 #define CULLIDE_SSBO_PRIMS_OUT 10  /* uvec4[primCount]: compact.comp: the records of the items still alive */
 /* The record build (build.comp): */
-#define CULLIDE_SSBO_PRIM_BEGIN 11 /* uint[itemCount + 1]: item i's primitives are ITEM_PRIMS[begin[i] .. begin[i + 1]) */
-#define CULLIDE_SSBO_ITEM_PRIMS 12 /* uint[itemPrimCount]: primitive references (triangle, or box | CULLIDE_PRIM_BOX_BIT) */
+#define CULLIDE_SSBO_PRIM_BEGIN 11 /* uint[itemCount + 1]: item i's primitives: ITEM_PRIMS[begin[i] .. begin[i + 1]) */
+#define CULLIDE_SSBO_ITEM_PRIMS 12 /* uint[itemPrimCount]: primitive references (triangle, or box | PRIM_BOX_BIT) */
 #define CULLIDE_SSBO_BANDS 13      /* uint[itemPrimCount]: each primitive's footprint (float bits), then its bands */
 #define CULLIDE_SSBO_BUILD 14      /* uint[CULLIDE_BUILD_GROUPS + work groups]: see CULLIDE_BUILD_* */
 
@@ -32,8 +32,8 @@
 #define CULLIDE_COUNTER_RECORDS 10  /* records compact.comp kept */
 #define CULLIDE_COUNTER_COUNT 11
 
-/* The record build's buffer. Per work group of the per-primitive passes, CULLIDE_BUILD_GROUPS + g holds its footprint sum
- * (float bits, FOOTPRINTS), then its record count (COUNT), then its first record (OFFSETS). */
+/* The record build's buffer. Per work group g of the per-primitive passes, CULLIDE_BUILD_GROUPS + g holds its
+ * footprint sum (float bits, FOOTPRINTS), then its record count (COUNT), then its first record (OFFSETS). */
 #define CULLIDE_BUILD_TOTAL 0      /* records of the alive items (OFFSETS) */
 #define CULLIDE_BUILD_APPROX 1     /* the same as a float (bits): no wrap-around, for the C++ side's size limit */
 #define CULLIDE_BUILD_PER_BAND 2   /* pixels per band (float bits, SCALE) */

@@ -28,7 +28,8 @@ struct LevelStats {
     /// level's alive set), i.e. waiting for the device to finish the work submitted before. The rest of cpuMs is
     /// issuing commands and the level loop.
     double waitMs = 0.0;
-    /// GPU time of the level's iterations and record builds from timer queries. Only meaningful with gpuTimingValid; 0 otherwise.
+    /// GPU time of the level's iterations and record builds from timer queries. Only meaningful with
+    /// gpuTimingValid; 0 otherwise.
     double gpuMs = 0.0;
     /// true when every iteration of the level was timed by an available, plausible timer-query result (at most
     /// the CPU wall time of the same span): false without timer queries and where a driver reports nonsense

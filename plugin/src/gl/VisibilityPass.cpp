@@ -246,7 +246,8 @@ struct VisibilityPass::Impl {
             {CULLIDE_SSBO_ITEM_BOUNDS, kItemBounds}, {CULLIDE_SSBO_PRIM_BEGIN, kPrimBegin},
             {CULLIDE_SSBO_ITEM_PRIMS, kItemPrims},  {CULLIDE_SSBO_BANDS, kBands},
             {CULLIDE_SSBO_BUILD, kBuild}};
-        for (const auto& [binding, buffer] : bindings) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffers[buffer]);
+        for (const auto& [binding, buffer] : bindings)
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffers[buffer]);
     }
 
     /// One pass of build.comp over `invocations` invocations.
