@@ -104,8 +104,10 @@ float footprintOf(vec3 size) {
     return max(max(side.y * side.z, side.z * side.x), side.x * side.y);
 }
 
+// At most half of CULLIDE_MAX_LOOP_ITERATIONS bands, so that the WRITE pass's loop stays within llvmpipe's limit; a
+// primitive that would need more gets longer bands, and cull.comp counts an invocation over the limit as an overflow.
 uint bandsOf(float footprint, float perBand) {
-    return uint(clamp(ceil(footprint / perBand), 1.0, 1.0e6));
+    return uint(clamp(ceil(footprint / perBand), 1.0, float(CULLIDE_MAX_LOOP_ITERATIONS / 2)));
 }
 
 // The item primitive p belongs to: the last i with primBegin[i] <= p (binary search over the items).

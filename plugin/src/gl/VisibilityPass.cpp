@@ -64,6 +64,11 @@ constexpr double kTimerSlackMs = 0.25;
 /// CULLIDE_PIXELS_PER_INVOCATION)) records on a hardware GPU, primitives + footprint pixels / 4,096 on llvmpipe.
 constexpr double kMaxRecords = 67108864.0;
 
+/// Work groups of primitives (64 each) beyond which a level gives up (BackendError, as above): 16.7 M primitives.
+/// build.comp's single-group passes loop over the work groups, about 13 iterations per 64 of them, and llvmpipe
+/// silently ends a shader's loops after 65,535 iterations.
+constexpr std::size_t kMaxBuildGroups = 262144;
+
 enum Buffer {
     kPositions,
     kIndices,
@@ -267,6 +272,9 @@ struct VisibilityPass::Impl {
     void countRecords(std::size_t itemCount, std::size_t primCount, const View& view, bool withBounds,
                       LevelStats& level, Stats& stats) {
         const std::size_t groups = (primCount + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
+        if (groups > kMaxBuildGroups)
+            throw BackendError("a level of " + std::to_string(primCount) + " primitives is over the limit of " +
+                               std::to_string(kMaxBuildGroups * CULLIDE_COMPUTE_GROUP_SIZE));
         reserveBuffer(buffers[kBands], capacity[kBands], primCount * 4);
         reserveBuffer(buffers[kBuild], capacity[kBuild], (CULLIDE_BUILD_GROUPS + groups) * 4);
         bindBuffers();
