@@ -98,8 +98,7 @@ void prune(LevelRun& run, const char* name) {
     run.stats.levels.push_back(LevelStats{});
     LevelStats& level = run.stats.levels.back();
     level.name = name;
-    pruneLevel(run.backend, run.items, run.settings, run.geometry.coordinateBound(), run.pool, run.survivors, level,
-               run.stats);
+    pruneLevel(run.backend, run.items, run.settings, run.geometry.coordinateBound(), run.survivors, level, run.stats);
 }
 
 std::vector<std::uint32_t> clusterProxies(const LevelRun& run) {

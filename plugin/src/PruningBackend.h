@@ -5,7 +5,6 @@
 #pragma once
 
 #include "cullide/Stats.h"
-#include "cullide/TaskPool.h"
 #include "cullide/Types.h"
 
 #include <cstddef>
@@ -91,13 +90,11 @@ public:
     virtual std::string device() const = 0;
 
     /// Starts a level: every item alive, the first iteration's view `view`. `items` stays alive (unchanged) until
-    /// the level ends. `pool`: the culler's workers, for the per-item set-up.
-    virtual void beginLevel(const LevelItems& items, const View& view, TaskPool& pool, LevelStats& level,
-                            Stats& stats) = 0;
+    /// the level ends.
+    virtual void beginLevel(const LevelItems& items, const View& view, LevelStats& level, Stats& stats) = 0;
     /// One iteration: both views along every enabled axis over the alive items; an item stays alive when it is not
     /// fully visible in any of them. Owner ids are packed into the low `idBits` bits of each pixel.
-    virtual IterationResult iterate(const View& view, std::uint32_t idBits, TaskPool& pool, LevelStats& level,
-                                    Stats& stats) = 0;
+    virtual IterationResult iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) = 0;
     /// The alive set now, 0/1 per item.
     virtual void readAlive(std::vector<std::uint8_t>& alive, LevelStats& level, Stats& stats) = 0;
 };

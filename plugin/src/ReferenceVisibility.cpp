@@ -183,12 +183,12 @@ ReferenceVisibility::ReferenceVisibility(const Settings& settings) : m_settings(
 
 void ReferenceVisibility::upload(const GpuGeometry& geometry, Stats&) { m_geometry = &geometry; }
 
-void ReferenceVisibility::beginLevel(const LevelItems& items, const View&, TaskPool&, LevelStats&, Stats&) {
+void ReferenceVisibility::beginLevel(const LevelItems& items, const View&, LevelStats&, Stats&) {
     m_items = &items;
     m_alive.assign(items.size(), 1);
 }
 
-IterationResult ReferenceVisibility::iterate(const View& view, std::uint32_t idBits, TaskPool&, LevelStats& level,
+IterationResult ReferenceVisibility::iterate(const View& view, std::uint32_t idBits, LevelStats& level,
                                              Stats& stats) {
     const LevelItems& items = *m_items;
     const GpuGeometry& geometry = *m_geometry;

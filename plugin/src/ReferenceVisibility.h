@@ -26,10 +26,8 @@ public:
     std::string renderer() const override { return "cpu-visibility-reference"; }
     std::string device() const override { return "cpu"; }
 
-    void beginLevel(const LevelItems& items, const View& view, TaskPool& pool, LevelStats& level,
-                    Stats& stats) override;
-    IterationResult iterate(const View& view, std::uint32_t idBits, TaskPool& pool, LevelStats& level,
-                            Stats& stats) override;
+    void beginLevel(const LevelItems& items, const View& view, LevelStats& level, Stats& stats) override;
+    IterationResult iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) override;
     void readAlive(std::vector<std::uint8_t>& alive, LevelStats& level, Stats& stats) override;
 
     /// The flag bits each item earned in the last iteration (bit 2a: hidden from the -a side somewhere, bit 2a + 1:

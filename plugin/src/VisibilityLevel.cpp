@@ -88,7 +88,7 @@ Aabb deviceBoundsOf(const GpuGeometry& geometry, const LevelItems& items, std::s
 }
 
 void pruneLevel(PruningBackend& backend, const LevelItems& items, const Settings& settings, double coordinateBound,
-                TaskPool& pool, std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats) {
+                std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats) {
     const Timer timer;
     const std::size_t n = items.size();
     assignKeeping(survivors, n, std::uint8_t{1});
@@ -105,11 +105,11 @@ void pruneLevel(PruningBackend& backend, const LevelItems& items, const Settings
     for (const Aabb& b : items.bounds) bounds.grow(b);
     View view = fitView(bounds, settings, coordinateBound);
     std::uint32_t maxOwner = *std::max_element(items.owner.begin(), items.owner.end());
-    backend.beginLevel(items, view, pool, level, stats);
+    backend.beginLevel(items, view, level, stats);
     std::size_t alive = n;
     bool allPruned = false;
     for (int iteration = 0; iteration < settings.maxIterations; ++iteration) {
-        const IterationResult r = backend.iterate(view, idBitsFor(maxOwner), pool, level, stats);
+        const IterationResult r = backend.iterate(view, idBitsFor(maxOwner), level, stats);
         if (r.overflows != 0) break;  // some footprint was not scanned: the iteration pruned nothing
         if (r.alive == alive) break;  // the set only shrinks: the same size is the same set
         alive = r.alive;

@@ -39,9 +39,8 @@ Aabb deviceBoundsOf(const GpuGeometry& geometry, const LevelItems& items, std::s
 /// Runs one level on `backend`: survivors[i] is 1 when item i may intersect an item of another owner. At most
 /// Settings::maxIterations iterations, each fitted to the items still alive; the loop stops when the set stops
 /// changing, when one owner is left (nothing to collide with: all pruned) or when an iteration overflowed (it pruned
-/// nothing). `coordinateBound`: GpuGeometry::coordinateBound of the upload the items refer to; `pool`: the
-/// culler's workers, which the backend may use for its per-item set-up.
+/// nothing). `coordinateBound`: GpuGeometry::coordinateBound of the upload the items refer to.
 void pruneLevel(PruningBackend& backend, const LevelItems& items, const Settings& settings, double coordinateBound,
-                TaskPool& pool, std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats);
+                std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats);
 
 }  // namespace cullide

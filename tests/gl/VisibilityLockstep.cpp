@@ -24,19 +24,17 @@ public:
     std::string renderer() const override { return m_tested->renderer(); }
     std::string device() const override { return m_tested->device(); }
 
-    void beginLevel(const LevelItems& items, const View& view, TaskPool& pool, LevelStats& level,
-                    Stats& stats) override {
-        m_tested->beginLevel(items, view, pool, level, stats);
-        m_reference->beginLevel(items, view, pool, m_scratchLevel, m_scratch);
+    void beginLevel(const LevelItems& items, const View& view, LevelStats& level, Stats& stats) override {
+        m_tested->beginLevel(items, view, level, stats);
+        m_reference->beginLevel(items, view, m_scratchLevel, m_scratch);
         ++m_log->levels;
         m_iteration = 0;
         m_aliveBefore = items.size();
     }
 
-    IterationResult iterate(const View& view, std::uint32_t idBits, TaskPool& pool, LevelStats& level,
-                            Stats& stats) override {
-        const IterationResult got = m_tested->iterate(view, idBits, pool, level, stats);
-        const IterationResult expected = m_reference->iterate(view, idBits, pool, m_scratchLevel, m_scratch);
+    IterationResult iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) override {
+        const IterationResult got = m_tested->iterate(view, idBits, level, stats);
+        const IterationResult expected = m_reference->iterate(view, idBits, m_scratchLevel, m_scratch);
         m_tested->readAlive(m_gotAlive, m_scratchLevel, m_scratch);
         m_reference->readAlive(m_expectedAlive, m_scratchLevel, m_scratch);
         compare(got, expected);

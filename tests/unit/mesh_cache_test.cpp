@@ -156,8 +156,8 @@ public:
     std::size_t deviceBytes() const override { return 0; }
     std::string renderer() const override { return "recording"; }
     std::string device() const override { return "none"; }
-    void beginLevel(const LevelItems&, const View&, TaskPool&, LevelStats&, Stats&) override {}
-    IterationResult iterate(const View&, std::uint32_t, TaskPool&, LevelStats&, Stats&) override { return {}; }
+    void beginLevel(const LevelItems&, const View&, LevelStats&, Stats&) override {}
+    IterationResult iterate(const View&, std::uint32_t, LevelStats&, Stats&) override { return {}; }
     void readAlive(std::vector<std::uint8_t>&, LevelStats&, Stats&) override {}
 };
 

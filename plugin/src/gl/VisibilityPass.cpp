@@ -502,8 +502,7 @@ bool recordsStale(const Aabb& view, const Aabb& recordedView) {
 
 }  // namespace
 
-void VisibilityPass::beginLevel(const LevelItems& items, const View& view, TaskPool& /*pool*/, LevelStats& level,
-                                Stats& stats) {
+void VisibilityPass::beginLevel(const LevelItems& items, const View& view, LevelStats& level, Stats& stats) {
     Impl& s = *m_impl;
     s.context.makeCurrent();
     const auto t0 = Clock::now();
@@ -514,8 +513,7 @@ void VisibilityPass::beginLevel(const LevelItems& items, const View& view, TaskP
     level.setupMs += msSince(t0);
 }
 
-IterationResult VisibilityPass::iterate(const View& view, std::uint32_t idBits, TaskPool& /*pool*/, LevelStats& level,
-                                        Stats& stats) {
+IterationResult VisibilityPass::iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) {
     Impl& s = *m_impl;
     s.context.makeCurrent();
     if (recordsStale(view.box, s.recordedView)) {

@@ -27,10 +27,8 @@ public:
     std::string renderer() const override;
     std::string device() const override;
 
-    void beginLevel(const LevelItems& items, const View& view, TaskPool& pool, LevelStats& level,
-                    Stats& stats) override;
-    IterationResult iterate(const View& view, std::uint32_t idBits, TaskPool& pool, LevelStats& level,
-                            Stats& stats) override;
+    void beginLevel(const LevelItems& items, const View& view, LevelStats& level, Stats& stats) override;
+    IterationResult iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) override;
     void readAlive(std::vector<std::uint8_t>& alive, LevelStats& level, Stats& stats) override;
 
 private:
