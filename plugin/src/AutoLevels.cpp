@@ -1,5 +1,7 @@
 #include "AutoLevels.h"
 
+#include <algorithm>
+
 namespace cullide {
 
 AutoLevels::Path AutoLevels::choose(std::size_t triangles) {
@@ -8,7 +10,7 @@ AutoLevels::Path AutoLevels::choose(std::size_t triangles) {
     const bool resized = triangles > 2 * m_triangles || 2 * triangles < m_triangles;
     // A new trial: the first, a size jump during one, or a size change once the decision has held long enough
     // (a scene whose colliding set keeps changing size would otherwise pay for the slower path every few frames).
-    if (m_step == 0 || (resized && (measuring() || m_framesDecided >= kMinFramesBetweenTrials))) {
+    if (m_step == 0 || (resized && (measuring() || m_framesDecided >= m_holdFrames))) {
         m_step = 0;
         m_triangles = triangles;
     }
@@ -27,7 +29,13 @@ void AutoLevels::record(Path path, double ms) {
     if (++m_step < kTrialFrames) return;
     m_cpuMs = m_trialCpuMs;
     m_gpuMs = m_trialGpuMs;
-    m_decision = m_gpuMs < m_cpuMs ? Path::Gpu : Path::Cpu;
+    const Path decision = m_gpuMs < m_cpuMs ? Path::Gpu : Path::Cpu;
+    const bool clear = std::max(m_cpuMs, m_gpuMs) >= kClearLoss * std::min(m_cpuMs, m_gpuMs);
+    m_holdFrames = m_decided && decision == m_decision && clear
+                       ? std::min(2 * m_holdFrames, kMaxFramesBetweenTrials)
+                       : kMinFramesBetweenTrials;
+    m_decision = decision;
+    m_decided = true;
     m_framesDecided = 0;
 }
 

@@ -9,9 +9,12 @@ namespace cullide {
 /// The trial: the first frames of a scene alternate the two paths (CPU, GPU, CPU, GPU); the first frame of each is
 /// a warm-up (static caches, the first upload of the device's resident region) and is not compared; the second of
 /// each is timed. From then on the faster path runs, until the scene's triangle count leaves [half, twice] the
-/// count it was measured at, once the decision has held for kMinFramesBetweenTrials frames; then the trial starts
-/// again. Both paths give the same pairs, so trial frames are ordinary frames; a trial costs at most two frames on
-/// the slower path per kMinFramesBetweenTrials + 4 frames.
+/// count it was measured at, once the decision has held for a hold of frames (kMinFramesBetweenTrials); then the
+/// trial starts again. Both paths give the same pairs, so trial frames are ordinary frames; a trial costs at most
+/// two frames on the slower path per hold + 4 frames. A trial that repeats the decision before it, with the slower
+/// path at least kClearLoss times the faster, doubles the hold (up to kMaxFramesBetweenTrials): a scene whose
+/// colliding set keeps changing size does not pay for a far slower path (a GPU that loses by 5x on a machine of
+/// many cores) every two seconds. Any other trial sets the hold back to kMinFramesBetweenTrials.
 /// The same rule on every device: a GPU that loses to the CPU path, and a software renderer that wins, are handled
 /// alike.
 class AutoLevels {
@@ -26,6 +29,8 @@ public:
 
     /// A trial is under way (or none has started: the first frame with triangles starts one).
     bool measuring() const { return m_step < kTrialFrames; }
+    /// Frames the decision holds before a change of the scene's size may start a new trial.
+    int holdFrames() const { return m_holdFrames; }
     /// "measuring", or "gpu" / "cpu": the faster path of the last trial.
     std::string decision() const;
     /// The timed trial frames of the last completed trial, in ms (0 before the first completes).
@@ -35,10 +40,14 @@ public:
 private:
     static constexpr int kTrialFrames = 4;
     static constexpr int kMinFramesBetweenTrials = 120;
+    static constexpr int kMaxFramesBetweenTrials = 120 * 32;
+    static constexpr double kClearLoss = 2.0;
     static Path trialPath(int step) { return step % 2 == 0 ? Path::Cpu : Path::Gpu; }
 
     int m_step = 0;                   ///< trial frames done; kTrialFrames = decided
     int m_framesDecided = 0;          ///< frames run on the decision since the last trial
+    int m_holdFrames = kMinFramesBetweenTrials;
+    bool m_decided = false;           ///< some trial has completed (m_decision is its outcome)
     bool m_pending = false;           ///< the path last chosen is a trial frame, not yet recorded
     std::size_t m_triangles = 0;      ///< triangle count of the scene when the trial started
     double m_trialCpuMs = 0.0, m_trialGpuMs = 0.0;

@@ -1,7 +1,7 @@
-// The seam between the frame pipeline (GpuCuller, LevelPipelines) and what runs CULLIDE's image-space visibility test: the GL
-// implementation (gl/VisibilityPass) and the CPU reference (ReferenceVisibility), which computes the same pixels in
-// the same float arithmetic and is the oracle of the GL one. The level's loop over iterations (VisibilityLevel.h)
-// drives either; a backend only answers "which items survive one iteration of this view".
+// The seam between the frame pipeline (GpuCuller, LevelPipelines) and what runs CULLIDE's image-space visibility
+// test: the GL implementation (gl/VisibilityPass) and the CPU reference (ReferenceVisibility), which computes the
+// same pixels in the same float arithmetic and is the oracle of the GL one. The level's loop over iterations
+// (VisibilityLevel.h) drives either; a backend only answers "which items survive one iteration of this view".
 #pragma once
 
 #include "cullide/Stats.h"

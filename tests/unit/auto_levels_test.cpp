@@ -89,5 +89,59 @@ TEST(AutoLevels, AFrameOnTheOtherPathIsNotATrialFrame) {
     EXPECT_EQ(a.choose(100), Path::Gpu);
 }
 
+/// Runs frames of a scene whose size alternates between 1000 and 5000 triangles every frame, from a decided state,
+/// until one starts a new trial (at most `limit` frames); returns how many frames ran before it and sets `size` to
+/// that frame's size. The starting frame is left unrecorded: runTrial's first frame starts the trial over.
+int framesUntilNextTrial(AutoLevels& a, int limit, std::size_t& size) {
+    for (int frame = 0; frame < limit; ++frame) {
+        size = frame % 2 == 0 ? 5000 : 1000;
+        a.choose(size);
+        if (a.measuring()) return frame;
+    }
+    return limit;
+}
+
+TEST(AutoLevels, AClearLoserIsRetriedLessOftenEachTimeItLosesAgain) {
+    AutoLevels a;
+    runTrial(a, 1000, 2.0, 9.0);  // the GPU loses by 4.5x
+    EXPECT_EQ(a.holdFrames(), 120);
+    // Each trial after a size change costs two GPU frames; each one that the GPU loses clearly again doubles the
+    // hold before the next, up to 3,840 frames.
+    for (int hold : {240, 480, 960, 1920, 3840, 3840}) {
+        std::size_t size = 0;
+        const int waited = framesUntilNextTrial(a, 10000, size);
+        EXPECT_GE(waited, a.holdFrames());
+        EXPECT_LE(waited, a.holdFrames() + 1);
+        runTrial(a, size, 2.0, 9.0);
+        EXPECT_EQ(a.decision(), "cpu");
+        EXPECT_EQ(a.holdFrames(), hold);
+    }
+}
+
+TEST(AutoLevels, ACloseOrChangedDecisionSetsTheShortHoldBack) {
+    AutoLevels a;
+    std::size_t size = 0;
+    // The trial starts on the first size change once the hold is over: that frame or the next.
+    auto waitHold = [&](int hold) {
+        const int waited = framesUntilNextTrial(a, 1000, size);
+        EXPECT_TRUE(waited == hold || waited == hold + 1) << waited << " frames for a hold of " << hold;
+    };
+    runTrial(a, 1000, 2.0, 9.0);
+    waitHold(120);
+    runTrial(a, size, 2.0, 9.0);
+    EXPECT_EQ(a.holdFrames(), 240);
+    waitHold(240);
+    runTrial(a, size, 2.0, 3.0);  // the same winner, but by less than twice: back to the short hold
+    EXPECT_EQ(a.decision(), "cpu");
+    EXPECT_EQ(a.holdFrames(), 120);
+    waitHold(120);
+    runTrial(a, size, 2.0, 9.0);  // clear again, the same winner: doubled
+    EXPECT_EQ(a.holdFrames(), 240);
+    waitHold(240);
+    runTrial(a, size, 9.0, 2.0);  // the GPU wins now, clearly: a new decision starts at the short hold
+    EXPECT_EQ(a.decision(), "gpu");
+    EXPECT_EQ(a.holdFrames(), 120);
+}
+
 }  // namespace
 }  // namespace cullide

@@ -1,8 +1,9 @@
 // CullideBroadphase: a drop-in btBroadphaseInterface whose mesh pairs are decided by CULLIDE (image-space
 // visibility culling, GPU levels where they pay) instead of AABB overlap alone.
 //
-//     auto* broadphase = new cullide::CullideBroadphase();                             // was: new btDbvtBroadphase()
-//     auto* dispatcher = new cullide::CullideCollisionDispatcher(config, broadphase);  // was: new btCollisionDispatcher(config)
+//     auto* broadphase = new cullide::CullideBroadphase();  // was: new btDbvtBroadphase()
+//     auto* dispatcher = new cullide::CullideCollisionDispatcher(config, broadphase);
+//                                                           // was: new btCollisionDispatcher(config)
 //
 // Design (see bullet_adapter/README.md for the details and the limits):
 // - The object level is Bullet's own btDbvtBroadphase, owned by this class: the pair cache holds exactly the pairs
@@ -14,11 +15,11 @@
 //   a counter, no pairs, filter mask 0 while parked) instead of poisoning the tree: nothing else is affected.
 // - The CULLIDE levels run only for the cache's pairs whose narrow phase reads the surviving triangles
 //   (GImpact-triangle mesh, plain or btScaledBvhTriangleMeshShape; GImpact-GImpact with setGImpactPairCulling(true);
-//   hull/compound-triangle mesh with
-//   setConvexMeshCulling(true)) or that the culler decides (GImpact against a convex shape), and that the dispatcher will process (needsCollision). The
-//   culler gets those pairs only, meshes as the shape's local triangles plus the body's transform (built once per
-//   shape, shared by its bodies; static objects world-space, cached between steps). Planes and infinite boxes are
-//   never culled. Every other pair goes from the object level straight to Bullet's algorithms.
+//   hull/compound-triangle mesh with setConvexMeshCulling(true)) or that the culler decides (GImpact against a
+//   convex shape), and that the dispatcher will process (needsCollision). The culler gets those pairs only, meshes
+//   as the shape's local triangles plus the body's transform (built once per shape, shared by its bodies; static
+//   objects world-space, cached between steps). Planes and infinite boxes are never culled. Every other pair goes
+//   from the object level straight to Bullet's algorithms.
 // - The hand-off to CullideCollisionDispatcher is a per-pair record (internal), valid only for the shapes
 //   and transforms the pair had in calculateOverlappingPairs(): the surviving triangles, or `pruned` for a pair the
 //   culler proved farther apart than its margin (it stays in the cache, as in Bullet; the narrow phase makes no
@@ -91,7 +92,8 @@ struct CullideFrameStats {
 /// What the broadphase keeps between steps for the objects that took part in culled pairs (getMemoryStats): local
 /// triangle geometry once per shape, however many bodies share it, and per object its record (transform, keys) plus
 /// a world-space copy of its triangles where one is kept (resting static-flagged objects; with
-/// setGImpactPairCulling(true), objects whose pairs the broadphase tests itself). Heap bytes of the containers (capacity), not counting the culler's own caches.
+/// setGImpactPairCulling(true), objects whose pairs the broadphase tests itself). Heap bytes of the containers
+/// (capacity), not counting the culler's own caches.
 struct CullideMemoryStats {
     std::size_t shapes = 0;               ///< shapes with local geometry (each held once)
     std::size_t sharedGeometryBytes = 0;  ///< their vertices, triangles and Bullet ids, in both precisions
@@ -107,7 +109,8 @@ public:
 
     /// Like createGpuCuller: without a usable GL device the culler runs its CPU path (a one-line notice), unless the
     /// settings demand GPU levels (then GlUnavailableError); std::invalid_argument for invalid settings. `pairCache`
-    /// (optional, not owned) replaces the internal btHashedOverlappingPairCache, like btDbvtBroadphase(btOverlappingPairCache*).
+    /// (optional, not owned) replaces the internal btHashedOverlappingPairCache, like
+    /// btDbvtBroadphase(btOverlappingPairCache*).
     explicit CullideBroadphase(const Settings& settings = Settings{}, btOverlappingPairCache* pairCache = nullptr)
         : CullideBroadphase(detail::checkBulletPrecision(), settings, pairCache, CullerFactory{}) {}
     /// Same, with a custom culler factory (e.g. createReferenceCuller for tests without GL).
@@ -144,13 +147,14 @@ public:
 
     /// With setGImpactPairCulling(true): GImpact-GImpact pairs whose meshes intersect (exact test on the surviving
     /// triangle pairs) get Bullet's GImpact contacts for that step (default: on; without GImpact pair culling every
-    /// GImpact-GImpact pair gets them and this setting changes nothing). GImpact's clip method also makes penetration contacts from
-    /// triangle pairs that are far apart but whose boxes overlap; only such pairs, deep inside the other mesh, make
-    /// them, and CULLIDE's near pairs do not include them. With the fallback the contacts of interpenetrating pairs
-    /// are exactly Bullet's; without it they come from the near pairs only (faster when meshes often intersect, but
-    /// the deepest penetration can be under-reported). Resting contacts within the margins are not affected. With
-    /// the fallback on, a pair found interpenetrating skips the culler for the next 4 steps (Bullet's full algorithm
-    /// runs it: Bullet's contacts, without paying for culling it would not read), then is culled again.
+    /// GImpact-GImpact pair gets them and this setting changes nothing). GImpact's clip method also makes
+    /// penetration contacts from triangle pairs that are far apart but whose boxes overlap; only such pairs, deep
+    /// inside the other mesh, make them, and CULLIDE's near pairs do not include them. With the fallback the
+    /// contacts of interpenetrating pairs are exactly Bullet's; without it they come from the near pairs only (faster
+    /// when meshes often intersect, but the deepest penetration can be under-reported). Resting contacts within the
+    /// margins are not affected. With the fallback on, a pair found interpenetrating skips the culler for the next 4
+    /// steps (Bullet's full algorithm runs it: Bullet's contacts, without paying for culling it would not read), then
+    /// is culled again.
     void setDeepPenetrationFallback(bool enable);
     bool getDeepPenetrationFallback() const;
 

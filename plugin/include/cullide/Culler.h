@@ -15,7 +15,8 @@
 
 namespace cullide {
 
-/// Thrown when no usable headless OpenGL device is available; the message names what is missing and the package providing it.
+/// Thrown when no usable headless OpenGL device is available; the message names what is missing and the package
+/// providing it.
 class GlUnavailableError : public std::runtime_error {
 public:
     using std::runtime_error::runtime_error;

@@ -15,8 +15,9 @@ struct Object {
     /// transformPoint() rounds it. Many objects can share one mesh, each with its own transform: the culler builds
     /// world-space vertices only for objects whose world box (the box of the transformed corners of the mesh box,
     /// exact for transformPoint's rounding) comes within the margin of another object, so far-apart instances cost
-    /// a box each. nullptr: the mesh is already in world space. An object is rejected when its transform is not finite or maps the mesh
-    /// box beyond the double range. Ignored for box-only proxies (their box is in world space).
+    /// a box each. nullptr: the mesh is already in world space. An object is rejected when its transform is not
+    /// finite or maps the mesh box beyond the double range. Ignored for box-only proxies (their box is in world
+    /// space).
     const Transform* transform = nullptr;
     /// Box-only proxy (used when mesh == nullptr). Must be finite.
     Aabb box;

@@ -85,7 +85,8 @@ struct Stats {
     std::size_t poolCallerSleeps = 0;
     /// GpuLevels::Auto with a GL device: "measuring" (the first four frames of a scene, and again after its triangle
     /// count halved or doubled, at most once per 120 frames, alternate the CPU path and the GPU levels and time
-    /// them), then "gpu" or "cpu", the faster of the two. Empty where nothing was decided (GpuLevels::Always or
+    /// them; each trial that again finds one path at least twice as fast doubles that interval, up to 3,840 frames),
+    /// then "gpu" or "cpu", the faster of the two. Empty where nothing was decided (GpuLevels::Always or
     /// Never, Pipeline::Paper, no device).
     std::string autoDecision;
     double autoCpuMs = 0.0;  ///< the timed trial frames behind autoDecision, whole-frame ms (0 until one is done)
