@@ -35,9 +35,9 @@ enum class Backend {
 enum class GpuLevels {
     /// Run the GPU visibility levels where they pay, by measurement: the first four frames of a scene (and again
     /// when its triangle count halves or doubles, at most once per 120 frames, or less often while the same path
-    /// keeps winning by at least twice) alternate the CPU path and the GPU levels, and the faster runs from then on (Stats::autoDecision, autoCpuMs, autoGpuMs). The same rule on every
-    /// device. Results are identical either way (with Settings::exactTriangles false the candidate supersets
-    /// differ). Without a GL device: the CPU path.
+    /// keeps winning by at least twice) alternate the CPU path and the GPU levels, and the faster runs from then on
+    /// (Stats::autoDecision, autoCpuMs, autoGpuMs). The same rule on every device. Results are identical either way
+    /// (with Settings::exactTriangles false the candidate supersets differ). Without a GL device: the CPU path.
     Auto,
     /// Always run the GPU levels (tests, benchmarks, the paper-faithful pipeline).
     Always,
