@@ -264,13 +264,13 @@ struct VisibilityPass::Impl {
         stats.draws += 1;
     }
 
-    /// Counts the records of the alive items for `view` on the device (build.comp up to its OFFSETS pass; first
+    /// Counts the records of the level's alive items for `view` on the device (build.comp up to its OFFSETS pass; first
     /// its BOUNDS pass where `withBounds`: at a level's start) and reads back their number, to size the record
     /// buffers and the passes; writeRecords writes them. On the compute back-end each primitive is split into
     /// bands of its largest footprint over the three views. The passes' GPU time counts as the level's, the
     /// read-back as its waiting.
-    void countRecords(std::size_t itemCount, std::size_t primCount, const View& view, bool withBounds,
-                      LevelStats& level, Stats& stats) {
+    void countRecords(const View& view, bool withBounds, LevelStats& level, Stats& stats) {
+        const std::size_t primCount = levelItems->prims.size();
         const std::size_t groups = (primCount + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
         if (groups > kMaxBuildGroups)
             throw BackendError("a level of " + std::to_string(primCount) + " primitives is over the limit of " +
@@ -281,7 +281,7 @@ struct VisibilityPass::Impl {
         glUseProgram(buildProgram);
         glUniform3fv(CULLIDE_LOC_PIXEL_SCALE, 1, view.pixelScale);
         glUniform3fv(CULLIDE_LOC_HALF_SIZE, 1, view.halfSize);
-        setBuildUniforms(itemCount, primCount);
+        setBuildUniforms();
         glUniform1ui(CULLIDE_LOC_GROUPS, static_cast<GLuint>(groups));
         const auto timedSpan = Clock::now();
         if (timer) glBeginQuery(GL_TIME_ELAPSED, timer);
@@ -313,16 +313,17 @@ struct VisibilityPass::Impl {
     }
 
     /// build.comp's WRITE pass: the counted records into kPrims (bound by prepareIteration).
-    void writeRecords(std::size_t itemCount, std::size_t primCount, LevelStats& level, Stats& stats) {
+    void writeRecords(LevelStats& level, Stats& stats) {
         glUseProgram(buildProgram);
-        setBuildUniforms(itemCount, primCount);
-        buildPass(CULLIDE_BUILD_PASS_WRITE, primCount, level, stats);
+        setBuildUniforms();
+        buildPass(CULLIDE_BUILD_PASS_WRITE, levelItems->prims.size(), level, stats);
         recordsPending = false;
     }
 
-    void setBuildUniforms(std::size_t itemCount, std::size_t primCount) const {
-        glUniform1ui(CULLIDE_LOC_ITEM_COUNT, static_cast<GLuint>(itemCount));
-        glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(primCount));
+    /// The level's sizes and the band policy, for every pass of build.comp.
+    void setBuildUniforms() const {
+        glUniform1ui(CULLIDE_LOC_ITEM_COUNT, static_cast<GLuint>(levelItems->size()));
+        glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(levelItems->prims.size()));
         glUniform1i(CULLIDE_LOC_BANDS, bands);
     }
 
@@ -358,7 +359,7 @@ struct VisibilityPass::Impl {
         prepareIteration(itemCount);
         const auto timedSpan = Clock::now();
         if (timer) glBeginQuery(GL_TIME_ELAPSED, timer);
-        if (recordsPending) writeRecords(itemCount, levelItems->prims.size(), level, stats);
+        if (recordsPending) writeRecords(level, stats);
         if (settings.backend == Backend::Raster) {
             reserveBuffer(buffers[kRecords], capacity[kRecords], 3 * recordCount * kRecordBytes);
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_RECORDS, buffers[kRecords]);
@@ -508,7 +509,7 @@ void VisibilityPass::beginLevel(const LevelItems& items, const View& view, Level
     const auto t0 = Clock::now();
     s.levelItems = &items;
     s.uploadItems(items, level, stats);
-    s.countRecords(items.size(), items.prims.size(), view, true, level, stats);
+    s.countRecords(view, true, level, stats);
     s.recordedView = view.box;
     level.setupMs += msSince(t0);
 }
@@ -518,7 +519,7 @@ IterationResult VisibilityPass::iterate(const View& view, std::uint32_t idBits, 
     s.context.makeCurrent();
     if (recordsStale(view.box, s.recordedView)) {
         const auto t0 = Clock::now();
-        s.countRecords(s.levelItems->size(), s.levelItems->prims.size(), view, false, level, stats);
+        s.countRecords(view, false, level, stats);
         s.recordedView = view.box;
         level.setupMs += msSince(t0);
     }
