@@ -195,6 +195,7 @@ struct SceneSpec {
     std::vector<BodySpec> bodies;
     int raysPerStep = 0;
     bool gimpact = false;
+    btScalar gravity = -10;  ///< along y
 };
 
 btTransform at(double x, double y, double z) {
@@ -282,6 +283,37 @@ SceneSpec toriPile(Shapes& s) {
         t.setRotation(btQuaternion(btVector3(rng.uniform(-1, 1), 1, rng.uniform(-1, 1)).normalized(),
                                    rng.uniform(0, 3)));
         sc.bodies.push_back({torus, 1, t});
+    }
+    return sc;
+}
+
+/// A world in units of 1e-3 (millimetres in metres): sizes, margins, positions and gravity scaled, while Bullet's
+/// broadphase fattening (0.05) and contact breaking threshold (0.02) stay absolute. Every pair is in the cache and
+/// the threshold reaches across whole objects: no GImpact candidate triangle is out of reach.
+SceneSpec smallUnits(Shapes& s) {
+    constexpr double u = 1e-3;
+    SceneSpec sc{"small-units", "4 GImpact tori, 28 boxes, spheres, hulls on a ground box, all at 1e-3 units", {}};
+    sc.gimpact = true;
+    sc.gravity = btScalar(-10 * u);
+    const btScalar margin(btScalar(0.04 * u));
+    const auto scaledMargin = [&](btCollisionShape* shape) {
+        shape->setMargin(margin);
+        return shape;
+    };
+    sc.bodies.push_back({scaledMargin(s.own(new btBoxShape(btVector3(20, 1, 20) * btScalar(u)))), 0, at(0, -u, 0)});
+    btGImpactMeshShape* torus = s.torus(u, 0.35 * u, 16, 10);
+    torus->setMargin(margin);
+    torus->updateBound();
+    Random rng(17);
+    btCollisionShape* box = scaledMargin(s.own(new btBoxShape(btVector3(1, 1, 1) * btScalar(0.4 * u))));
+    btCollisionShape* ball = s.own(new btSphereShape(btScalar(0.4 * u)));
+    btCollisionShape* hull = scaledMargin(s.hull(rng, 24, 0.5 * u, 0.4 * u, 0.45 * u));
+    btCollisionShape* const kinds[] = {box, ball, hull, box, ball, hull, box, torus};  // 4 tori, 28 convex shapes
+    for (int i = 0; i < 32; ++i) {
+        btTransform t = at(rng.uniform(-5, 5) * u, (2.0 + 0.6 * i) * u, rng.uniform(-5, 5) * u);
+        t.setRotation(btQuaternion(btVector3(rng.uniform(-1, 1), 1, rng.uniform(-1, 1)).normalized(),
+                                   rng.uniform(0, 3)));
+        sc.bodies.push_back({kinds[i % 8], 1, t});
     }
     return sc;
 }
@@ -414,7 +446,7 @@ const SceneFactory kScenes[] = {{"boxes-3000", boxesFalling},      {"pyramid-wal
                                 {"tori-pile", toriPile},           {"stack", boxPyramid},
                                 {"landscape-150", landscapeSmall}, {"gimpact-landscape", gimpactLandscape},
                                 {"compounds-400", compoundHeap},   {"heightfield-prims", primitivesOnHeightfield},
-                                {"landscape-compounds", compoundsOnLandscape}};
+                                {"landscape-compounds", compoundsOnLandscape}, {"small-units", smallUnits}};
 
 /// A dynamics world that times the parts of its step.
 class TimedWorld final : public btDiscreteDynamicsWorld {
@@ -507,7 +539,7 @@ struct World {
         makePipeline(p, config, btVector3(-120, -60, -120), btVector3(120, 200, 120), broadphase, dispatcher);
         if (scene.gimpact) btGImpactCollisionAlgorithm::registerAlgorithm(dispatcher.get());
         world = std::make_unique<TimedWorld>(dispatcher.get(), broadphase.get(), &solver, &config);
-        world->setGravity(btVector3(0, -10, 0));
+        world->setGravity(btVector3(0, scene.gravity, 0));
         for (const BodySpec& b : scene.bodies) {
             btVector3 inertia(0, 0, 0);
             if (b.mass > 0) b.shape->calculateLocalInertia(b.mass, inertia);

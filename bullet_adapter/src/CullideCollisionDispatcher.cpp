@@ -187,9 +187,15 @@ ConvexReach convexReach(const btCollisionObjectWrapper& meshWrap, const btCollis
     return reach;
 }
 
+/// How far outside the convex shape's box a triangle with margin `margin` can still make a point: factor * (the
+/// margin + the breaking threshold), plus the float slack of the mapped coordinates.
+btScalar reachDistance(const ConvexReach& reach, btScalar margin) {
+    return kConvexReachFactor * (margin + reach.threshold) + reach.slack;
+}
+
 /// False when the triangle's box, mapped into the convex shape's frame, stays farther from the convex shape's box
-/// along an axis than factor * (the triangle's margin + the breaking threshold): the triangle is farther than that
-/// from the shape, so the convex algorithm cannot make a point from it.
+/// along an axis than reachDistance: the triangle is farther than that from the shape, so the convex algorithm
+/// cannot make a point from it.
 ///
 /// (Separating-plane tests for triangle against triangle, tried: they skipped ~8 % more GImpact-concave candidates,
 /// but with double-precision Bullet 5 of 108,081 contact keys of a heightfield scene went missing, not explained;
@@ -202,9 +208,24 @@ bool convexCanTouch(const btTriangleShapeEx& triangle, const ConvexReach& reach)
         lo.setMin(v);
         hi.setMax(v);
     }
-    const btScalar d = kConvexReachFactor * (triangle.getMargin() + reach.threshold) + reach.slack;
+    // The margin as the virtual getMargin gives it (btTriangleShapeEx does not override it), without the call.
+    const btScalar d = reachDistance(reach, triangle.btConvexInternalShape::getMargin());
     for (int k = 0; k < 3; ++k)
         if (lo[k] > reach.max[k] + d || hi[k] < reach.min[k] - d) return false;
+    return true;
+}
+
+/// True when the whole mesh part lies within reach of the convex shape: its box (Bullet's, margin included), mapped
+/// into the convex shape's frame, inside the convex shape's box grown by reachDistance at the part's margin. Then
+/// convexCanTouch keeps every candidate and the loop can leave it out: in a world of small units Bullet's absolute
+/// contact breaking threshold (0.02) alone can reach across whole objects. A part's box stale or wrong by rounding
+/// only makes the loop run GJK on a candidate convexCanTouch would have skipped: Bullet's own loop runs them all.
+bool partWithinReach(const btGImpactMeshShapePart& part, const ConvexReach& reach) {
+    btVector3 lo, hi;
+    part.getAabb(reach.meshToConvex, lo, hi);
+    const btScalar d = reachDistance(reach, part.getMargin());
+    for (int k = 0; k < 3; ++k)
+        if (!(lo[k] >= reach.min[k] - d && hi[k] <= reach.max[k] + d)) return false;
     return true;
 }
 
@@ -504,6 +525,8 @@ private:
         // sort sees) stay Bullet's.
         checkManifold(swapped ? convexWrap : meshWrap, swapped ? meshWrap : convexWrap);
         const ConvexReach reach = convexReach(*meshWrap, *convexWrap);
+        const bool allWithinReach = partWithinReach(meshPart, reach);
+        if (allWithinReach) stats.convexUnchecked += static_cast<std::size_t>(candidates.size());
         int& face = swapped ? m_triface1 : m_triface0;
         meshPart.lockChildShapes();
         btTriangleShapeEx triangle;
@@ -511,7 +534,7 @@ private:
             face = candidates[i];
             meshPart.getBulletTriangle(candidates[i], triangle);
             ++stats.convexCandidates;
-            if (!convexCanTouch(triangle, reach)) continue;
+            if (!allWithinReach && !convexCanTouch(triangle, reach)) continue;
             ++stats.convexTriangles;
             // The wrapper carries (m_part0, m_triface0) whichever side the mesh is, as Bullet's loop does.
             const btCollisionObjectWrapper triangleWrap(meshWrap, &triangle, meshWrap->getCollisionObject(),
@@ -846,37 +869,57 @@ bullet::AlgorithmKind CullideCollisionDispatcher::threadablePair(btBroadphasePai
                                   m_manifoldScratch);
 }
 
+namespace {
+
+/// The dispatcher's algorithm for a pair in place of `registered` (the application's table entry), or nullptr for
+/// the table's own.
+btCollisionAlgorithmCreateFunc* replacementFor(const btCollisionObjectWrapper* body0Wrap,
+                                               const btCollisionObjectWrapper* body1Wrap,
+                                               const btCollisionAlgorithmCreateFunc* registered,
+                                               const CullideBroadphase& broadphase) {
+    const int t0 = body0Wrap->getCollisionShape()->getShapeType();
+    const int t1 = body1Wrap->getCollisionShape()->getShapeType();
+    const bool gimpact = t0 == GIMPACT_SHAPE_PROXYTYPE || t1 == GIMPACT_SHAPE_PROXYTYPE;
+    const bool convexMesh = bullet::isTriangleMeshType(t0) || bullet::isTriangleMeshType(t1);
+    // Most lookups come from a per-triangle loop (a GImpact triangle or a mesh triangle against a convex shape):
+    // neither kind, and answered here.
+    if (!gimpact && !convexMesh) return nullptr;
+    // Bullet's algorithm is replaced only where the application's table holds Bullet's own one, so
+    // btGImpactCollisionAlgorithm::registerAlgorithm(dispatcher) (or not calling it) keeps its meaning and any
+    // custom registration wins.
+    // GImpact against GImpact or against a concave shape (triangle meshes, heightfields, ...) but a plane, which
+    // Bullet's algorithm collides with the mesh's vertices (GIMPACT_VS_PLANE_COLLISION).
+    const auto concave = [](int t) { return btBroadphaseProxy::isConcave(t) && t != STATIC_PLANE_PROXYTYPE; };
+    const bool gimpactPair = (t0 == GIMPACT_SHAPE_PROXYTYPE && concave(t1)) ||
+                             (concave(t0) && t1 == GIMPACT_SHAPE_PROXYTYPE);
+    const bool gimpactConvexPair = CullideGImpactAlgorithm::trimeshAgainstConvex(body0Wrap, body1Wrap) ||
+                                   CullideGImpactAlgorithm::trimeshAgainstConvex(body1Wrap, body0Wrap);
+    if ((gimpactPair || gimpactConvexPair) && registeredIs<btGImpactCollisionAlgorithm::CreateFunc>(registered))
+        return &g_gimpactCreate;
+    // Convex-mesh pairs read the culler's triangles only with convex-mesh culling on; otherwise Bullet's own
+    // algorithm runs them without a record lookup per pair and step.
+    if (!convexMesh || !broadphase.getConvexMeshCulling()) return nullptr;
+    if (bullet::isTriangleMeshType(t1) && culledConvex(body0Wrap) &&
+        registeredIs<btConvexConcaveCollisionAlgorithm::CreateFunc>(registered))
+        return &g_convexMeshCreate;
+    if (bullet::isTriangleMeshType(t0) && culledConvex(body1Wrap) &&
+        registeredIs<btConvexConcaveCollisionAlgorithm::SwappedCreateFunc>(registered))
+        return &g_meshConvexCreate;
+    return nullptr;
+}
+
+}  // namespace
+
 btCollisionAlgorithm* CullideCollisionDispatcher::findAlgorithm(const btCollisionObjectWrapper* body0Wrap,
                                                                 const btCollisionObjectWrapper* body1Wrap,
                                                                 btPersistentManifold* sharedManifold,
                                                                 ebtDispatcherQueryType queryType) {
     if (queryType == BT_CONTACT_POINT_ALGORITHMS && m_broadphase != nullptr) {
-        const int t0 = body0Wrap->getCollisionShape()->getShapeType();
-        const int t1 = body1Wrap->getCollisionShape()->getShapeType();
-        // Replace Bullet's algorithm only where the application's table holds Bullet's own one, so
-        // btGImpactCollisionAlgorithm::registerAlgorithm(dispatcher) (or not calling it) keeps its meaning and any
-        // custom registration wins.
-        const btCollisionAlgorithmCreateFunc* registered = m_doubleDispatchContactPoints[t0][t1];
-        btCollisionAlgorithmCreateFunc* replacement = nullptr;
-        // GImpact against GImpact or against a concave shape (triangle meshes, heightfields, ...) but a plane, which
-        // Bullet's algorithm collides with the mesh's vertices (GIMPACT_VS_PLANE_COLLISION).
-        const auto concave = [](int t) { return btBroadphaseProxy::isConcave(t) && t != STATIC_PLANE_PROXYTYPE; };
-        const bool gimpactPair = (t0 == GIMPACT_SHAPE_PROXYTYPE && concave(t1)) ||
-                                 (concave(t0) && t1 == GIMPACT_SHAPE_PROXYTYPE);
-        const bool gimpactConvexPair = CullideGImpactAlgorithm::trimeshAgainstConvex(body0Wrap, body1Wrap) ||
-                                       CullideGImpactAlgorithm::trimeshAgainstConvex(body1Wrap, body0Wrap);
-        // Convex-mesh pairs read the culler's triangles only with convex-mesh culling on; otherwise Bullet's own
-        // algorithm runs them without a record lookup per pair and step.
-        const bool convexMesh = m_broadphase->getConvexMeshCulling();
-        if ((gimpactPair || gimpactConvexPair) && registeredIs<btGImpactCollisionAlgorithm::CreateFunc>(registered))
-            replacement = &g_gimpactCreate;
-        else if (convexMesh && bullet::isTriangleMeshType(t1) && culledConvex(body0Wrap) &&
-                 registeredIs<btConvexConcaveCollisionAlgorithm::CreateFunc>(registered))
-            replacement = &g_convexMeshCreate;
-        else if (convexMesh && bullet::isTriangleMeshType(t0) && culledConvex(body1Wrap) &&
-                 registeredIs<btConvexConcaveCollisionAlgorithm::SwappedCreateFunc>(registered))
-            replacement = &g_meshConvexCreate;
-        if (replacement != nullptr) {
+        const btCollisionAlgorithmCreateFunc* registered =
+            m_doubleDispatchContactPoints[body0Wrap->getCollisionShape()->getShapeType()]
+                                         [body1Wrap->getCollisionShape()->getShapeType()];
+        if (btCollisionAlgorithmCreateFunc* replacement =
+                replacementFor(body0Wrap, body1Wrap, registered, *m_broadphase)) {
             btCollisionAlgorithmConstructionInfo ci;
             ci.m_dispatcher1 = this;
             ci.m_manifold = sharedManifold;
@@ -958,6 +1001,7 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
     m_total.concavePairs += m_current.concavePairs;
     m_total.convexCandidates += m_current.convexCandidates;
     m_total.convexTriangles += m_current.convexTriangles;
+    m_total.convexUnchecked += m_current.convexUnchecked;
     m_total.threadedMeshPairs += m_current.threadedMeshPairs;
     m_total.threadedTasks += m_current.threadedTasks;
     m_total.apartPairs += m_current.apartPairs;

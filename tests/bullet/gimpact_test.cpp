@@ -234,7 +234,7 @@ TEST(BulletGImpact, ToriOnBoxesWithAKinematicTorus) {
 
 /// The dispatcher's GImpact per-triangle loop (GImpact-convex and GImpact-concave pairs), summed over a mirrored run.
 struct LoopCounts {
-    std::size_t convexPairs = 0, concavePairs = 0, candidates = 0, tested = 0;
+    std::size_t convexPairs = 0, concavePairs = 0, candidates = 0, tested = 0, unchecked = 0;
     std::function<void(int, TestWorld&, TestWorld&)> collector() {
         return [this](int, TestWorld&, TestWorld& c) {
             const CullideDispatchStats& d = c.cullideDispatcher()->getLastStepStats();
@@ -242,6 +242,7 @@ struct LoopCounts {
             concavePairs += d.concavePairs;
             candidates += d.convexCandidates;
             tested += d.convexTriangles;
+            unchecked += d.convexUnchecked;
         };
     }
 };
@@ -249,23 +250,31 @@ struct LoopCounts {
 /// GImpact tori on a large tilted ground box, with hulls and spheres among them. Bullet's query box for a torus is
 /// the ground's AABB in the torus's frame, which holds nearly all of the torus: CULLIDE's dispatcher runs Bullet's
 /// per-triangle loop on the triangles within reach of the convex shape only. Every contact point (position,
-/// normal, distance, triangle) must be Bullet's, and most candidate triangles must have been skipped; with
-/// GImpact-convex culling on as off (the default).
-void expectConvexContactsFromTrianglesWithinReach(bool convexCulling) {
+/// normal, distance, triangle) must be Bullet's; with GImpact-convex culling on as off (the default). At `scale` 1
+/// most candidate triangles must have been skipped. The scene shrunk by `scale` (sizes, margins, positions and
+/// gravity alike) keeps Bullet's absolute breaking threshold (0.02), whose reach then covers whole tori: there the
+/// dispatcher must leave out its per-triangle test, which would keep every candidate.
+void expectConvexContactsFromTrianglesWithinReach(bool convexCulling, btScalar scale = 1) {
     ShapeStore shapes;
-    btCollisionShape* ground = shapes.box(btVector3(12, btScalar(0.5), 12));
-    btCollisionShape* torus = shapes.gimpactTorus(1, btScalar(0.3), 24, 12, btScalar(0.04));
-    btCollisionShape* hull = shapes.hull(btVector3(btScalar(0.5), btScalar(0.35), btScalar(0.4)), 30, 7);
-    btCollisionShape* ball = shapes.sphere(btScalar(0.35));
+    const btScalar margin = btScalar(0.04) * scale;  // Bullet's default, scaled
+    btCollisionShape* ground = shapes.box(btVector3(12, btScalar(0.5), 12) * scale);
+    btCollisionShape* torus = shapes.gimpactTorus(scale, btScalar(0.3) * scale, 24, 12, margin);
+    btCollisionShape* hull = shapes.hull(btVector3(btScalar(0.5), btScalar(0.35), btScalar(0.4)) * scale, 30, 7);
+    btCollisionShape* ball = shapes.sphere(btScalar(0.35) * scale);
+    ground->setMargin(margin);
+    hull->setMargin(margin);
     const btQuaternion tilt(btVector3(1, 0, 1).normalized(), btScalar(0.12));
     auto populate = [&](TestWorld& w) {
         btGImpactCollisionAlgorithm::registerAlgorithm(&w.dispatcher());
-        w.addBody(ground, 0, btTransform(tilt, btVector3(0, -1, 0)));
+        w.world().setGravity(btVector3(0, -10, 0) * scale);
+        w.addBody(ground, 0, btTransform(tilt, btVector3(0, -1, 0) * scale));
         for (int k = 0; k < 6; ++k) {
             const btVector3 at(btScalar(1.9) * std::sin(btScalar(1.3) * btScalar(k)), btScalar(1.0) + btScalar(0.9) * btScalar(k),
                                btScalar(1.9) * std::cos(btScalar(0.9) * btScalar(k)));
-            w.addBody(torus, 1, btTransform(btQuaternion(btVector3(1, 0, btScalar(0.4)).normalized(), btScalar(0.3) * btScalar(k)), at));
-            w.addBody(k % 2 ? hull : ball, 1, btTransform(btQuaternion::getIdentity(), at + btVector3(0, btScalar(0.6), 0)));
+            const btQuaternion turn(btVector3(1, 0, btScalar(0.4)).normalized(), btScalar(0.3) * btScalar(k));
+            w.addBody(torus, 1, btTransform(turn, at * scale));
+            w.addBody(k % 2 ? hull : ball, 1,
+                      btTransform(btQuaternion::getIdentity(), (at + btVector3(0, btScalar(0.6), 0)) * scale));
         }
     };
     TestWorld reference(PipelineKind::Default);
@@ -280,19 +289,24 @@ void expectConvexContactsFromTrianglesWithinReach(bool convexCulling) {
     // pair with a convex shape runs Bullet's own per-triangle loop: exact, point by point.
     auto isTorus = [](int object) { return object >= 1 && object % 2 == 1; };
     options.tolerance = [&](const std::pair<int, int>& pair) {
-        return isTorus(pair.first) && isTorus(pair.second) ? 2.0 * double(gContactBreakingThreshold) : 1e-6;
+        return isTorus(pair.first) && isTorus(pair.second) ? 2.0 * double(gContactBreakingThreshold) : 1e-6 * scale;
     };
     LoopCounts counts;
     options.each = counts.collector();
     const MirrorRun run = runMirrored(reference, cullide, options);
     printMirrorRun("gimpact tori, hulls and spheres on a tilted ground box", run);
-    std::printf("  GImpact-convex: %zu pair-steps, %zu of %zu candidate triangles within reach\n", counts.convexPairs,
-                counts.tested, counts.candidates);
+    std::printf("  GImpact-convex: %zu pair-steps, %zu of %zu candidate triangles within reach, %zu unchecked\n",
+                counts.convexPairs, counts.tested, counts.candidates, counts.unchecked);
     const std::size_t convexPairs = counts.convexPairs, tested = counts.tested, candidates = counts.candidates;
     expectAgreement(run, 600);
     EXPECT_GT(convexPairs, 300u) << "no GImpact-convex pair ran: the scene tests nothing";
     EXPECT_GT(tested, 0u);
-    EXPECT_LT(tested * 4, candidates) << "the reach filter kept most of Bullet's candidates";
+    if (scale == 1) {
+        EXPECT_LT(tested * 4, candidates) << "the reach filter kept most of Bullet's candidates";
+        EXPECT_EQ(counts.unchecked, 0u) << "no torus lies wholly within reach of a convex shape at this scale";
+    } else {
+        EXPECT_EQ(counts.unchecked, candidates) << "the reach covers every torus: the per-triangle test is waste";
+    }
 }
 
 TEST(BulletGImpact, ConvexShapesGetBulletsContactsFromTrianglesWithinReach) {
@@ -303,6 +317,11 @@ TEST(BulletGImpact, ConvexShapesGetBulletsContactsFromTrianglesWithinReach) {
 TEST(BulletGImpact, ConvexShapesCulledGetBulletsContactsFromTrianglesWithinReach) {
     CULLIDE_BULLET_REQUIRE_GL();
     expectConvexContactsFromTrianglesWithinReach(true);
+}
+
+TEST(BulletGImpact, ConvexShapesInASmallUnitWorldGetBulletsContactsWithoutThePerTriangleTest) {
+    CULLIDE_BULLET_REQUIRE_GL();
+    expectConvexContactsFromTrianglesWithinReach(false, btScalar(1e-3));
 }
 
 /// GImpact tori dropped on a static concave ground (turned, off the origin), added before the tori (the ground is

@@ -72,6 +72,9 @@ struct CullideDispatchStats {
     std::size_t concavePairs = 0;
     std::size_t convexCandidates = 0;   ///< ... triangles of Bullet's box queries (both kinds of pair)
     std::size_t convexTriangles = 0;    ///< ... of which within reach of the convex shape: run through GJK
+    /// ... of which taken without a per-triangle test: their mesh part lay wholly within reach of the convex shape
+    /// (Bullet's absolute breaking threshold, 0.02, reaches across whole objects in a world of small units)
+    std::size_t convexUnchecked = 0;
     /// GImpact mesh-mesh pairs whose contacts were computed ahead, on the narrow-phase threads
     /// (setNarrowPhaseThreads), and their search parts (a large pair's search is cut into several)
     std::size_t threadedMeshPairs = 0;
