@@ -612,7 +612,8 @@ struct Row {
     /// CULLIDE world's manifold lacks, and the difference of the deepest points.
     std::size_t points = 0, pointsMissing = 0, comparedPairSteps = 0;
     double deepestDiffMax = 0, deepestDiffSum = 0;
-    double convexCandidates = 0, convexTriangles = 0;  ///< GImpact-convex triangles per step: Bullet's query, run
+    /// GImpact-convex triangles per step: Bullet's query, run, run without the per-triangle reach test
+    double convexCandidates = 0, convexTriangles = 0, convexUnchecked = 0;
 };
 
 /// Adds the CULLIDE world's last step (dispatcher and broadphase stages) to the row's per-step means.
@@ -626,6 +627,7 @@ void addCullideStep(const cullide::CullideCollisionDispatcher& dispatcher, const
     row.threadedPairs += double(d.threadedPairs) / steps;
     row.convexCandidates += double(d.convexCandidates) / steps;
     row.convexTriangles += double(d.convexTriangles) / steps;
+    row.convexUnchecked += double(d.convexUnchecked) / steps;
     const auto& b = broadphase.getLastFrameStats();
     row.buildMs += b.buildMs / steps;
     row.cullMs += b.cullMs / steps;
@@ -1053,7 +1055,7 @@ void printRow(const Row& r) {
                 "lost %zu of %zu (checked %zu: %zu apart) extra %zu | dispatcher: culled %.1f, full %.1f "
                 "(penetrating %.1f), apart %.1f, threaded %.1f | culling frame %.2f ms, culler %.2f, records %.2f; last step: %zu object pairs, "
                 "%zu pruned | contact keys missing %zu of %zu, deepest point diff max %.3g mean %.3g (%zu pair-steps) | "
-                "GImpact-convex triangles %.0f of %.0f | kept: %zu shapes %zu B shared, %zu objects %zu B "
+                "GImpact-convex triangles %.0f of %.0f (%.0f unchecked) | kept: %zu shapes %zu B shared, %zu objects %zu B "
                 "(%zu world copies), %.0f B per object\n",
                 r.scene.c_str(), r.bodies, r.steps, r.ms[0], r.ms[1], r.ms[2], r.ms[2] / best, r.broadphaseMs[0],
                 r.broadphaseMs[1], r.broadphaseMs[2], r.narrowMs[0], r.narrowMs[1], r.narrowMs[2], r.pairs[0],
@@ -1061,7 +1063,7 @@ void printRow(const Row& r) {
                 r.lostChecked, r.lostApart, r.extra, r.cullidePairs, r.fallbackPairs, r.penetrationPairs, r.apartPairs, r.threadedPairs, r.buildMs, r.cullMs, r.recordMs, r.last.objectPairs,
                 r.last.prunedPairs, r.pointsMissing, r.points, r.deepestDiffMax,
                 r.comparedPairSteps ? r.deepestDiffSum / double(r.comparedPairSteps) : 0.0, r.comparedPairSteps,
-                r.convexTriangles, r.convexCandidates, r.memory.shapes, r.memory.sharedGeometryBytes,
+                r.convexTriangles, r.convexCandidates, r.convexUnchecked, r.memory.shapes, r.memory.sharedGeometryBytes,
                 r.memory.objects, r.memory.objectBytes, r.memory.worldCopies,
                 r.memory.objects ? double(r.memory.objectBytes) / double(r.memory.objects) : 0.0);
     std::fflush(stdout);
