@@ -25,6 +25,18 @@ bool boxDeclared(const btCollisionObject& object) {
     return object.getCollisionShape()->getShapeType() == TERRAIN_SHAPE_PROXYTYPE;
 }
 
+/// The pair's box distance, squared, with each box current: an active object's proxy box (the world refreshes it
+/// every step), an inactive one's from its shape at its present transform. The world leaves an inactive object's
+/// proxy as it was when btCollisionWorld::setForceUpdateAllAabbs(false) is set, and the application may have moved
+/// it since (a static platform moved with setWorldTransform alone): Bullet's narrow phase uses the transform.
+btScalar currentGapSquared(const btBroadphaseProxy& proxy0, const btCollisionObject& object0,
+                           const btBroadphaseProxy& proxy1, const btCollisionObject& object1) {
+    btVector3 min0 = proxy0.m_aabbMin, max0 = proxy0.m_aabbMax, min1 = proxy1.m_aabbMin, max1 = proxy1.m_aabbMax;
+    if (!object0.isActive()) object0.getCollisionShape()->getAabb(object0.getWorldTransform(), min0, max0);
+    if (!object1.isActive()) object1.getCollisionShape()->getAabb(object1.getWorldTransform(), min1, max1);
+    return boxDistanceSquared(min0, max0, min1, max1);
+}
+
 }  // namespace
 
 btScalar boxDistanceSquared(const btVector3& min0, const btVector3& max0, const btVector3& min1,
@@ -54,12 +66,14 @@ bool clearIfApart(btBroadphasePair& pair, btCollisionDispatcher& dispatcher, btM
     // Two objects at rest: the dispatch does not collide them (needsCollision), so their pair is Bullet's to skip,
     // at the cost Bullet's own loop pays for it.
     if (object0 == nullptr || object1 == nullptr || (!object0->isActive() && !object1->isActive())) return false;
-    const btScalar gap2 = boxDistanceSquared(proxy0.m_aabbMin, proxy0.m_aabbMax, proxy1.m_aabbMin, proxy1.m_aabbMax);
-    if (!(gap2 > 0)) return false;  // overlapping (or NaN) boxes: the algorithm decides
+    // Overlapping (or NaN) proxy boxes: the algorithm decides. Most pairs end here, before any other test.
+    if (!(boxDistanceSquared(proxy0.m_aabbMin, proxy0.m_aabbMax, proxy1.m_aabbMin, proxy1.m_aabbMax) > 0))
+        return false;
     if (!rigidOrPlain(*object0) || !rigidOrPlain(*object1) ||
         gimpact(*object0) || gimpact(*object1) || boxDeclared(*object0) || boxDeclared(*object1) ||
         !dispatcher.needsCollision(object0, object1) || !freesNoManifoldWhenApart(*pair.m_algorithm))
         return false;
+    const btScalar gap2 = currentGapSquared(proxy0, *object0, proxy1, *object1);
     const btScalar t = manifoldBreakingThreshold(dispatcher, *object0, *object1);
     if (!(t >= 0 && gap2 > t * t)) return false;
     scratch.resize(0);

@@ -18,8 +18,11 @@
 // could make or free a manifold (freesNoManifoldWhenApart: a compound algorithm that still holds child algorithms
 // frees them, and with them their manifolds, which reorders the dispatcher's manifolds as the solver reads them;
 // algorithms other than Bullet's convex ones), and every pair when the application installed its own near callback.
-// A shape that otherwise lies outside its own box (a compound with a heightfield child whose data exceeds its range,
-// vertices changed without a refit) gets no points where it does, as with btAxisSweep3.
+// An inactive object's box is taken from its shape at its present transform, not from its proxy: with
+// btCollisionWorld::setForceUpdateAllAabbs(false) the world refreshes active objects' proxies only, and an application
+// may move a static or sleeping object without updateSingleAabb. A shape that otherwise lies outside its own box (a
+// compound with a heightfield child whose data exceeds its range, vertices changed without a refit) gets no points
+// where it does, as with btAxisSweep3.
 #pragma once
 
 #include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
@@ -40,8 +43,9 @@ btScalar manifoldBreakingThreshold(const btCollisionDispatcher& dispatcher, cons
                                    const btCollisionObject& object1);
 
 /// If the pair's algorithm can be skipped — both objects rigid bodies or plain collision objects, neither with a
-/// GImpact shape, an algorithm already made that would make or free no manifold there, and their boxes more than
-/// the breaking threshold of the pair (and of every manifold its algorithm holds) apart — clears the points of its
+/// GImpact shape, an algorithm already made that would make or free no manifold there, and their boxes (an inactive
+/// object's from its shape at its transform) more than the breaking threshold of the pair (and of every manifold its
+/// algorithm holds) apart — clears the points of its
 /// manifolds (Bullet's contact-destroyed callbacks run as for a refresh) and returns true. Otherwise changes
 /// nothing. `scratch` is reused between calls. Pairs the dispatch would not collide (`needsCollision`) are left
 /// alone. The caller checks the rest: discrete dispatch, Bullet's own near callback.

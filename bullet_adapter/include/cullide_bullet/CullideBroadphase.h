@@ -12,7 +12,8 @@
 //   nothing, and rayTest / aabbTest answer as Bullet's. An application that used another Bullet broadphase (a
 //   btAxisSweep3 with its world bounds, a tuned btDbvtBroadphase) hands it over with setObjectLevel and keeps its
 //   pairs and its costs. A proxy with a non-finite AABB is parked (one line on stderr,
-//   a counter, no pairs, filter mask 0 while parked) instead of poisoning the tree: nothing else is affected.
+//   a counter, no pairs, filter mask 0 while parked) instead of poisoning the tree. The valid objects keep their
+//   pairs and contacts; the manifolds' order (which the solver follows) may differ from Bullet's from then on.
 // - The CULLIDE levels run only for the cache's pairs whose narrow phase reads the surviving triangles
 //   (GImpact-triangle mesh, plain or btScaledBvhTriangleMeshShape; GImpact-GImpact with setGImpactPairCulling(true);
 //   hull/compound-triangle mesh with setConvexMeshCulling(true)) or that the culler decides (GImpact against a
