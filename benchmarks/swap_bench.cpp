@@ -188,6 +188,7 @@ struct BodySpec {
     btCollisionShape* shape;
     btScalar mass;
     btTransform transform;
+    btVector3 velocity = btVector3(0, 0, 0);  ///< initial linear velocity
 };
 struct SceneSpec {
     std::string name;
@@ -399,6 +400,27 @@ SceneSpec boxPyramid(Shapes& s) {
     return sc;
 }
 
+/// A settled scene that mostly sleeps: 5,000 boxes resting side by side in a 100 x 50 grid of 10 x 10 blocks (their
+/// neighbours' boxes within the broadphase's fattening), asleep after the first ~2 s, and 6 balls rolled along the
+/// lanes between the blocks, waking the boxes they brush.
+SceneSpec sleepingBoxes(Shapes& s) {
+    SceneSpec sc{"sleeping-5000", "5,000 boxes asleep in blocks on a ground box, 6 balls rolling through", {}};
+    sc.bodies.push_back({s.own(new btBoxShape(btVector3(150, 1, 40))), 0, at(0, -1, 0)});
+    btCollisionShape* box = s.own(new btBoxShape(btVector3(btScalar(0.5), btScalar(0.5), btScalar(0.5))));
+    for (int i = 0; i < 5000; ++i) {
+        const int x = i % 100, z = i / 100;  // blocks of 10 x 10, lanes of 1.5 between them
+        sc.bodies.push_back({box, 1, at(-60 + x * 1.02 + (x / 10) * 1.5, 0.5, -30 + z * 1.02 + (z / 10) * 1.5)});
+    }
+    btCollisionShape* ball = s.own(new btSphereShape(btScalar(0.8)));  // wider than a lane: it brushes the blocks
+    for (int k = 0; k < 6; ++k) {  // along x in the lanes between block rows, reaching them after the boxes sleep
+        const int row = k % 4 + 1;  // the lane before this block row
+        BodySpec b{ball, 2, at(-90 - 12.0 * k, 0.8, -30 + (10 * row - 0.5) * 1.02 + (row - 0.5) * 1.5)};
+        b.velocity = btVector3(6, 0, 0);
+        sc.bodies.push_back(b);
+    }
+    return sc;
+}
+
 /// Like bench_run's stepping scene 'landscape': 150 primitives and hulls dropped on one 8,192-triangle BVH part.
 SceneSpec landscapeSmall(Shapes& s) {
     SceneSpec sc{"landscape-150", "150 boxes/spheres/capsules/hulls (24 points) over one BVH part (8K triangles)", {}};
@@ -446,7 +468,8 @@ const SceneFactory kScenes[] = {{"boxes-3000", boxesFalling},      {"pyramid-wal
                                 {"tori-pile", toriPile},           {"stack", boxPyramid},
                                 {"landscape-150", landscapeSmall}, {"gimpact-landscape", gimpactLandscape},
                                 {"compounds-400", compoundHeap},   {"heightfield-prims", primitivesOnHeightfield},
-                                {"landscape-compounds", compoundsOnLandscape}, {"small-units", smallUnits}};
+                                {"landscape-compounds", compoundsOnLandscape}, {"small-units", smallUnits},
+                                {"sleeping-5000", sleepingBoxes}};
 
 /// A dynamics world that times the parts of its step.
 class TimedWorld final : public btDiscreteDynamicsWorld {
@@ -547,6 +570,7 @@ struct World {
             btRigidBody::btRigidBodyConstructionInfo info(b.mass, motion.back().get(), b.shape, inertia);
             bodies.push_back(std::make_unique<btRigidBody>(info));
             bodies.back()->setUserIndex(static_cast<int>(bodies.size() - 1));
+            bodies.back()->setLinearVelocity(b.velocity);
             world->addRigidBody(bodies.back().get());
         }
     }

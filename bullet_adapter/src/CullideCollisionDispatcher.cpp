@@ -1,6 +1,7 @@
 #include "cullide_bullet/CullideCollisionDispatcher.h"
 #include "AdapterAccess.h"
 #include "ApartPairs.h"
+#include "GImpactConvexContacts.h"
 #include "GImpactLeafPairs.h"
 #include "GImpactMeshContacts.h"
 #include "ShapeGeometry.h"
@@ -149,85 +150,6 @@ struct SurvivingMeshWrapper {
     SurvivingTrianglesShape shape;
     btCollisionObjectWrapper wrapper;
 };
-
-/// Where a GImpact triangle can still make a contact point with a convex shape: the convex shape's local box
-/// (btCollisionShape::getAabb, margin included), the map from mesh-local to convex-local coordinates, the contact
-/// breaking threshold and the float slack of the mapped coordinates.
-struct ConvexReach {
-    btTransform meshToConvex;
-    btVector3 min, max;
-    btScalar threshold = 0;
-    btScalar slack = 0;
-};
-
-/// Safety factor on the reach: GJK's and the polyhedral clipper's tolerances are far below it.
-constexpr btScalar kConvexReachFactor = btScalar(1.5);
-
-btScalar largestCoordinate(const btVector3& v) {
-    const btVector3 a = v.absolute();
-    return a[a.maxAxis()];
-}
-
-/// btManifoldResult drops a point deeper than the manifold's contact breaking threshold (depth measured between the
-/// margin-inflated shapes), and btCollisionDispatcher::getNewManifold sets that threshold to
-/// gContactBreakingThreshold, scaled by the smaller angular motion disc of the two objects' shapes when
-/// CD_USE_RELATIVE_CONTACT_BREAKING_THRESHOLD is set; the larger of the two rules is used here, whatever the flag.
-ConvexReach convexReach(const btCollisionObjectWrapper& meshWrap, const btCollisionObjectWrapper& convexWrap) {
-    ConvexReach reach;
-    reach.meshToConvex = convexWrap.getWorldTransform().inverseTimes(meshWrap.getWorldTransform());
-    convexWrap.getCollisionShape()->getAabb(btTransform::getIdentity(), reach.min, reach.max);
-    const btCollisionShape* meshShape = meshWrap.getCollisionObject()->getCollisionShape();
-    const btCollisionShape* convexShape = convexWrap.getCollisionObject()->getCollisionShape();
-    reach.threshold = btMax(gContactBreakingThreshold,
-                            btMin(meshShape->getContactBreakingThreshold(gContactBreakingThreshold),
-                                  convexShape->getContactBreakingThreshold(gContactBreakingThreshold)));
-    const btScalar scale = btMax(btMax(largestCoordinate(reach.min), largestCoordinate(reach.max)),
-                                 largestCoordinate(reach.meshToConvex.getOrigin()));
-    reach.slack = 64 * SIMD_EPSILON * scale;
-    return reach;
-}
-
-/// How far outside the convex shape's box a triangle with margin `margin` can still make a point: factor * (the
-/// margin + the breaking threshold), plus the float slack of the mapped coordinates.
-btScalar reachDistance(const ConvexReach& reach, btScalar margin) {
-    return kConvexReachFactor * (margin + reach.threshold) + reach.slack;
-}
-
-/// False when the triangle's box, mapped into the convex shape's frame, stays farther from the convex shape's box
-/// along an axis than reachDistance: the triangle is farther than that from the shape, so the convex algorithm
-/// cannot make a point from it.
-///
-/// (Separating-plane tests for triangle against triangle, tried: they skipped ~8 % more GImpact-concave candidates,
-/// but with double-precision Bullet 5 of 108,081 contact keys of a heightfield scene went missing, not explained;
-/// without them none does. Only the box test is used.)
-bool convexCanTouch(const btTriangleShapeEx& triangle, const ConvexReach& reach) {
-    btVector3 lo = reach.meshToConvex(triangle.m_vertices1[0]);
-    btVector3 hi = lo;
-    for (int k = 1; k < 3; ++k) {
-        const btVector3 v = reach.meshToConvex(triangle.m_vertices1[k]);
-        lo.setMin(v);
-        hi.setMax(v);
-    }
-    // The margin as the virtual getMargin gives it (btTriangleShapeEx does not override it), without the call.
-    const btScalar d = reachDistance(reach, triangle.btConvexInternalShape::getMargin());
-    for (int k = 0; k < 3; ++k)
-        if (lo[k] > reach.max[k] + d || hi[k] < reach.min[k] - d) return false;
-    return true;
-}
-
-/// True when the whole mesh part lies within reach of the convex shape: its box (Bullet's, margin included), mapped
-/// into the convex shape's frame, inside the convex shape's box grown by reachDistance at the part's margin. Then
-/// convexCanTouch keeps every candidate and the loop can leave it out: in a world of small units Bullet's absolute
-/// contact breaking threshold (0.02) alone can reach across whole objects. A part's box stale or wrong by rounding
-/// only makes the loop run GJK on a candidate convexCanTouch would have skipped: Bullet's own loop runs them all.
-bool partWithinReach(const btGImpactMeshShapePart& part, const ConvexReach& reach) {
-    btVector3 lo, hi;
-    part.getAabb(reach.meshToConvex, lo, hi);
-    const btScalar d = reachDistance(reach, part.getMargin());
-    for (int k = 0; k < 3; ++k)
-        if (!(lo[k] >= reach.min[k] - d && hi[k] <= reach.max[k] + d)) return false;
-    return true;
-}
 
 /// GImpact pairs. By default each kind gets Bullet's contacts from Bullet's own algorithm reproduced or trimmed:
 /// GImpact-GImpact (processAsBullet), GImpact-concave (processWithConcave), GImpact-convex (processWithConvex). Pairs
@@ -416,10 +338,33 @@ private:
         const btCollisionObjectWrapper* convexWrap = swapped ? body0Wrap : body1Wrap;
         const auto* mesh = static_cast<const btGImpactMeshShape*>(meshWrap->getCollisionShape());
         ++stats.convexPairs;
-        int& part = swapped ? m_part1 : m_part0;
-        for (part = mesh->getMeshPartCount(); part-- > 0;)
-            partAgainstConvex(meshWrap, *mesh->getMeshPart(part), convexWrap, swapped, stats);
+        const detail::MeshContactBatch::ConvexAhead* ahead = convexAhead(body0Wrap, body1Wrap, dispatchInfo);
+        // Computed on the workers for these inputs: the manifold made as Bullet's loop makes it (the dispatcher's
+        // getNewManifold), then the points added in Bullet's order, if it has the threshold they were computed with.
+        if (ahead != nullptr && ahead->manifold) checkManifold(body0Wrap, body1Wrap);
+        if (ahead != nullptr &&
+            (!ahead->manifold || getLastManifold()->getContactBreakingThreshold() == ahead->breakingThreshold)) {
+            ahead->contacts.forEach([&](const detail::MeshContact& c) { addContact(body0Wrap, body1Wrap, c); });
+            addCounts(ahead->counts, stats);
+            ++stats.threadedConvexPairs;
+        } else {  // Bullet's loop here (the manifold, if made above, is the one it would make first)
+            int& part = swapped ? m_part1 : m_part0;
+            for (part = mesh->getMeshPartCount(); part-- > 0;)
+                partAgainstConvex(meshWrap, *mesh->getMeshPart(part), convexWrap, swapped, stats);
+        }
         if (getLastManifold() != nullptr) m_resultOut->refreshContactPoints();
+    }
+
+    /// The pair's points computed ahead by the dispatch's batch (detail::convexPairContacts), or nullptr.
+    const detail::MeshContactBatch::ConvexAhead* convexAhead(const btCollisionObjectWrapper* body0Wrap,
+                                                             const btCollisionObjectWrapper* body1Wrap,
+                                                             const btDispatcherInfo& dispatchInfo) const {
+        // The ahead loop's result has no closest-point threshold (a dispatch's has none; a query's may).
+        if (m_resultOut->m_closestPointDistanceThreshold != 0) return nullptr;
+        return detail::AdapterAccess::meshContacts(cullideDispatcher(m_dispatcher))
+            .findConvex(body0Wrap->getCollisionObject(), body1Wrap->getCollisionObject(),
+                        body0Wrap->getCollisionShape(), body1Wrap->getCollisionShape(),
+                        body0Wrap->getWorldTransform(), body1Wrap->getWorldTransform(), dispatchInfo);
     }
 
     /// GImpact mesh against a concave shape (a triangle mesh, a heightfield; not a plane; either order), with Bullet's
@@ -467,7 +412,7 @@ private:
             (m_swapped ? m_algorithm.m_triface0 : m_algorithm.m_triface1) = triangleIndex;
             const btCollisionObjectWrapper wrap(m_meshWrap, &shape, m_meshWrap->getCollisionObject(),
                                                 m_meshWrap->getWorldTransform(), partId, triangleIndex);
-            const WrapperInResult in(*m_algorithm.m_resultOut, wrap);
+            const detail::WrapperInResult in(*m_algorithm.m_resultOut, wrap);
             m_algorithm.partAgainstConvex(m_gimpactWrap, m_part, &wrap, m_swapped, m_stats);
         }
 
@@ -481,71 +426,38 @@ private:
         CullideDispatchStats& m_stats;
     };
 
-    /// Puts `wrap` in the result in place of the wrapper of its object for the scope, as Bullet's loops do around a
-    /// child shape (the contact's shape identifiers and callbacks see the child).
-    class WrapperInResult {
-    public:
-        WrapperInResult(btManifoldResult& result, const btCollisionObjectWrapper& wrap)
-            : m_result(result), m_first(result.getBody0Wrap()->getCollisionObject() == wrap.getCollisionObject()),
-              m_previous(m_first ? result.getBody0Wrap() : result.getBody1Wrap()) {
-            if (m_first)
-                m_result.setBody0Wrap(&wrap);
-            else
-                m_result.setBody1Wrap(&wrap);
-        }
-        ~WrapperInResult() {
-            if (m_first)
-                m_result.setBody0Wrap(m_previous);
-            else
-                m_result.setBody1Wrap(m_previous);
-        }
-        WrapperInResult(const WrapperInResult&) = delete;
-        WrapperInResult& operator=(const WrapperInResult&) = delete;
-
-    private:
-        btManifoldResult& m_result;
-        bool m_first;
-        const btCollisionObjectWrapper* m_previous;
-    };
-
     /// Bullet's gimpact_vs_shape for one GImpact mesh part against a convex shape: the part's box query with the
-    /// convex shape's box in the part's frame, then every candidate triangle (last to first) against the convex shape
-    /// through the dispatcher's convex algorithm, with Bullet's shape identifiers — minus the candidates that cannot
-    /// make a point (convexCanTouch).
+    /// convex shape's box in the part's frame, then the candidates through detail::collideCandidates (Bullet's loop
+    /// minus the candidates out of reach) into the pair's result.
     void partAgainstConvex(const btCollisionObjectWrapper* meshWrap, const btGImpactMeshShapePart& meshPart,
                            const btCollisionObjectWrapper* convexWrap, bool swapped, CullideDispatchStats& stats) {
         const btCollisionShape* convex = convexWrap->getCollisionShape();
         candidates.resize(0);
-        gimpact_vs_shape_find_pairs(meshWrap->getWorldTransform(), convexWrap->getWorldTransform(), &meshPart, convex,
-                                    candidates);
+        if (meshPart.hasBoxSet())
+            detail::convexCandidates(meshWrap->getWorldTransform(), meshPart, *convex, convexWrap->getWorldTransform(),
+                                     candidates);
+        else
+            gimpact_vs_shape_find_pairs(meshWrap->getWorldTransform(), convexWrap->getWorldTransform(), &meshPart,
+                                        convex, candidates);
         if (candidates.size() == 0) return;
         // Bullet's loop makes the pair's manifold with its first candidate's algorithm (newAlgorithm's checkManifold,
         // bodies in the order the algorithm gets them), whether a point follows or not: so does this one, also when
         // every candidate is skipped, so that the dispatcher's manifolds (empty ones too, which the solver's island
         // sort sees) stay Bullet's.
         checkManifold(swapped ? convexWrap : meshWrap, swapped ? meshWrap : convexWrap);
-        const ConvexReach reach = convexReach(*meshWrap, *convexWrap);
-        const bool allWithinReach = partWithinReach(meshPart, reach);
-        if (allWithinReach) stats.convexUnchecked += static_cast<std::size_t>(candidates.size());
-        int& face = swapped ? m_triface1 : m_triface0;
+        const detail::ConvexTarget target{m_dispatcher, getLastManifold(), m_resultOut, m_dispatchInfo};
+        detail::ConvexCounts counts;
         meshPart.lockChildShapes();
-        btTriangleShapeEx triangle;
-        for (int i = candidates.size(); i-- > 0;) {
-            face = candidates[i];
-            meshPart.getBulletTriangle(candidates[i], triangle);
-            ++stats.convexCandidates;
-            if (!allWithinReach && !convexCanTouch(triangle, reach)) continue;
-            ++stats.convexTriangles;
-            // The wrapper carries (m_part0, m_triface0) whichever side the mesh is, as Bullet's loop does.
-            const btCollisionObjectWrapper triangleWrap(meshWrap, &triangle, meshWrap->getCollisionObject(),
-                                                        meshWrap->getWorldTransform(), m_part0, m_triface0);
-            const WrapperInResult in(*m_resultOut, triangleWrap);
-            if (swapped)
-                shape_vs_shape_collision(convexWrap, &triangleWrap, convex, &triangle);
-            else
-                shape_vs_shape_collision(&triangleWrap, convexWrap, &triangle, convex);
-        }
+        detail::collideCandidates({meshWrap, convexWrap, swapped}, meshPart, &candidates[0], candidates.size(),
+                                  {m_part0, m_triface0, m_part1, m_triface1}, target, counts);
         meshPart.unlockChildShapes();
+        addCounts(counts, stats);
+    }
+
+    static void addCounts(const detail::ConvexCounts& counts, CullideDispatchStats& stats) {
+        stats.convexCandidates += counts.candidates;
+        stats.convexTriangles += counts.triangles;
+        stats.convexUnchecked += counts.unchecked;
     }
 
     /// GImpact against a shape that is neither GImpact nor convex (either order). A concave shape but a plane:
@@ -815,6 +727,42 @@ unsigned machineThreads() {
 
 }  // namespace
 
+namespace {
+
+/// GImpact-convex pairs are computed ahead when the previous step ran at least this many of their triangles (~40 us
+/// of GJK on the 2-core machine, about what waking the workers costs) or the batch runs anyway for mesh-mesh pairs.
+constexpr std::size_t kMinAheadConvexTriangles = 64;
+
+/// Whether a GImpact-convex pair of the cache (objects in its order; one shape a btGImpactMeshShape whose parts all
+/// have box sets) may be computed ahead: the convex shape's algorithm with a triangle may run on a worker, the pair's
+/// algorithm is the dispatcher's GImpact one, and the culler has not proved it out of reach.
+bool convexPairAhead(const btCollisionObject& object0, const btCollisionObject& object1,
+                     const bullet::CreateFuncTable& funcs, const CullideBroadphase* broadphase) {
+    const btCollisionShape& shape0 = *object0.getCollisionShape();
+    const btCollisionShape& shape1 = *object1.getCollisionShape();
+    const bool convexFirst = shape0.getShapeType() != GIMPACT_SHAPE_PROXYTYPE;
+    const btCollisionShape& convex = convexFirst ? shape0 : shape1;
+    if (!convex.isConvex() || convex.isCompound() || !bullet::objectsMayThread(object0, object1)) return false;
+    // The pair's algorithm is this dispatcher's GImpact one (the application registered Bullet's).
+    if (!registeredIs<btGImpactCollisionAlgorithm::CreateFunc>(
+            funcs[shape0.getShapeType()][shape1.getShapeType()]))
+        return false;
+    const int triangle = TRIANGLE_SHAPE_PROXYTYPE, convexType = convex.getShapeType();
+    const btCollisionAlgorithmCreateFunc* triangleFunc =
+        convexFirst ? funcs[convexType][triangle] : funcs[triangle][convexType];
+    if (!bullet::convexTriangleThreadable(convex, triangleFunc) || !detail::pointsIndependentOfManifold(triangleFunc))
+        return false;
+    if (broadphase == nullptr || !broadphase->getGImpactConvexCulling()) return true;
+    // A pair the culler proved out of reach gets no point this step: nothing to compute.
+    const btCollisionObjectWrapper w0(nullptr, &shape0, &object0, object0.getWorldTransform(), -1, -1);
+    const btCollisionObjectWrapper w1(nullptr, &shape1, &object1, object1.getWorldTransform(), -1, -1);
+    bool swapped = false;
+    const PairTriangles* record = detail::AdapterAccess::trianglePairsFor(*broadphase, &w0, &w1, swapped);
+    return record == nullptr || !record->pruned;
+}
+
+}  // namespace
+
 bool CullideCollisionDispatcher::listMeshPairs(btOverlappingPairCache* pairCache,
                                                const btDispatcherInfo& dispatchInfo) {
     detail::MeshContactBatch& batch = *m_meshContacts;
@@ -826,6 +774,10 @@ bool CullideCollisionDispatcher::listMeshPairs(btOverlappingPairCache* pairCache
         !registeredIs<btGImpactCollisionAlgorithm::CreateFunc>(
             m_doubleDispatchContactPoints[GIMPACT_SHAPE_PROXYTYPE][GIMPACT_SHAPE_PROXYTYPE]))
         return false;
+    // GImpact-convex pairs: their triangles' algorithms run on the workers, so only with no hook that would see a
+    // worker's points, and when the previous step collided enough of their triangles.
+    const bool convexAhead =
+        m_lastStep.convexTriangles >= kMinAheadConvexTriangles && bullet::dispatchMayThread(dispatchInfo);
     const int count = pairCache->getNumOverlappingPairs();
     const btBroadphasePair* pairs = count > 0 ? pairCache->getOverlappingPairArrayPtr() : nullptr;
     for (int i = 0; i < count; ++i) {
@@ -833,7 +785,13 @@ bool CullideCollisionDispatcher::listMeshPairs(btOverlappingPairCache* pairCache
         const auto* object1 = static_cast<const btCollisionObject*>(pairs[i].m_pProxy1->m_clientObject);
         const btGImpactMeshShape* shape0 = asGImpactMesh(object0->getCollisionShape());
         const btGImpactMeshShape* shape1 = asGImpactMesh(object1->getCollisionShape());
-        if (shape0 == nullptr || shape1 == nullptr || !needsCollision(object0, object1)) continue;
+        if ((shape0 == nullptr && shape1 == nullptr) || !needsCollision(object0, object1)) continue;
+        if (shape0 == nullptr || shape1 == nullptr) {
+            if (convexAhead && convexPairAhead(*object0, *object1, m_doubleDispatchContactPoints, m_broadphase))
+                batch.addConvex(object0, object1, *object0->getCollisionShape(), *object1->getCollisionShape(),
+                                object0->getWorldTransform(), object1->getWorldTransform(), *this, dispatchInfo);
+            continue;
+        }
         if (m_broadphase != nullptr && m_broadphase->getGImpactPairCulling()) {
             // A culled pair reads the culler's triangle pairs instead, unless its meshes interpenetrate.
             const btCollisionObjectWrapper w0(nullptr, shape0, object0, object0->getWorldTransform(), -1, -1);
@@ -846,6 +804,7 @@ bool CullideCollisionDispatcher::listMeshPairs(btOverlappingPairCache* pairCache
     }
     return batch.size() > 0;
 }
+
 
 CullideCollisionDispatcher::~CullideCollisionDispatcher() = default;
 
@@ -983,7 +942,7 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
     if (!m_poolBusy && listMeshPairs(pairCache, dispatchInfo)) {
         const PoolClaim claim{m_poolBusy};  // a dispatch nested in a pair's algorithm leaves the batch and pool alone
         batch.run(&pool(narrowPhaseThreads()), [&] { dispatchPairs(false); });
-        m_current.threadedMeshPairs = batch.size();
+        m_current.threadedMeshPairs = batch.size() - batch.convexCount();
         m_current.threadedTasks = batch.taskCount();
         batch.clear();
     } else {
@@ -1003,6 +962,7 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
     m_total.convexTriangles += m_current.convexTriangles;
     m_total.convexUnchecked += m_current.convexUnchecked;
     m_total.threadedMeshPairs += m_current.threadedMeshPairs;
+    m_total.threadedConvexPairs += m_current.threadedConvexPairs;
     m_total.threadedTasks += m_current.threadedTasks;
     m_total.apartPairs += m_current.apartPairs;
     m_total.threadedPairs += m_current.threadedPairs;

@@ -1,4 +1,6 @@
 #include "GImpactMeshContacts.h"
+#include "GImpactConvexContacts.h"
+#include "ApartPairs.h"
 
 #include "cullide/TaskPool.h"
 
@@ -215,6 +217,8 @@ void lockAll(const btGImpactMeshShape& shape, bool lock) {
     }
 }
 
+const btGImpactMeshShape& meshOf(const btCollisionShape* shape) { return *static_cast<const btGImpactMeshShape*>(shape); }
+
 bool sameTransform(const btTransform& a, const btTransform& b) {
     return a.getOrigin() == b.getOrigin() && a.getBasis()[0] == b.getBasis()[0] &&
            a.getBasis()[1] == b.getBasis()[1] && a.getBasis()[2] == b.getBasis()[2];
@@ -256,6 +260,9 @@ std::size_t ContactLists::size() const {
 
 void MeshContactBatch::clear() {
     m_pairCount = 0;
+    m_convexCount = 0;
+    m_dispatcher = nullptr;
+    m_info = nullptr;
     m_index.clear();
     m_searches.clear();
     m_tasks.clear();
@@ -280,9 +287,9 @@ std::size_t MeshContactBatch::storeFor(const btGImpactMeshShapePart& part, const
     return m_storeCount++;
 }
 
-void MeshContactBatch::add(const btCollisionObject* object0, const btCollisionObject* object1,
-                           const btGImpactMeshShape& shape0, const btGImpactMeshShape& shape1,
-                           const btTransform& trans0, const btTransform& trans1) {
+MeshContactBatch::Pair& MeshContactBatch::addPair(const btCollisionObject* object0, const btCollisionObject* object1,
+                                                  const btCollisionShape& shape0, const btCollisionShape& shape1,
+                                                  const btTransform& trans0, const btTransform& trans1) {
     if (m_pairs.size() == m_pairCount) m_pairs.emplace_back();
     Pair& p = m_pairs[m_pairCount];
     p.object0 = object0;
@@ -292,28 +299,53 @@ void MeshContactBatch::add(const btCollisionObject* object0, const btCollisionOb
     p.trans0 = trans0;
     p.trans1 = trans1;
     p.firstTask = p.endTask = 0;
-    p.contacts = ContactLists();
+    p.convex = false;
+    p.ahead = ConvexAhead();
     p.points = Pair::Points::Pending;
     m_index[{object0, object1}] = m_pairCount;  // a pair listed twice: the last one (the same inputs)
     ++m_pairCount;
+    return p;
+}
+
+void MeshContactBatch::add(const btCollisionObject* object0, const btCollisionObject* object1,
+                           const btGImpactMeshShape& shape0, const btGImpactMeshShape& shape1,
+                           const btTransform& trans0, const btTransform& trans1) {
+    addPair(object0, object1, shape0, shape1, trans0, trans1);
+}
+
+void MeshContactBatch::addConvex(const btCollisionObject* object0, const btCollisionObject* object1,
+                                 const btCollisionShape& shape0, const btCollisionShape& shape1,
+                                 const btTransform& trans0, const btTransform& trans1, btCollisionDispatcher& dispatcher,
+                                 const btDispatcherInfo& info) {
+    addPair(object0, object1, shape0, shape1, trans0, trans1).convex = true;
+    m_dispatcher = &dispatcher;
+    m_info = &info;
+    ++m_convexCount;
 }
 
 void MeshContactBatch::makeTasks(std::size_t target, MeshContactScratch& scratch) {
     for (std::size_t i = 0; i < m_pairCount; ++i) {
         Pair& p = m_pairs[i];
         p.firstTask = m_tasks.size();
-        for (int p0 = p.shape0->getMeshPartCount(); p0-- > 0;) {
-            for (int p1 = p.shape1->getMeshPartCount(); p1-- > 0;) {
-                const btGImpactBoxSet& set0 = *p.shape0->getMeshPart(p0)->getBoxSet();
-                const btGImpactBoxSet& set1 = *p.shape1->getMeshPart(p1)->getBoxSet();
+        if (p.convex) {
+            makeConvexTasks(i);
+            p.endTask = m_tasks.size();
+            continue;
+        }
+        const btGImpactMeshShape& shape0 = meshOf(p.shape0);
+        const btGImpactMeshShape& shape1 = meshOf(p.shape1);
+        for (int p0 = shape0.getMeshPartCount(); p0-- > 0;) {
+            for (int p1 = shape1.getMeshPartCount(); p1-- > 0;) {
+                const btGImpactBoxSet& set0 = *shape0.getMeshPart(p0)->getBoxSet();
+                const btGImpactBoxSet& set1 = *shape1.getMeshPart(p1)->getBoxSet();
                 m_searches.emplace_back(set0, p.trans0, set1, p.trans1);
                 if (!m_searches.back().rootsOverlap()) continue;
                 std::size_t store0 = kNoStore, store1 = kNoStore;
                 if (target > 1 && set0.getNodeCount() >= kSplitNodes && set1.getNodeCount() >= kSplitNodes) {
                     m_searches.back().split(target, scratch.leaves, m_split);
                     // The parts' tasks share their triangles rather than each preparing those it meets.
-                    store0 = storeFor(*p.shape0->getMeshPart(p0), p.trans0);
-                    store1 = storeFor(*p.shape1->getMeshPart(p1), p.trans1);
+                    store0 = storeFor(*shape0.getMeshPart(p0), p.trans0);
+                    store1 = storeFor(*shape1.getMeshPart(p1), p.trans1);
                 } else {
                     m_split.assign(1, NodePair{0, 0});
                 }
@@ -325,10 +357,36 @@ void MeshContactBatch::makeTasks(std::size_t target, MeshContactScratch& scratch
     }
 }
 
+void MeshContactBatch::makeConvexTasks(std::size_t pair) {
+    Pair& p = m_pairs[pair];
+    const bool convexFirst = p.shape0->getShapeType() != GIMPACT_SHAPE_PROXYTYPE;
+    const btGImpactMeshShape& mesh = meshOf(convexFirst ? p.shape1 : p.shape0);
+    const btCollisionShape& convex = convexFirst ? *p.shape0 : *p.shape1;
+    const btTransform& meshTransform = convexFirst ? p.trans1 : p.trans0;
+    const btTransform& convexTransform = convexFirst ? p.trans0 : p.trans1;
+    p.ahead.breakingThreshold = bullet::manifoldBreakingThreshold(*m_dispatcher, *p.object0, *p.object1);
+    for (int part = mesh.getMeshPartCount(); part-- > 0;) {
+        if (m_candidates.size() == m_candidateCount) m_candidates.emplace_back();
+        btAlignedObjectArray<int>& candidates = m_candidates[m_candidateCount];
+        candidates.resize(0);
+        convexCandidates(meshTransform, *mesh.getMeshPart(part), convex, convexTransform, candidates);
+        if (candidates.size() == 0) continue;
+        p.ahead.manifold = true;  // Bullet's loop makes the pair's manifold at its first candidate
+        for (int end = candidates.size(); end > 0; end -= kConvexChunk) {
+            Task t{pair, m_candidateCount, part, -1, NodePair{0, 0}, kNoStore, kNoStore};
+            t.first = std::max(0, end - kConvexChunk);
+            t.count = end - t.first;
+            m_tasks.push_back(t);
+        }
+        ++m_candidateCount;
+    }
+}
+
 void MeshContactBatch::prepareTasks(std::size_t target) {
     try {
         makeTasks(target, threadScratch());
         if (m_taskContacts.size() < m_tasks.size()) m_taskContacts.resize(m_tasks.size());
+        if (m_taskCounts.size() < m_tasks.size()) m_taskCounts.resize(m_tasks.size());
         if (m_taskStateSize < m_tasks.size()) {
             m_taskState = std::make_unique<std::atomic<int>[]>(m_tasks.size());
             m_taskStateSize = m_tasks.size();
@@ -344,6 +402,7 @@ void MeshContactBatch::prepareTasks(std::size_t target) {
 void MeshContactBatch::run(TaskPool* pool, const std::function<void()>& meanwhile) {
     m_searches.clear();
     m_tasks.clear();
+    m_candidateCount = 0;
     if (m_pairCount == 0) {
         meanwhile();
         return;
@@ -416,10 +475,20 @@ bool MeshContactBatch::waitForTasks(const Pair& pair) {
 
 void MeshContactBatch::runTask(std::size_t task, MeshContactScratch& scratch) {
     const Task& t = m_tasks[task];
-    const Pair& p = m_pairs[t.pair];
-    const PartPair parts = partPair(*p.shape0, t.part0, p.trans0, *p.shape1, t.part1, p.trans1);
+    Pair& p = m_pairs[t.pair];
     std::vector<MeshContact>& out = m_taskContacts[task];
     out.clear();
+    if (p.convex) {
+        const btCollisionObjectWrapper wrap0(nullptr, p.shape0, p.object0, p.trans0, -1, -1);
+        const btCollisionObjectWrapper wrap1(nullptr, p.shape1, p.object1, p.trans1, -1, -1);
+        const bool convexFirst = p.shape0->getShapeType() != GIMPACT_SHAPE_PROXYTYPE;
+        const ConvexSides sides{convexFirst ? &wrap1 : &wrap0, convexFirst ? &wrap0 : &wrap1, convexFirst};
+        m_taskCounts[task] = ConvexCounts();
+        convexChunkContacts(sides, t.part0, &m_candidates[t.search][t.first], t.count, p.ahead.breakingThreshold,
+                            *m_dispatcher, *m_info, out, m_taskCounts[task]);
+        return;
+    }
+    const PartPair parts = partPair(meshOf(p.shape0), t.part0, p.trans0, meshOf(p.shape1), t.part1, p.trans1);
     // A part without a shared store (small, or beyond the budget): the task prepares its triangles in its own.
     const auto store = [&](std::size_t index, TriangleStore& own, const btGImpactMeshShapePart& part,
                            const btTransform& trans) -> TriangleStore& {
@@ -434,14 +503,14 @@ void MeshContactBatch::runTask(std::size_t task, MeshContactScratch& scratch) {
 
 void MeshContactBatch::lockParts(bool lock) const {
     for (std::size_t i = 0; i < m_pairCount; ++i) {
-        lockAll(*m_pairs[i].shape0, lock);
-        lockAll(*m_pairs[i].shape1, lock);
+        for (const btCollisionShape* shape : {m_pairs[i].shape0, m_pairs[i].shape1})
+            if (shape->getShapeType() == GIMPACT_SHAPE_PROXYTYPE) lockAll(meshOf(shape), lock);
     }
 }
 
-const ContactLists* MeshContactBatch::find(const btCollisionObject* object0, const btCollisionObject* object1,
-                                           const btCollisionShape* shape0, const btCollisionShape* shape1,
-                                           const btTransform& trans0, const btTransform& trans1) {
+MeshContactBatch::Pair* MeshContactBatch::computed(const btCollisionObject* object0, const btCollisionObject* object1,
+                                                   const btCollisionShape* shape0, const btCollisionShape* shape1,
+                                                   const btTransform& trans0, const btTransform& trans1) {
     if (!m_running) return nullptr;
     const auto it = m_index.find({object0, object1});
     if (it == m_index.end()) return nullptr;
@@ -452,9 +521,30 @@ const ContactLists* MeshContactBatch::find(const btCollisionObject* object0, con
     if (p.points == Pair::Points::Pending) {
         p.points = waitForTasks(p) ? Pair::Points::Ready : Pair::Points::Failed;
         if (p.points == Pair::Points::Ready)
-            p.contacts = ContactLists(m_taskContacts.data() + p.firstTask, p.endTask - p.firstTask);
+            p.ahead.contacts = ContactLists(m_taskContacts.data() + p.firstTask, p.endTask - p.firstTask);
+        if (p.points == Pair::Points::Ready && p.convex)
+            for (std::size_t t = p.firstTask; t < p.endTask; ++t) {
+                p.ahead.counts.candidates += m_taskCounts[t].candidates;
+                p.ahead.counts.triangles += m_taskCounts[t].triangles;
+                p.ahead.counts.unchecked += m_taskCounts[t].unchecked;
+            }
     }
-    return p.points == Pair::Points::Ready ? &p.contacts : nullptr;
+    return p.points == Pair::Points::Ready ? &p : nullptr;
+}
+
+const ContactLists* MeshContactBatch::find(const btCollisionObject* object0, const btCollisionObject* object1,
+                                           const btCollisionShape* shape0, const btCollisionShape* shape1,
+                                           const btTransform& trans0, const btTransform& trans1) {
+    const Pair* p = computed(object0, object1, shape0, shape1, trans0, trans1);
+    return p != nullptr && !p->convex ? &p->ahead.contacts : nullptr;
+}
+
+const MeshContactBatch::ConvexAhead* MeshContactBatch::findConvex(
+    const btCollisionObject* object0, const btCollisionObject* object1, const btCollisionShape* shape0,
+    const btCollisionShape* shape1, const btTransform& trans0, const btTransform& trans1, const btDispatcherInfo& info) {
+    if (&info != m_info) return nullptr;  // another dispatch's settings (a nested dispatch, an own near callback)
+    const Pair* p = computed(object0, object1, shape0, shape1, trans0, trans1);
+    return p != nullptr && p->convex ? &p->ahead : nullptr;
 }
 
 }  // namespace detail

@@ -7,7 +7,8 @@
 // scratch and the dispatch's shared prepared triangles (TriangleStore, filled first come first served): no manifold,
 // no callback, no allocator of Bullet's. So many pairs, and the parts of one large pair's
 // descent, run on worker threads (MeshContactBatch) while the manifolds are still made on the calling thread, in
-// Bullet's dispatch order.
+// Bullet's dispatch order. The batch also computes GImpact-convex pairs ahead (GImpactConvexContacts.h: Bullet's
+// per-triangle algorithms into a manifold of their own).
 #pragma once
 
 #include "GImpactLeafPairs.h"
@@ -24,7 +25,9 @@
 #include <unordered_map>
 #include <vector>
 
+class btCollisionDispatcher;
 class btCollisionObject;
+struct btDispatcherInfo;
 
 namespace cullide {
 class TaskPool;
@@ -37,6 +40,11 @@ struct MeshContact {
     btVector3 normal;
     btScalar distance;
     int part0, face0, part1, face1;
+};
+
+/// Candidate triangles of one GImpact-convex loop: Bullet's query found, collided, collided without the reach test.
+struct ConvexCounts {
+    std::size_t candidates = 0, triangles = 0, unchecked = 0;
 };
 
 /// A world-space triangle as Bullet's collide_sat_triangles prepares it (btPrimitiveTriangle: vertices mapped by the
@@ -169,6 +177,15 @@ public:
     /// parts all have box sets. The transforms are copied.
     void add(const btCollisionObject* object0, const btCollisionObject* object1, const btGImpactMeshShape& shape0,
              const btGImpactMeshShape& shape1, const btTransform& trans0, const btTransform& trans1);
+    /// A GImpact-convex pair the dispatch will process with the objects in this order (detail::convexPairContacts
+    /// computes it): one shape a btGImpactMeshShape whose parts all have box sets, the other a convex shape whose
+    /// algorithm with a triangle may run on a worker (bullet::convexTriangleThreadable). `dispatcher` and `info` are
+    /// the dispatch's, the same for every pair of a batch.
+    void addConvex(const btCollisionObject* object0, const btCollisionObject* object1, const btCollisionShape& shape0,
+                   const btCollisionShape& shape1, const btTransform& trans0, const btTransform& trans1,
+                   btCollisionDispatcher& dispatcher, const btDispatcherInfo& info);
+    /// The pairs added with addConvex.
+    std::size_t convexCount() const { return m_convexCount; }
     std::size_t size() const { return m_pairCount; }
     /// Computes the pairs' points on `pool`'s workers (nullptr: none) while this thread runs `meanwhile` (the
     /// dispatch, whose algorithms call find); then the tasks nobody took. The parts are locked on this thread for
@@ -182,6 +199,19 @@ public:
     const ContactLists* find(const btCollisionObject* object0, const btCollisionObject* object1,
                              const btCollisionShape* shape0, const btCollisionShape* shape1, const btTransform& trans0,
                              const btTransform& trans1);
+    /// A GImpact-convex pair's points computed ahead, with what its loop counted and whether it makes the manifold.
+    struct ConvexAhead {
+        ContactLists contacts;
+        ConvexCounts counts;
+        bool manifold = false;
+        /// The breaking threshold the triangles' algorithms were given (btCollisionDispatcher::getNewManifold's for
+        /// the pair): the points are the pair's when its manifold has the same.
+        btScalar breakingThreshold = 0;
+    };
+    /// find for a pair added with addConvex, dispatched with the batch's dispatch info.
+    const ConvexAhead* findConvex(const btCollisionObject* object0, const btCollisionObject* object1,
+                                  const btCollisionShape* shape0, const btCollisionShape* shape1,
+                                  const btTransform& trans0, const btTransform& trans1, const btDispatcherInfo& info);
 
     /// Search parts (tasks) of the last run.
     std::size_t taskCount() const { return m_tasks.size(); }
@@ -194,19 +224,21 @@ private:
     struct Pair {
         const btCollisionObject* object0;
         const btCollisionObject* object1;
-        const btGImpactMeshShape* shape0;
-        const btGImpactMeshShape* shape1;
+        const btCollisionShape* shape0;  // btGImpactMeshShapes, or (convex) one of them and a convex shape
+        const btCollisionShape* shape1;
         btTransform trans0, trans1;
         std::size_t firstTask, endTask;
-        ContactLists contacts;  // the tasks' lists, once Ready
+        bool convex;
+        ConvexAhead ahead;  // the tasks' lists, once Ready; for a convex pair, its counts and manifold too
         enum class Points { Pending, Ready, Failed } points;
     };
     struct Task {
         std::size_t pair;
-        std::size_t search;
-        int part0, part1;
+        std::size_t search;  ///< mesh pair: its part pair's search; convex pair: its part's candidates (m_candidates)
+        int part0, part1;    ///< convex pair: part0 the mesh's part
         NodePair start;
         std::size_t store0, store1;  ///< the parts' shared triangles (m_stores), or kNoStore
+        int first = 0, count = 0;    ///< convex pair: the candidates [first, first + count) of its part
     };
     struct PairKeyHash {
         std::size_t operator()(const std::pair<const btCollisionObject*, const btCollisionObject*>& k) const {
@@ -214,7 +246,18 @@ private:
         }
     };
 
+    Pair& addPair(const btCollisionObject* object0, const btCollisionObject* object1, const btCollisionShape& shape0,
+                  const btCollisionShape& shape1, const btTransform& trans0, const btTransform& trans1);
+    /// The pair of (object0, object1) for these shapes and transforms, its points computed (waiting for its tasks),
+    /// or nullptr.
+    Pair* computed(const btCollisionObject* object0, const btCollisionObject* object1, const btCollisionShape* shape0,
+                   const btCollisionShape* shape1, const btTransform& trans0, const btTransform& trans1);
     void makeTasks(std::size_t target, MeshContactScratch& scratch);
+    /// A convex pair's tasks: per mesh part (last to first), its candidates in pieces of kConvexChunk, the last
+    /// piece first (the loop's order).
+    void makeConvexTasks(std::size_t pair);
+    /// Candidates per task of a convex pair: a piece runs ~50 GJK queries (~30 us), the pair's share of the workers.
+    static constexpr int kConvexChunk = 48;
     /// The store of `part`'s triangles under `t` for this dispatch (one per part and transform, shared by its
     /// tasks), or kNoStore when a new one would take the stores beyond kSharedTriangleBytes.
     std::size_t storeFor(const btGImpactMeshShapePart& part, const btTransform& t);
@@ -233,9 +276,15 @@ private:
 
     std::vector<Pair> m_pairs;  // the first m_pairCount are this dispatch's
     std::size_t m_pairCount = 0;
+    std::size_t m_convexCount = 0;
+    btCollisionDispatcher* m_dispatcher = nullptr;  // the convex pairs' dispatch
+    const btDispatcherInfo* m_info = nullptr;
     std::vector<LeafPairSearch> m_searches;
     std::vector<Task> m_tasks;
     std::vector<std::vector<MeshContact>> m_taskContacts;
+    std::vector<ConvexCounts> m_taskCounts;                  // convex tasks' counts
+    std::vector<btAlignedObjectArray<int>> m_candidates;     // convex pairs' parts' candidates, the first m_candidateCount
+    std::size_t m_candidateCount = 0;
     std::vector<NodePair> m_split;
     std::vector<std::unique_ptr<TriangleStore>> m_stores;  // the first m_storeCount are this dispatch's
     std::size_t m_storeCount = 0;

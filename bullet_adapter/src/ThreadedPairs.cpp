@@ -263,16 +263,19 @@ bool threadableAlgorithm(AlgorithmKind kind, const btCollisionShape& shape0, con
             const bool convexFirst = bulletConvex(shape0);
             const btCollisionShape& convex = convexFirst ? shape0 : shape1;
             const btCollisionShape& concave = convexFirst ? shape1 : shape0;
-            return bulletConvex(convex) && bulletConcave(concave) &&
-                   (bulletConvexFunc(triangleFunc) ||
-                    (triangleFunc != nullptr &&
-                     typeid(*triangleFunc) == typeid(btSphereTriangleCollisionAlgorithm::CreateFunc)));
+            return bulletConcave(concave) && convexTriangleThreadable(convex, triangleFunc);
         }
         case AlgorithmKind::Compound:  // compoundMayThread
         case AlgorithmKind::Other:
             break;
     }
     return false;
+}
+
+bool convexTriangleThreadable(const btCollisionShape& convex, const btCollisionAlgorithmCreateFunc* triangleFunc) {
+    return bulletConvex(convex) &&
+           (bulletConvexFunc(triangleFunc) ||
+            (triangleFunc != nullptr && typeid(*triangleFunc) == typeid(btSphereTriangleCollisionAlgorithm::CreateFunc)));
 }
 
 namespace {

@@ -84,6 +84,12 @@ bool threadableAlgorithm(AlgorithmKind kind, const btCollisionShape& shape0, con
                          const btCollisionAlgorithmCreateFunc* pairFunc,
                          const btCollisionAlgorithmCreateFunc* triangleFunc);
 
+/// Whether the dispatcher's algorithm for a triangle and `convex` (`triangleFunc`, the creation function for the two
+/// in the order they are collided) may run on a narrow-phase thread: `convex` one of Bullet's convex shapes, the
+/// algorithm Bullet's convex one with GJK-EPA or Bullet's sphere-triangle one (which read their manifold only for its
+/// thresholds and its point count).
+bool convexTriangleThreadable(const btCollisionShape& convex, const btCollisionAlgorithmCreateFunc* triangleFunc);
+
 /// The dispatcher's creation functions for contact-point queries by the two shape types (btCollisionDispatcher's
 /// m_doubleDispatchContactPoints, which only the dispatcher reads).
 using CreateFuncTable =

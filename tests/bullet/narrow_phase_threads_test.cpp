@@ -279,10 +279,12 @@ bool onContactProcessed(btManifoldPoint&, void*, void*) {
     return false;
 }
 
-/// Runs the pile with the narrow-phase threads while an application hook is installed by `install` (and removed by
-/// `remove`); returns the pair-steps that ran on the workers. The hook must have run on the calling thread only.
-std::size_t runWithHook(const PileScene& scene, const std::function<void(TestWorld&)>& install,
-                        const std::function<void()>& remove, bool expectCalls) {
+/// Runs a scene with the narrow-phase threads while an application hook is installed by `install` (and removed by
+/// `remove`); returns the swap's dispatch stats over the run (threadedPairs: the pair-steps that ran on the workers).
+/// The hook must have run on the calling thread only.
+template <typename Scene>
+CullideDispatchStats runWithHook(const Scene& scene, const std::function<void(TestWorld&)>& install,
+                                 const std::function<void()>& remove, bool expectCalls) {
     SideBySide worlds(scene, 4);
     const std::unique_ptr<TestWorld>& reference = worlds.reference;
     TestWorld& w = worlds.swap;
@@ -295,7 +297,7 @@ std::size_t runWithHook(const PileScene& scene, const std::function<void(TestWor
         EXPECT_EQ(CallbackThreads::ids, std::set<std::thread::id>{std::this_thread::get_id()})
             << "the application's callbacks run on the calling thread only";
     }
-    return threadedPairs(w);
+    return w.cullideDispatcher()->getTotalStats();
 }
 
 TEST(NarrowPhaseThreads, ApplicationCallbacksRunOnTheCallingThread) {
@@ -310,16 +312,18 @@ TEST(NarrowPhaseThreads, ApplicationCallbacksRunOnTheCallingThread) {
                 if (o->getUserIndex() % 3 == 0)
                     o->setCollisionFlags(o->getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
         },
-        [] { gContactAddedCallback = nullptr; }, true);
+        [] { gContactAddedCallback = nullptr; }, true).threadedPairs;
     EXPECT_GT(flagged, 1000u) << "pairs of unflagged objects still run on the workers";
     // The manifold callbacks run for every pair: no pair on the workers.
     EXPECT_EQ(runWithHook(
                   scene, [](TestWorld&) { gContactStartedCallback = onContactStarted; },
-                  [] { gContactStartedCallback = nullptr; }, true),
+                  [] { gContactStartedCallback = nullptr; }, true)
+                  .threadedPairs,
               0u);
     EXPECT_EQ(runWithHook(
                   scene, [](TestWorld&) { gContactProcessedCallback = onContactProcessed; },
-                  [] { gContactProcessedCallback = nullptr; }, true),
+                  [] { gContactProcessedCallback = nullptr; }, true)
+                  .threadedPairs,
               0u);
     // The friction combiner is the application's code too.
     static CalculateCombinedCallback saved = nullptr;
@@ -332,7 +336,8 @@ TEST(NarrowPhaseThreads, ApplicationCallbacksRunOnTheCallingThread) {
                           return btManifoldResult::calculateCombinedFriction(a, b);
                       };
                   },
-                  [] { gCalculateCombinedFrictionCallback = saved; }, true),
+                  [] { gCalculateCombinedFrictionCallback = saved; }, true)
+                  .threadedPairs,
               0u);
 }
 
@@ -355,11 +360,13 @@ TEST(NarrowPhaseThreads, DrawingDebugDrawerKeepsPairsOnTheCallingThread) {
     PileScene scene;
     CountingDrawer drawer;
     EXPECT_EQ(runWithHook(
-                  scene, [&](TestWorld& w) { w.world().setDebugDrawer(&drawer); }, [] {}, false),
+                  scene, [&](TestWorld& w) { w.world().setDebugDrawer(&drawer); }, [] {}, false)
+                  .threadedPairs,
               0u);
     drawer.setDebugMode(btIDebugDraw::DBG_NoDebug);  // a drawer that draws nothing keeps the threads
     EXPECT_GT(runWithHook(
-                  scene, [&](TestWorld& w) { w.world().setDebugDrawer(&drawer); }, [] {}, false),
+                  scene, [&](TestWorld& w) { w.world().setDebugDrawer(&drawer); }, [] {}, false)
+                  .threadedPairs,
               1000u);
 }
 
@@ -546,12 +553,43 @@ struct GImpactMixScene {
 };
 
 TEST(BitForBit, GImpactAgainstConvexAndMeshKeepsBulletsManifolds) {
-    expectBitForBit(GImpactMixScene{}, {1u, 2u}, 150, [](TestWorld& w, unsigned) {
+    expectBitForBit(GImpactMixScene{}, {1u, 2u, 5u}, 150, [](TestWorld& w, unsigned threads) {
         const CullideDispatchStats& stats = w.cullideDispatcher()->getTotalStats();
+        std::printf("[ measure  ] %u threads: %zu GImpact-convex pair-steps, %zu computed ahead on the workers\n",
+                    threads, stats.convexPairs, stats.threadedConvexPairs);
         EXPECT_GT(stats.convexPairs, 500u);
         EXPECT_GT(stats.concavePairs, 100u);
         EXPECT_LT(stats.convexTriangles, stats.convexCandidates) << "candidate triangles out of reach are skipped";
+        if (threads == 1)
+            EXPECT_EQ(stats.threadedConvexPairs, 0u);
+        else
+            EXPECT_GT(stats.threadedConvexPairs, stats.convexPairs / 2)
+                << "GImpact-convex pairs are computed on the narrow-phase threads, their points added in order";
     });
+}
+
+TEST(NarrowPhaseThreads, GImpactConvexPairsStayOnTheCallingThreadForHooks) {
+    const GImpactMixScene scene;
+    EXPECT_GT(runWithHook(
+                  scene, [](TestWorld&) {}, [] {}, false)
+                  .threadedConvexPairs,
+              100u);
+    // A contact-added hook sees each point with its triangle's wrapper, on the calling thread.
+    EXPECT_EQ(runWithHook(
+                  scene,
+                  [](TestWorld& w) {
+                      gContactAddedCallback = onContactAdded;
+                      for (btCollisionObject* o : w.objects())
+                          o->setCollisionFlags(o->getCollisionFlags() | btCollisionObject::CF_CUSTOM_MATERIAL_CALLBACK);
+                  },
+                  [] { gContactAddedCallback = nullptr; }, true)
+                  .threadedConvexPairs,
+              0u);
+    EXPECT_EQ(runWithHook(
+                  scene, [](TestWorld&) { gContactStartedCallback = onContactStarted; },
+                  [] { gContactStartedCallback = nullptr; }, true)
+                  .threadedConvexPairs,
+              0u);
 }
 
 }  // namespace

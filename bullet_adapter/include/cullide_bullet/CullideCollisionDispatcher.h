@@ -79,6 +79,9 @@ struct CullideDispatchStats {
     /// (setNarrowPhaseThreads), and their search parts (a large pair's search is cut into several)
     std::size_t threadedMeshPairs = 0;
     std::size_t threadedTasks = 0;
+    /// GImpact-convex pairs (convexPairs) whose triangles were collided ahead, on the narrow-phase threads, and their
+    /// points then added in Bullet's order (from the second step with at least 64 of their triangles collided)
+    std::size_t threadedConvexPairs = 0;
     /// Pairs whose broadphase boxes were farther apart than their contact breaking threshold: no algorithm call,
     /// their manifolds' points cleared (btDbvtBroadphase's fattened pairs that btAxisSweep3 would not hold)
     std::size_t apartPairs = 0;
