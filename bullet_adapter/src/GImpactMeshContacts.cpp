@@ -217,7 +217,9 @@ void lockAll(const btGImpactMeshShape& shape, bool lock) {
     }
 }
 
-const btGImpactMeshShape& meshOf(const btCollisionShape* shape) { return *static_cast<const btGImpactMeshShape*>(shape); }
+const btGImpactMeshShape& meshOf(const btCollisionShape* shape) {
+    return *static_cast<const btGImpactMeshShape*>(shape);
+}
 
 bool sameTransform(const btTransform& a, const btTransform& b) {
     return a.getOrigin() == b.getOrigin() && a.getBasis()[0] == b.getBasis()[0] &&
@@ -315,7 +317,8 @@ void MeshContactBatch::add(const btCollisionObject* object0, const btCollisionOb
 
 void MeshContactBatch::addConvex(const btCollisionObject* object0, const btCollisionObject* object1,
                                  const btCollisionShape& shape0, const btCollisionShape& shape1,
-                                 const btTransform& trans0, const btTransform& trans1, btCollisionDispatcher& dispatcher,
+                                 const btTransform& trans0, const btTransform& trans1,
+                                 btCollisionDispatcher& dispatcher,
                                  const btDispatcherInfo& info) {
     addPair(object0, object1, shape0, shape1, trans0, trans1).convex = true;
     m_dispatcher = &dispatcher;
@@ -541,7 +544,8 @@ const ContactLists* MeshContactBatch::find(const btCollisionObject* object0, con
 
 const MeshContactBatch::ConvexAhead* MeshContactBatch::findConvex(
     const btCollisionObject* object0, const btCollisionObject* object1, const btCollisionShape* shape0,
-    const btCollisionShape* shape1, const btTransform& trans0, const btTransform& trans1, const btDispatcherInfo& info) {
+    const btCollisionShape* shape1, const btTransform& trans0, const btTransform& trans1,
+    const btDispatcherInfo& info) {
     if (&info != m_info) return nullptr;  // another dispatch's settings (a nested dispatch, an own near callback)
     const Pair* p = computed(object0, object1, shape0, shape1, trans0, trans1);
     return p != nullptr && p->convex ? &p->ahead : nullptr;

@@ -283,7 +283,7 @@ private:
     std::vector<Task> m_tasks;
     std::vector<std::vector<MeshContact>> m_taskContacts;
     std::vector<ConvexCounts> m_taskCounts;                  // convex tasks' counts
-    std::vector<btAlignedObjectArray<int>> m_candidates;     // convex pairs' parts' candidates, the first m_candidateCount
+    std::vector<btAlignedObjectArray<int>> m_candidates;     // convex pairs' parts' candidates (m_candidateCount)
     std::size_t m_candidateCount = 0;
     std::vector<NodePair> m_split;
     std::vector<std::unique_ptr<TriangleStore>> m_stores;  // the first m_storeCount are this dispatch's

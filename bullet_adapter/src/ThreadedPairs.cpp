@@ -273,9 +273,9 @@ bool threadableAlgorithm(AlgorithmKind kind, const btCollisionShape& shape0, con
 }
 
 bool convexTriangleThreadable(const btCollisionShape& convex, const btCollisionAlgorithmCreateFunc* triangleFunc) {
-    return bulletConvex(convex) &&
-           (bulletConvexFunc(triangleFunc) ||
-            (triangleFunc != nullptr && typeid(*triangleFunc) == typeid(btSphereTriangleCollisionAlgorithm::CreateFunc)));
+    if (!bulletConvex(convex)) return false;
+    return bulletConvexFunc(triangleFunc) ||
+           (triangleFunc != nullptr && typeid(*triangleFunc) == typeid(btSphereTriangleCollisionAlgorithm::CreateFunc));
 }
 
 namespace {
