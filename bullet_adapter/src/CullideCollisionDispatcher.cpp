@@ -355,7 +355,7 @@ private:
         if (getLastManifold() != nullptr) m_resultOut->refreshContactPoints();
     }
 
-    /// The pair's points computed ahead by the dispatch's batch (detail::convexPairContacts), or nullptr.
+    /// The pair's points computed ahead by the dispatch's batch (detail::convexChunkContacts), or nullptr.
     const detail::MeshContactBatch::ConvexAhead* convexAhead(const btCollisionObjectWrapper* body0Wrap,
                                                              const btCollisionObjectWrapper* body1Wrap,
                                                              const btDispatcherInfo& dispatchInfo) const {

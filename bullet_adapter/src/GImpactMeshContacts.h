@@ -177,10 +177,10 @@ public:
     /// parts all have box sets. The transforms are copied.
     void add(const btCollisionObject* object0, const btCollisionObject* object1, const btGImpactMeshShape& shape0,
              const btGImpactMeshShape& shape1, const btTransform& trans0, const btTransform& trans1);
-    /// A GImpact-convex pair the dispatch will process with the objects in this order (detail::convexPairContacts
-    /// computes it): one shape a btGImpactMeshShape whose parts all have box sets, the other a convex shape whose
-    /// algorithm with a triangle may run on a worker (bullet::convexTriangleThreadable). `dispatcher` and `info` are
-    /// the dispatch's, the same for every pair of a batch.
+    /// A GImpact-convex pair the dispatch will process with the objects in this order (its pieces computed by
+    /// detail::convexChunkContacts): one shape a btGImpactMeshShape whose parts all have box sets, the other a convex
+    /// shape whose algorithm with a triangle may run on a worker (bullet::convexTriangleThreadable,
+    /// detail::pointsIndependentOfManifold). `dispatcher` and `info` are the dispatch's, the same for every pair.
     void addConvex(const btCollisionObject* object0, const btCollisionObject* object1, const btCollisionShape& shape0,
                    const btCollisionShape& shape1, const btTransform& trans0, const btTransform& trans1,
                    btCollisionDispatcher& dispatcher, const btDispatcherInfo& info);
