@@ -301,7 +301,7 @@ MeshContactBatch::Pair& MeshContactBatch::addPair(const btCollisionObject* objec
     p.trans0 = trans0;
     p.trans1 = trans1;
     p.firstTask = p.endTask = 0;
-    p.convex = false;
+    p.convex = p.convexFirst = false;
     p.ahead = ConvexAhead();
     p.points = Pair::Points::Pending;
     m_index[{object0, object1}] = m_pairCount;  // a pair listed twice: the last one (the same inputs)
@@ -320,7 +320,9 @@ void MeshContactBatch::addConvex(const btCollisionObject* object0, const btColli
                                  const btTransform& trans0, const btTransform& trans1,
                                  btCollisionDispatcher& dispatcher,
                                  const btDispatcherInfo& info) {
-    addPair(object0, object1, shape0, shape1, trans0, trans1).convex = true;
+    Pair& p = addPair(object0, object1, shape0, shape1, trans0, trans1);
+    p.convex = true;
+    p.convexFirst = shape0.getShapeType() != GIMPACT_SHAPE_PROXYTYPE;
     m_dispatcher = &dispatcher;
     m_info = &info;
     ++m_convexCount;
@@ -362,7 +364,7 @@ void MeshContactBatch::makeTasks(std::size_t target, MeshContactScratch& scratch
 
 void MeshContactBatch::makeConvexTasks(std::size_t pair) {
     Pair& p = m_pairs[pair];
-    const bool convexFirst = p.shape0->getShapeType() != GIMPACT_SHAPE_PROXYTYPE;
+    const bool convexFirst = p.convexFirst;
     const btGImpactMeshShape& mesh = meshOf(convexFirst ? p.shape1 : p.shape0);
     const btCollisionShape& convex = convexFirst ? *p.shape0 : *p.shape1;
     const btTransform& meshTransform = convexFirst ? p.trans1 : p.trans0;
@@ -484,8 +486,7 @@ void MeshContactBatch::runTask(std::size_t task, MeshContactScratch& scratch) {
     if (p.convex) {
         const btCollisionObjectWrapper wrap0(nullptr, p.shape0, p.object0, p.trans0, -1, -1);
         const btCollisionObjectWrapper wrap1(nullptr, p.shape1, p.object1, p.trans1, -1, -1);
-        const bool convexFirst = p.shape0->getShapeType() != GIMPACT_SHAPE_PROXYTYPE;
-        const ConvexSides sides{convexFirst ? &wrap1 : &wrap0, convexFirst ? &wrap0 : &wrap1, convexFirst};
+        const ConvexSides sides{p.convexFirst ? &wrap1 : &wrap0, p.convexFirst ? &wrap0 : &wrap1, p.convexFirst};
         m_taskCounts[task] = ConvexCounts();
         convexChunkContacts(sides, t.part0, &m_candidates[t.search][t.first], t.count, p.ahead.breakingThreshold,
                             *m_dispatcher, *m_info, out, m_taskCounts[task]);

@@ -229,6 +229,7 @@ private:
         btTransform trans0, trans1;
         std::size_t firstTask, endTask;
         bool convex;
+        bool convexFirst;  // convex pair: the convex shape is shape0
         ConvexAhead ahead;  // the tasks' lists, once Ready; for a convex pair, its counts and manifold too
         enum class Points { Pending, Ready, Failed } points;
     };
