@@ -31,7 +31,7 @@ scripts/fetch_meshes.sh || true
 # bundle's bin/ first on PATH).
 dir=build-gpu
 targets=(cullide_gl_tests cullide_bullet_tests cullide-bench-run cullide-bench-report cullide-demo cullide-pairs
-  cullide-pool-bench)
+  cullide-pool-bench cullide-swap-bench)
 launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)   # optional: speeds up rebuilds
 cmake -S . -B $dir -G Ninja "${launcher[@]}" -DCMAKE_BUILD_TYPE=Release \
@@ -47,7 +47,8 @@ echo "gpu-run: built in $(( $(date +%s) - t0 )) s"
 rm -rf "$dest"
 mkdir -p "$dest/bin" "$dest/lib" "$dest/data"
 programs=(tests/cullide_gl_tests tests/bullet/cullide_bullet_tests benchmarks/cullide-bench-run
-  benchmarks/cullide-bench-report demos/cullide-demo plugin/cullide-pairs benchmarks/cullide-pool-bench)
+  benchmarks/cullide-bench-report demos/cullide-demo plugin/cullide-pairs benchmarks/cullide-pool-bench
+  benchmarks/cullide-swap-bench)
 for p in "${programs[@]}"; do
   f=$(find $dir/${p%/*} -maxdepth 1 -name "${p##*/}" -type f | head -1)
   [ -n "$f" ] || { echo "gpu-run: ERROR: $p was not built" >&2; exit 1; }

@@ -3,8 +3,8 @@
 #   run.sh [--quick] [--device hardware|software|surfaceless|N] OUTDIR
 # 1. prints the machine, the driver and the EGL device/renderer CULLIDE picks (cullide-bench-run --probe);
 # 2. runs the GL tests (CI=true: a missing device fails) -> OUTDIR/gl-tests.json, the Bullet adapter tests ->
-#    OUTDIR/bullet-tests.json, a short headless demo -> OUTDIR/demo/, and the pool's fork/join cost ->
-#    OUTDIR/pool-bench.txt;
+#    OUTDIR/bullet-tests-N.json (in shards, beside the GL tests), a short headless demo -> OUTDIR/demo/, the pool's
+#    fork/join cost -> OUTDIR/pool-bench.txt, and the two-line swap's benchmark -> OUTDIR/swap.{txt,json};
 # 3. runs the benchmarks: bench-runs.sh, the same run list as scripts/bench.sh (--quick: its quick list);
 # 4. cullide-bench-report: OUTDIR/results-gpu.json (results + machine, device, renderer, driver), OUTDIR/benchmarks.md,
 #    OUTDIR/plotdata/ (gnuplot scripts; PNGs in OUTDIR/plots/ only where gnuplot is installed);
@@ -33,7 +33,7 @@ done
 mkdir -p "$outdir" || exit 2
 out=$(cd "$outdir" && pwd)
 rm -rf "$out/bench" "$out/demo" "$out/plots" "$out/plotdata" "$out/cache" "$out/tmp" "$out/results-gpu.json" \
-  "$out/gl-tests.json" "$out/bullet-tests.json" "$out/benchmarks.md" "$out/log.txt"
+  "$out/gl-tests.json" "$out"/bullet-tests*.json "$out/benchmarks.md" "$out/log.txt" "$out"/swap*
 exec > >(tee "$out/log.txt") 2>&1
 tee_pid=$!
 t0=$(date +%s)
@@ -62,10 +62,14 @@ step() {
   echo
   echo "=== $name ($(( t - t0 )) s in)"
   timeout "$limit" "$@" || rc=$?
-  local took=$(( $(date +%s) - t ))
-  if [ $rc -eq 0 ]; then echo "=== $name: ok ($took s)"
+  record "$name" $rc $(( $(date +%s) - t )) "$limit"
+}
+# record NAME EXIT SECONDS LIMIT: a step's outcome, in the log, the failed list and steps.json.
+record() {
+  local name=$1 rc=$2 took=$3 limit=$4
+  if [ "$rc" -eq 0 ]; then echo "=== $name: ok ($took s)"
   else
-    [ $rc -eq 124 ] && echo "=== $name: timed out after $limit s" || echo "=== $name: FAILED, exit $rc ($took s)"
+    [ "$rc" -eq 124 ] && echo "=== $name: timed out after $limit s" || echo "=== $name: FAILED, exit $rc ($took s)"
     failed+=("$name")
   fi
   steps_json="$steps_json${steps_json:+, }\"$name\": {\"exit\": $rc, \"seconds\": $took}"
@@ -116,12 +120,44 @@ fi
 mkdir -p "$out/tmp"
 export TMPDIR="$out/tmp"
 if [ $quick -eq 1 ]; then tests_limit=150; demo_frames=30; else tests_limit=240; demo_frames=120; fi
+# The GL tests and the Bullet adapter tests run side by side, the adapter's in shards (its tests are CPU-bound and
+# independent; each shard is its own process with its own culler and GL context): device time is scarce.
+shards=$(( $(nproc) / 4 )); [ $shards -ge 1 ] || shards=1; [ $shards -le 4 ] || shards=4
+bullet_shards() {
+  local i pids=() rc=0
+  for ((i = 0; i < shards; i++)); do
+    GTEST_TOTAL_SHARDS=$shards GTEST_SHARD_INDEX=$i "$here/bin/cullide_bullet_tests" \
+      --gtest_output=json:"$out/bullet-tests-$i.json" >"$out/tmp/bullet-tests-$i.txt" 2>&1 &
+    pids+=($!)
+  done
+  for ((i = 0; i < shards; i++)); do wait ${pids[$i]} || rc=$?; done
+  for ((i = 0; i < shards; i++)); do
+    echo "--- shard $i of $shards:"; grep -E '^\[  (PASSED|FAILED) |^\[==========\]|tests? (FAILED|failed)' \
+      "$out/tmp/bullet-tests-$i.txt" || tail -20 "$out/tmp/bullet-tests-$i.txt"
+  done
+  return $rc
+}
+export -f bullet_shards
+export here out shards
+t_bullet=$(date +%s)
+echo "=== bullet-tests ($(( t_bullet - t0 )) s in): $shards shards beside the GL tests"
+( rc=0; timeout $tests_limit bash -c bullet_shards >"$out/tmp/bullet-tests.txt" 2>&1 || rc=$?; echo $rc \
+  >"$out/tmp/bullet-tests.rc" ) &
+bullet_pid=$!
 step gl-tests $tests_limit "$here/bin/cullide_gl_tests" --gtest_output=json:"$out/gl-tests.json"
-step bullet-tests $tests_limit "$here/bin/cullide_bullet_tests" --gtest_output=json:"$out/bullet-tests.json"
+wait $bullet_pid
+echo
+cat "$out/tmp/bullet-tests.txt"
+record bullet-tests "$(cat "$out/tmp/bullet-tests.rc" 2>/dev/null || echo 1)" $(( $(date +%s) - t_bullet )) $tests_limit
 step demo 120 "$here/bin/cullide-demo" --frames $demo_frames --check-every 15 --snapshot-every $demo_frames --quiet \
   --out "$out/demo"
 # The worker pool's fork/join cost by thread count (the CPU stages make a few dozen parallelFor calls a frame).
 step pool-bench 60 bash -c '"$1" --calls 500 | tee "$2"' _ "$here/bin/cullide-pool-bench" "$out/pool-bench.txt"
+# The two-line swap (CullideBroadphase + CullideCollisionDispatcher, GpuLevels::Auto) against Bullet's default
+# pipeline and btAxisSweep3 on typical scenes, in lockstep in one process: OUTDIR/swap.txt and swap.json.
+if [ $quick -eq 1 ]; then swap_steps=10; else swap_steps=${SWAP_STEPS:-120}; fi
+step swap-bench 120 bash -c '"$1" --steps "$2" --json "$3/swap.json" 2>"$3/swap-lost.txt" | tee "$3/swap.txt"' _ \
+  "$here/bin/cullide-swap-bench" $swap_steps "$out"
 
 # 3. The benchmarks: the run list of scripts/bench.sh.
 t_bench=$(date +%s)
