@@ -155,7 +155,7 @@ step demo 120 "$here/bin/cullide-demo" --frames $demo_frames --check-every 15 --
 step pool-bench 60 bash -c '"$1" --calls 500 | tee "$2"' _ "$here/bin/cullide-pool-bench" "$out/pool-bench.txt"
 # The two-line swap (CullideBroadphase + CullideCollisionDispatcher, GpuLevels::Auto) against Bullet's default
 # pipeline and btAxisSweep3 on typical scenes, in lockstep in one process: OUTDIR/swap.txt and swap.json.
-if [ $quick -eq 1 ]; then swap_steps=10; else swap_steps=${SWAP_STEPS:-120}; fi
+if [ $quick -eq 1 ]; then swap_steps=10; else swap_steps=${SWAP_STEPS:-60}; fi
 step swap-bench 120 bash -c '"$1" --steps "$2" --json "$3/swap.json" 2>"$3/swap-lost.txt" | tee "$3/swap.txt"' _ \
   "$here/bin/cullide-swap-bench" $swap_steps "$out"
 

@@ -15,8 +15,9 @@ struct LevelStats {
     std::size_t primitivesDrawn = 0;        ///< primitives submitted (all passes, all axes)
     std::size_t draws = 0;
     double cpuMs = 0.0;                     ///< wall time spent on the CPU side of the level (incl. waiting)
-    /// Of cpuMs, GL back-end: sending the level's items and building their boxes and records on the device, up to
-    /// the read-back of the record count (at its start, and again where the view shrank enough to refit the bands).
+    /// Of cpuMs, GL back-end: sending the level's items and building their boxes and records on the device (at its
+    /// start, and again where the view shrank enough to refit the bands), less the wait for the record count's
+    /// read-back, which waitMs counts: setupMs + waitMs <= cpuMs.
     double setupMs = 0.0;
     /// Of setupMs, the GL calls that send the items (primitives, owners) and clear their device state.
     double setupSendMs = 0.0;
