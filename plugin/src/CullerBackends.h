@@ -19,6 +19,9 @@ struct GlBackendOptions {
     /// The compute back-end's bands as on a hardware GPU (about CULLIDE_TARGET_INVOCATIONS records per build) on a
     /// software renderer too, which otherwise scans 4,096 pixels per band: so that llvmpipe runs the GPU's records.
     bool shortBands = false;
+    /// Added to every read-back's wait (and counted in LevelStats::waitMs like it): a device whose round trips are
+    /// slow, so that tests can check how the level's CPU time is split between its set-up and its waits.
+    double readBackDelayMs = 0.0;
 };
 
 /// The GL visibility test (gl/VisibilityPass). Throws GlUnavailableError without a usable GL device.

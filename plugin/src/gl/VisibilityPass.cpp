@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <initializer_list>
 #include <string>
+#include <thread>
 
 namespace cullide::gl {
 namespace {
@@ -124,9 +125,10 @@ struct VisibilityPass::Impl {
     std::size_t recordCount = 0;  ///< records of the alive items, in kPrims
     bool recordsPending = false;  ///< counted (countRecords), not yet written: the next iteration writes them first
     Aabb recordedView;            ///< the view the records' bands were fitted to
+    double readBackDelayMs = 0.0;  ///< GlBackendOptions::readBackDelayMs (tests: a slow device's round trip)
 
     Impl(std::unique_ptr<EglContext> c, const Settings& s, const GlBackendOptions& options)
-        : ownContext(std::move(c)), context(*ownContext), settings(s) {
+        : ownContext(std::move(c)), context(*ownContext), settings(s), readBackDelayMs(options.readBackDelayMs) {
         context.makeCurrent();
         if (settings.backend == Backend::Compute) {
             program = linkProgram({compileShader(GL_COMPUTE_SHADER, {"common.glsl", "visit.glsl", "cull.comp"})},
@@ -295,10 +297,7 @@ struct VisibilityPass::Impl {
         if (timer) glEndQuery(GL_TIME_ELAPSED);
         glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
         GLuint total[2] = {};
-        const auto waitStart = Clock::now();
-        glGetNamedBufferSubData(buffers[kBuild], 4 * CULLIDE_BUILD_TOTAL, sizeof total, total);
-        level.waitMs += msSince(waitStart);
-        stats.bytesReadBack += sizeof total;
+        readBack(buffers[kBuild], 4 * CULLIDE_BUILD_TOTAL, sizeof total, total, level, stats);
         recordGpuTime(timer ? timerResultMs(timer, msSince(timedSpan)) : -1.0, level, stats);
         checkGlError("counting a level's records");
         float approx = 0.0f;
@@ -391,10 +390,7 @@ struct VisibilityPass::Impl {
         if (timer) glEndQuery(GL_TIME_ELAPSED);
         glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
         GLuint counters[CULLIDE_COUNTER_COUNT] = {};
-        const auto waitStart = Clock::now();
-        glGetNamedBufferSubData(buffers[kCounters], 0, sizeof counters, counters);
-        level.waitMs += msSince(waitStart);
-        stats.bytesReadBack += sizeof counters;
+        readBack(buffers[kCounters], 0, sizeof counters, counters, level, stats);
         recordGpuTime(timer ? timerResultMs(timer, msSince(timedSpan)) : -1.0, level, stats);
         checkGlError("a visibility iteration");
         IterationResult r;
@@ -412,14 +408,22 @@ struct VisibilityPass::Impl {
         return r;
     }
 
+    /// Reads `bytes` at `offset` of `buffer` back into `to`: blocks until the device has finished the work submitted
+    /// before, which the level's waitMs counts (with the tests' readBackDelayMs inside it).
+    void readBack(GLuint buffer, std::size_t offset, std::size_t bytes, void* to, LevelStats& level, Stats& stats) {
+        const auto waitStart = Clock::now();
+        glGetNamedBufferSubData(buffer, static_cast<GLintptr>(offset), static_cast<GLsizeiptr>(bytes), to);
+        if (readBackDelayMs > 0.0)
+            std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(readBackDelayMs));
+        level.waitMs += msSince(waitStart);
+        stats.bytesReadBack += bytes;
+    }
+
     /// The device's alive set, as 0/1 per item.
     void readAlive(std::size_t itemCount, std::vector<std::uint8_t>& alive, LevelStats& level, Stats& stats) {
         aliveScratch.resize(itemCount);
         glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-        const auto waitStart = Clock::now();
-        glGetNamedBufferSubData(buffers[kAlive], 0, static_cast<GLsizeiptr>(itemCount * 4), aliveScratch.data());
-        level.waitMs += msSince(waitStart);
-        stats.bytesReadBack += itemCount * 4;
+        readBack(buffers[kAlive], 0, itemCount * 4, aliveScratch.data(), level, stats);
         alive.resize(itemCount);
         for (std::size_t i = 0; i < itemCount; ++i) alive[i] = aliveScratch[i] != 0 ? 1 : 0;
     }
