@@ -33,7 +33,8 @@ done
 mkdir -p "$outdir" || exit 2
 out=$(cd "$outdir" && pwd)
 rm -rf "$out/bench" "$out/demo" "$out/plots" "$out/plotdata" "$out/cache" "$out/tmp" "$out/results-gpu.json" \
-  "$out/gl-tests.json" "$out"/bullet-tests*.json "$out/benchmarks.md" "$out/log.txt" "$out"/swap*
+  "$out/gl-tests.json" "$out"/bullet-tests-*.json "$out/benchmarks.md" "$out/log.txt" "$out/swap.txt" \
+  "$out/swap.json" "$out/swap-lost.txt" "$out/pool-bench.txt"
 exec > >(tee "$out/log.txt") 2>&1
 tee_pid=$!
 t0=$(date +%s)
@@ -141,23 +142,32 @@ export -f bullet_shards
 export here out shards
 t_bullet=$(date +%s)
 echo "=== bullet-tests ($(( t_bullet - t0 )) s in): $shards shards beside the GL tests"
-( rc=0; timeout $tests_limit bash -c bullet_shards >"$out/tmp/bullet-tests.txt" 2>&1 || rc=$?; echo $rc \
-  >"$out/tmp/bullet-tests.rc" ) &
+# The background run writes "EXIT SECONDS" (its own time, not the GL tests') for record.
+( rc=0; timeout $tests_limit bash -c bullet_shards >"$out/tmp/bullet-tests.txt" 2>&1 || rc=$?
+  echo "$rc $(( $(date +%s) - t_bullet ))" >"$out/tmp/bullet-tests.rc" ) &
 bullet_pid=$!
 step gl-tests $tests_limit "$here/bin/cullide_gl_tests" --gtest_output=json:"$out/gl-tests.json"
 wait $bullet_pid
 echo
 cat "$out/tmp/bullet-tests.txt"
-record bullet-tests "$(cat "$out/tmp/bullet-tests.rc" 2>/dev/null || echo 1)" $(( $(date +%s) - t_bullet )) $tests_limit
+read -r bullet_rc bullet_s <"$out/tmp/bullet-tests.rc" 2>/dev/null
+[[ "${bullet_rc:-}" =~ ^[0-9]+$ ]] || bullet_rc=1     # no status written: the background run died
+[[ "${bullet_s:-}" =~ ^[0-9]+$ ]] || bullet_s=$(( $(date +%s) - t_bullet ))
+record bullet-tests $bullet_rc $bullet_s $tests_limit
 step demo 120 "$here/bin/cullide-demo" --frames $demo_frames --check-every 15 --snapshot-every $demo_frames --quiet \
   --out "$out/demo"
 # The worker pool's fork/join cost by thread count (the CPU stages make a few dozen parallelFor calls a frame).
-step pool-bench 60 bash -c '"$1" --calls 500 | tee "$2"' _ "$here/bin/cullide-pool-bench" "$out/pool-bench.txt"
+step pool-bench 60 bash -c 'set -o pipefail; "$1" --calls 500 | tee "$2"' _ "$here/bin/cullide-pool-bench" \
+  "$out/pool-bench.txt"
 # The two-line swap (CullideBroadphase + CullideCollisionDispatcher, GpuLevels::Auto) against Bullet's default
 # pipeline and btAxisSweep3 on typical scenes, in lockstep in one process: OUTDIR/swap.txt and swap.json.
+# Its stderr (the first lost pairs explained, or why it failed) goes to swap-lost.txt; the end of it to the log.
+# Limit: 2 s a step, at least 120 s (60 steps took 14-32 s on the H100 machine; tori-pile slows down past 60).
 if [ $quick -eq 1 ]; then swap_steps=10; else swap_steps=${SWAP_STEPS:-60}; fi
-step swap-bench 120 bash -c '"$1" --steps "$2" --json "$3/swap.json" 2>"$3/swap-lost.txt" | tee "$3/swap.txt"' _ \
-  "$here/bin/cullide-swap-bench" $swap_steps "$out"
+swap_limit=$(( 2 * swap_steps > 120 ? 2 * swap_steps : 120 ))
+step swap-bench $swap_limit bash -c 'set -o pipefail; "$1" --steps "$2" --json "$3/swap.json" 2>"$3/swap-lost.txt" |
+  tee "$3/swap.txt"' _ "$here/bin/cullide-swap-bench" $swap_steps "$out"
+[ -s "$out/swap-lost.txt" ] && { echo "swap-bench: stderr (last 5 lines):"; tail -5 "$out/swap-lost.txt"; }
 
 # 3. The benchmarks: the run list of scripts/bench.sh.
 t_bench=$(date +%s)
