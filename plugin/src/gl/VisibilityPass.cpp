@@ -505,33 +505,38 @@ bool recordsStale(const Aabb& view, const Aabb& recordedView) {
     return false;
 }
 
-/// A set-up's share of cpuMs: the time since `t0` less what it spent blocked in the record count's read-back, which
-/// waitMs counts (set-up and waits are disjoint parts of cpuMs; on a hardware device the read-back is most of it).
-double setupSince(Clock::time_point t0, double waitedMs) { return std::max(0.0, msSince(t0) - waitedMs); }
+/// Runs a level's set-up and adds its time to setupMs, less what it spent blocked in read-backs (the record count's),
+/// which waitMs counts: set-up and waits are disjoint parts of cpuMs (on a hardware device the read-back is most of
+/// the set-up).
+template <class SetUp>
+void timeSetUp(LevelStats& level, SetUp&& setUp) {
+    const auto t0 = Clock::now();
+    const double waitedBefore = level.waitMs;
+    setUp();
+    level.setupMs += msSince(t0) - (level.waitMs - waitedBefore);
+}
 
 }  // namespace
 
 void VisibilityPass::beginLevel(const LevelItems& items, const View& view, LevelStats& level, Stats& stats) {
     Impl& s = *m_impl;
     s.context.makeCurrent();
-    const auto t0 = Clock::now();
-    const double waitedBefore = level.waitMs;
-    s.levelItems = &items;
-    s.uploadItems(items, level, stats);
-    s.countRecords(view, true, level, stats);
-    s.recordedView = view.box;
-    level.setupMs += setupSince(t0, level.waitMs - waitedBefore);
+    timeSetUp(level, [&] {
+        s.levelItems = &items;
+        s.uploadItems(items, level, stats);
+        s.countRecords(view, true, level, stats);
+        s.recordedView = view.box;
+    });
 }
 
 IterationResult VisibilityPass::iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) {
     Impl& s = *m_impl;
     s.context.makeCurrent();
     if (recordsStale(view.box, s.recordedView)) {
-        const auto t0 = Clock::now();
-        const double waitedBefore = level.waitMs;
-        s.countRecords(view, false, level, stats);
-        s.recordedView = view.box;
-        level.setupMs += setupSince(t0, level.waitMs - waitedBefore);
+        timeSetUp(level, [&] {
+            s.countRecords(view, false, level, stats);
+            s.recordedView = view.box;
+        });
     }
     return s.runIteration(view, idBits, s.levelItems->size(), level, stats);
 }
