@@ -627,6 +627,15 @@ TEST(HostileInput, WrongOffCountsAreNamedAsSuch) {
     EXPECT_EQ(msg.find("too small"), std::string::npos) << msg;
 }
 
+/// A vertex whose first coordinate is the largest 64-bit integer: the face-likeness test (is the line "n i1 ... in"?)
+/// compared n + 4 with the token count, an overflow (found by the readers' fuzzer; UBSan aborts on it).
+TEST(HostileInput, AVertexOfHugeIntegersIsAVertex) {
+    const TriangleMesh m = off("OFF\n3 1 0\n9223372036854775807 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+    ASSERT_EQ(m.vertices.size(), 3u);
+    EXPECT_EQ(m.vertices[0][0], 9223372036854775807.0);
+    EXPECT_EQ(m.triangles.size(), 1u);
+}
+
 TEST(HostileInput, SceneFromAStream) {
     TempDir dir;
     dir.write("m/tri.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");

@@ -421,9 +421,10 @@ Vec3 readOffVertex(TokenReader& r, bool& faceLike) {
         p[k] = r.number("vertex coordinate");
     }
     const std::size_t extra = r.trailingNumbers("vertex coordinates", allIntegers);
-    const auto tokens = static_cast<std::int64_t>(3 + extra);
-    // A polygon "n i1 ... in" has n + 1 integers, n + 4 or n + 5 with an RGB(A) colour.
-    faceLike = allIntegers && first >= 3 && (tokens == first + 1 || tokens == first + 4 || tokens == first + 5);
+    // A polygon "n i1 ... in" has n + 1 integers, n + 4 or n + 5 with an RGB(A) colour. Compared as tokens - n: both
+    // are positive, so the difference cannot overflow where n + 4 could (n up to 2^63 - 1).
+    const std::int64_t beyondCount = static_cast<std::int64_t>(3 + extra) - first;
+    faceLike = allIntegers && first >= 3 && (beyondCount == 1 || beyondCount == 4 || beyondCount == 5);
     return p;
 }
 
