@@ -288,6 +288,22 @@ SceneSpec toriPile(Shapes& s) {
     return sc;
 }
 
+/// GImpact meshes resting side by side on a static plane (Bullet's GImpact-plane algorithm: a vertex loop per mesh).
+SceneSpec toriOnPlane(Shapes& s) {
+    SceneSpec sc{"tori-plane", "144 GImpact tori (1,024 triangles each) dropped side by side on a static plane", {}};
+    sc.gimpact = true;
+    sc.bodies.push_back({s.own(new btStaticPlaneShape(btVector3(0, 1, 0), 0)), 0, at(0, 0, 0)});
+    btCollisionShape* torus = s.torus(1.0, 0.3, 32, 16);
+    Random rng(4);
+    for (int i = 0; i < 144; ++i) {
+        btTransform t = at(-18.7 + (i % 12) * 3.4, 1.0 + rng.uniform(0, 1), -18.7 + (i / 12) * 3.4);
+        t.setRotation(btQuaternion(btVector3(rng.uniform(-0.3, 0.3), 1, rng.uniform(-0.3, 0.3)).normalized(),
+                                   rng.uniform(0, 3)));
+        sc.bodies.push_back({torus, 1, t});
+    }
+    return sc;
+}
+
 /// A world in units of 1e-3 (millimetres in metres): sizes, margins, positions and gravity scaled, while Bullet's
 /// broadphase fattening (0.05) and contact breaking threshold (0.02) stay absolute. Every pair is in the cache and
 /// the threshold reaches across whole objects: no GImpact candidate triangle is out of reach.
@@ -469,7 +485,7 @@ const SceneFactory kScenes[] = {{"boxes-3000", boxesFalling},      {"pyramid-wal
                                 {"landscape-150", landscapeSmall}, {"gimpact-landscape", gimpactLandscape},
                                 {"compounds-400", compoundHeap},   {"heightfield-prims", primitivesOnHeightfield},
                                 {"landscape-compounds", compoundsOnLandscape}, {"small-units", smallUnits},
-                                {"sleeping-5000", sleepingBoxes}};
+                                {"sleeping-5000", sleepingBoxes},  {"tori-plane", toriOnPlane}};
 
 /// A dynamics world that times the parts of its step.
 class TimedWorld final : public btDiscreteDynamicsWorld {
@@ -638,6 +654,8 @@ struct Row {
     double deepestDiffMax = 0, deepestDiffSum = 0;
     /// GImpact-convex triangles per step: Bullet's query, run, run without the per-triangle reach test
     double convexCandidates = 0, convexTriangles = 0, convexUnchecked = 0;
+    /// GImpact-plane vertices per step: those Bullet's loop visits, those tested
+    double planeVertices = 0, planeVerticesTested = 0;
 };
 
 /// Adds the CULLIDE world's last step (dispatcher and broadphase stages) to the row's per-step means.
@@ -652,6 +670,8 @@ void addCullideStep(const cullide::CullideCollisionDispatcher& dispatcher, const
     row.convexCandidates += double(d.convexCandidates) / steps;
     row.convexTriangles += double(d.convexTriangles) / steps;
     row.convexUnchecked += double(d.convexUnchecked) / steps;
+    row.planeVertices += double(d.planeVertices) / steps;
+    row.planeVerticesTested += double(d.planeVerticesTested) / steps;
     const auto& b = broadphase.getLastFrameStats();
     row.buildMs += b.buildMs / steps;
     row.cullMs += b.cullMs / steps;
@@ -1079,7 +1099,7 @@ void printRow(const Row& r) {
                 "lost %zu of %zu (checked %zu: %zu apart) extra %zu | dispatcher: culled %.1f, full %.1f "
                 "(penetrating %.1f), apart %.1f, threaded %.1f | culling frame %.2f ms, culler %.2f, records %.2f; last step: %zu object pairs, "
                 "%zu pruned | contact keys missing %zu of %zu, deepest point diff max %.3g mean %.3g (%zu pair-steps) | "
-                "GImpact-convex triangles %.0f of %.0f (%.0f unchecked) | kept: %zu shapes %zu B shared, %zu objects %zu B "
+                "GImpact-convex triangles %.0f of %.0f (%.0f unchecked) | GImpact-plane vertices %.0f of %.0f | kept: %zu shapes %zu B shared, %zu objects %zu B "
                 "(%zu world copies), %.0f B per object\n",
                 r.scene.c_str(), r.bodies, r.steps, r.ms[0], r.ms[1], r.ms[2], r.ms[2] / best, r.broadphaseMs[0],
                 r.broadphaseMs[1], r.broadphaseMs[2], r.narrowMs[0], r.narrowMs[1], r.narrowMs[2], r.pairs[0],
@@ -1087,7 +1107,7 @@ void printRow(const Row& r) {
                 r.lostChecked, r.lostApart, r.extra, r.cullidePairs, r.fallbackPairs, r.penetrationPairs, r.apartPairs, r.threadedPairs, r.buildMs, r.cullMs, r.recordMs, r.last.objectPairs,
                 r.last.prunedPairs, r.pointsMissing, r.points, r.deepestDiffMax,
                 r.comparedPairSteps ? r.deepestDiffSum / double(r.comparedPairSteps) : 0.0, r.comparedPairSteps,
-                r.convexTriangles, r.convexCandidates, r.convexUnchecked, r.memory.shapes, r.memory.sharedGeometryBytes,
+                r.convexTriangles, r.convexCandidates, r.convexUnchecked, r.planeVerticesTested, r.planeVertices, r.memory.shapes, r.memory.sharedGeometryBytes,
                 r.memory.objects, r.memory.objectBytes, r.memory.worldCopies,
                 r.memory.objects ? double(r.memory.objectBytes) / double(r.memory.objects) : 0.0);
     std::fflush(stdout);

@@ -4,6 +4,7 @@
 #include "GImpactConvexContacts.h"
 #include "GImpactLeafPairs.h"
 #include "GImpactMeshContacts.h"
+#include "GImpactPlaneContacts.h"
 #include "ShapeGeometry.h"
 #include "ThreadedPairs.h"
 #include "cullide/TaskPool.h"
@@ -152,7 +153,8 @@ struct SurvivingMeshWrapper {
 };
 
 /// GImpact pairs. By default each kind gets Bullet's contacts from Bullet's own algorithm reproduced or trimmed:
-/// GImpact-GImpact (processAsBullet), GImpact-concave (processWithConcave), GImpact-convex (processWithConvex). Pairs
+/// GImpact-GImpact (processAsBullet), GImpact-concave (processWithConcave), GImpact-convex (processWithConvex),
+/// GImpact-plane (processWithPlane). Pairs
 /// culled on request read CULLIDE's lists: GImpact-GImpact's surviving triangle pairs go straight to Bullet's
 /// triangle-triangle routine (triangleContacts: collide_sat_triangles' loop), GImpact-triangle mesh runs Bullet's
 /// gimpact_vs_concave on the mesh's surviving triangles only. Same size as btGImpactCollisionAlgorithm.
@@ -473,9 +475,13 @@ private:
         const bool gimpactFirst = body0Wrap->getCollisionShape()->getShapeType() == GIMPACT_SHAPE_PROXYTYPE;
         const btCollisionObjectWrapper* gimpactWrap = gimpactFirst ? body0Wrap : body1Wrap;
         const btCollisionObjectWrapper* meshWrap = gimpactFirst ? body1Wrap : body0Wrap;
+        if (meshWrap->getCollisionShape()->getShapeType() == STATIC_PLANE_PROXYTYPE && isGImpactMesh(*gimpactWrap)) {
+            processWithPlane(gimpactWrap, meshWrap, !gimpactFirst, dispatchInfo, resultOut, stats);
+            return;
+        }
         if (!meshWrap->getCollisionShape()->isConcave() ||
             meshWrap->getCollisionShape()->getShapeType() == STATIC_PLANE_PROXYTYPE) {
-            // A compound, a plane (Bullet collides GImpact vertices with it), ...: Bullet's algorithm as it is.
+            // A compound, a plane against a GImpact compound or lone part, ...: Bullet's algorithm as it is.
             ++stats.fallbackPairs;
             btGImpactCollisionAlgorithm::processCollision(body0Wrap, body1Wrap, dispatchInfo, resultOut);
             return;
@@ -505,6 +511,37 @@ private:
         if (getLastManifold() != nullptr) m_resultOut->refreshContactPoints();
     }
 
+    /// GImpact mesh against a static plane (either order): Bullet's gimpact_vs_shape for a mesh and a plane — each
+    /// part, last to first, through its vertex loop (gimpacttrimeshpart_vs_plane_collision) — with the vertices
+    /// that cannot make a point ruled out first (GImpactPlaneContacts.h). Same points, same order.
+    void processWithPlane(const btCollisionObjectWrapper* meshWrap, const btCollisionObjectWrapper* planeWrap,
+                          bool swapped, const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut,
+                          CullideDispatchStats& stats) {
+        clearCache();
+        m_resultOut = resultOut;
+        m_dispatchInfo = &dispatchInfo;
+        ++stats.planePairs;
+        const auto& mesh = *static_cast<const btGImpactMeshShape*>(meshWrap->getCollisionShape());
+        const auto& plane = *static_cast<const btStaticPlaneShape*>(planeWrap->getCollisionShape());
+        const btVector4 equation = detail::planeEquation(plane, planeWrap->getWorldTransform());
+        const btVector3 facing(equation[0], equation[1], equation[2]);
+        const btVector3 normal = swapped ? -facing : facing;
+        const btCollisionObjectWrapper* first = swapped ? planeWrap : meshWrap;
+        const btCollisionObjectWrapper* second = swapped ? meshWrap : planeWrap;
+        detail::PlaneCounts counts;
+        int& part = swapped ? m_part1 : m_part0;
+        for (part = mesh.getMeshPartCount(); part--;) {
+            planePoints.clear();
+            detail::planePartContacts(*mesh.getMeshPart(part), meshWrap->getWorldTransform(), equation,
+                                      plane.getMargin(), planePoints, counts);
+            for (const detail::PlanePoint& p : planePoints) addContactPoint(first, second, p.vertex, normal, p.distance);
+        }
+        stats.planeVertices += counts.vertices;
+        stats.planeVerticesTested += counts.tested;
+        if (getLastManifold() != nullptr) m_resultOut->refreshContactPoints();
+    }
+
+    static thread_local std::vector<detail::PlanePoint> planePoints;
     static thread_local std::vector<std::array<int, 4>> ordered;  // part0, part1, tri0, tri1
     static thread_local std::vector<detail::MeshContact> contacts;
     static thread_local btAlignedObjectArray<int> candidates;      // Bullet's box query of one mesh part
@@ -562,6 +599,7 @@ public:
     };
 };
 
+thread_local std::vector<detail::PlanePoint> CullideGImpactAlgorithm::planePoints;
 thread_local std::vector<std::array<int, 4>> CullideGImpactAlgorithm::ordered;
 thread_local std::vector<int> CullideGImpactAlgorithm::interleaved;
 thread_local btAlignedObjectArray<int> CullideGImpactAlgorithm::candidates;
@@ -853,7 +891,11 @@ btCollisionAlgorithmCreateFunc* replacementFor(const btCollisionObjectWrapper* b
                              (concave(t0) && t1 == GIMPACT_SHAPE_PROXYTYPE);
     const bool gimpactConvexPair = CullideGImpactAlgorithm::trimeshAgainstConvex(body0Wrap, body1Wrap) ||
                                    CullideGImpactAlgorithm::trimeshAgainstConvex(body1Wrap, body0Wrap);
-    if ((gimpactPair || gimpactConvexPair) && registeredIs<btGImpactCollisionAlgorithm::CreateFunc>(registered))
+    // A GImpact mesh against a plane: Bullet's vertex loop, most vertices ruled out by a cheaper bound first.
+    const bool gimpactPlanePair =
+        (t1 == STATIC_PLANE_PROXYTYPE && CullideGImpactAlgorithm::isGImpactMesh(*body0Wrap)) ||
+        (t0 == STATIC_PLANE_PROXYTYPE && CullideGImpactAlgorithm::isGImpactMesh(*body1Wrap));
+    if ((gimpactPair || gimpactConvexPair || gimpactPlanePair) && registeredIs<btGImpactCollisionAlgorithm::CreateFunc>(registered))
         return &g_gimpactCreate;
     // Convex-mesh pairs read the culler's triangles only with convex-mesh culling on; otherwise Bullet's own
     // algorithm runs them without a record lookup per pair and step.
@@ -966,6 +1008,9 @@ void CullideCollisionDispatcher::dispatchAllCollisionPairs(btOverlappingPairCach
     m_total.threadedTasks += m_current.threadedTasks;
     m_total.apartPairs += m_current.apartPairs;
     m_total.threadedPairs += m_current.threadedPairs;
+    m_total.planePairs += m_current.planePairs;
+    m_total.planeVertices += m_current.planeVertices;
+    m_total.planeVerticesTested += m_current.planeVerticesTested;
     m_total.dispatchMs += m_current.dispatchMs;
     if (ownCache) m_lastStep = m_current;
     m_current = outer;

@@ -4,6 +4,7 @@
 #include <BulletCollision/CollisionDispatch/btManifoldResult.h>
 
 #include <cstdio>
+#include <cstring>
 #include <set>
 
 namespace cullide::test {
@@ -128,6 +129,46 @@ void expectAgreement(const MirrorRun& run, std::size_t minimumPairSteps) {
     EXPECT_EQ(run.agreement.pointMismatches, 0u)
         << "contact points (position, normal, distance) of pairs that run Bullet's algorithm on identical input";
     EXPECT_EQ(run.triangleContactsMissing, 0u) << run.firstTriangleMissing;
+}
+
+std::vector<btScalar> bitState(TestWorld& w) {
+    std::vector<btScalar> s;
+    btCollisionDispatcher& d = w.dispatcher();
+    for (int i = 0; i < d.getNumManifolds(); ++i) {
+        const btPersistentManifold* m = d.getManifoldByIndexInternal(i);
+        s.push_back(btScalar(static_cast<const btCollisionObject*>(m->getBody0())->getUserIndex()));
+        s.push_back(btScalar(static_cast<const btCollisionObject*>(m->getBody1())->getUserIndex()));
+        for (int c = 0; c < m->getNumContacts(); ++c) {
+            const btManifoldPoint& p = m->getContactPoint(c);
+            for (int k = 0; k < 3; ++k) s.insert(s.end(), {p.m_positionWorldOnB[k], p.m_normalWorldOnB[k]});
+            s.insert(s.end(), {p.getDistance(), btScalar(p.getLifeTime()), p.getAppliedImpulse()});
+        }
+    }
+    for (btCollisionObject* o : w.objects()) {
+        const btRigidBody* b = btRigidBody::upcast(o);
+        const btTransform& t = b->getWorldTransform();
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) s.push_back(t.getBasis()[r][c]);
+        for (int c = 0; c < 3; ++c)
+            s.insert(s.end(), {t.getOrigin()[c], b->getLinearVelocity()[c], b->getAngularVelocity()[c]});
+    }
+    return s;
+}
+
+int firstDifferingStep(TestWorld& reference, TestWorld& w, int steps, int sleepFrom) {
+    int first = -1;
+    for (int step = 0; step < steps; ++step) {
+        if (step == sleepFrom)
+            for (TestWorld* x : {&reference, &w})
+                for (btCollisionObject* o : x->objects())
+                    btRigidBody::upcast(o)->setSleepingThresholds(btScalar(100), btScalar(100));
+        reference.step();
+        w.step();
+        const std::vector<btScalar> a = bitState(reference), b = bitState(w);
+        if (first < 0 && (a.size() != b.size() || std::memcmp(a.data(), b.data(), a.size() * sizeof(btScalar)) != 0))
+            first = step;
+    }
+    return first;
 }
 
 }  // namespace cullide::test

@@ -9,6 +9,7 @@
 #include <array>
 #include <functional>
 #include <map>
+#include <vector>
 
 namespace cullide::test {
 
@@ -58,6 +59,15 @@ MirrorRun runMirrored(TestWorld& reference, TestWorld& cullide, const MirrorOpti
 
 /// Prints the measurement lines of a mirror run (visible in the test log).
 void printMirrorRun(const char* scene, const MirrorRun& run);
+
+/// Position, orientation and velocities of every body, then every manifold in the dispatcher's order (the order the
+/// solver reads them in) with its points: position, normal, distance, age and impulse. Compared as bits.
+std::vector<btScalar> bitState(TestWorld& w);
+
+/// Steps `reference` and `w` side by side (not mirrored: each world runs on its own) for all `steps` and returns the
+/// first step whose states (bitState) differ in any bit, or -1. From step `sleepFrom` (if not negative) every body
+/// may fall asleep (sleeping thresholds raised in both worlds).
+int firstDifferingStep(TestWorld& reference, TestWorld& w, int steps, int sleepFrom = -1);
 
 /// Checks shared by the mirrored scene tests.
 void expectAgreement(const MirrorRun& run, std::size_t minimumPairSteps);

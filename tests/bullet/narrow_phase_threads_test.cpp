@@ -96,32 +96,6 @@ struct PileScene {
     void populate(TestWorld& w) const { Drop{6, 1.3, 1.2, 0.37}.populate(w, landscape, field, kinds); }
 };
 
-/// Position, orientation and velocities of every body, then every manifold in the dispatcher's order (the order the
-/// solver reads them in) with its points: position, normal, distance, age and impulse. Compared as bits.
-std::vector<btScalar> stateOf(TestWorld& w) {
-    std::vector<btScalar> s;
-    btCollisionDispatcher& d = w.dispatcher();
-    for (int i = 0; i < d.getNumManifolds(); ++i) {
-        const btPersistentManifold* m = d.getManifoldByIndexInternal(i);
-        s.push_back(btScalar(static_cast<const btCollisionObject*>(m->getBody0())->getUserIndex()));
-        s.push_back(btScalar(static_cast<const btCollisionObject*>(m->getBody1())->getUserIndex()));
-        for (int c = 0; c < m->getNumContacts(); ++c) {
-            const btManifoldPoint& p = m->getContactPoint(c);
-            for (int k = 0; k < 3; ++k) s.insert(s.end(), {p.m_positionWorldOnB[k], p.m_normalWorldOnB[k]});
-            s.insert(s.end(), {p.getDistance(), btScalar(p.getLifeTime()), p.getAppliedImpulse()});
-        }
-    }
-    for (btCollisionObject* o : w.objects()) {
-        const btRigidBody* b = btRigidBody::upcast(o);
-        const btTransform& t = b->getWorldTransform();
-        for (int r = 0; r < 3; ++r)
-            for (int c = 0; c < 3; ++c) s.push_back(t.getBasis()[r][c]);
-        for (int c = 0; c < 3; ++c)
-            s.insert(s.end(), {t.getOrigin()[c], b->getLinearVelocity()[c], b->getAngularVelocity()[c]});
-    }
-    return s;
-}
-
 std::size_t threadedPairs(TestWorld& w) { return w.cullideDispatcher()->getTotalStats().threadedPairs; }
 
 /// From step kSleepFrom every body may fall asleep (Bullet's 2 s below the raised thresholds): the piles' pairs are
@@ -142,22 +116,9 @@ struct SideBySide {
     }
 };
 
-/// Steps the reference and the swap side by side (not mirrored: each world runs on its own) for all `steps` and
-/// returns the first step whose states differ in any bit, or -1.
+/// The first of `steps` steps (from now) whose states differ in any bit, or -1; bodies may sleep from kSleepFrom.
 int firstDivergingStep(TestWorld& reference, TestWorld& w, int steps) {
-    int first = -1;
-    for (int step = 0; step < steps; ++step) {
-        if (step == kSleepFrom)
-            for (TestWorld* x : {&reference, &w})
-                for (btCollisionObject* o : x->objects())
-                    btRigidBody::upcast(o)->setSleepingThresholds(btScalar(100), btScalar(100));
-        reference.step();
-        w.step();
-        const std::vector<btScalar> a = stateOf(reference), b = stateOf(w);
-        if (first < 0 && (a.size() != b.size() || std::memcmp(a.data(), b.data(), a.size() * sizeof(btScalar)) != 0))
-            first = step;
-    }
-    return first;
+    return firstDifferingStep(reference, w, steps, kSleepFrom);
 }
 
 /// Runs the scene side by side with Bullet's pipeline for `steps` steps with each of the thread counts, expects no

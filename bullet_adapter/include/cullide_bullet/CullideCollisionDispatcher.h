@@ -13,11 +13,16 @@
 //   from the convex shape's local box than 1.5 * (triangle margin + contact breaking threshold): they cannot make a
 //   point. Bullet's query box is the convex shape's AABB in the mesh's frame; for a ground box that is most of the
 //   mesh, and every candidate costs a GJK run. The contacts are Bullet's, point for point.
+// - GImpact mesh vs static plane: Bullet's vertex loop (gimpacttrimeshpart_vs_plane_collision), part by part, with
+//   most vertices ruled out first by a bound read straight from the mesh's arrays (the plane in the mesh's frame,
+//   less a bound on the rounding error of Bullet's arithmetic); the rest go through Bullet's test in Bullet's order.
+//   The contacts are Bullet's, point for point.
 // - A pair the broadphase recorded as pruned (the culler proved it farther apart than its margin) makes no contact:
 //   its algorithm clears its manifold and returns. A pair recorded as interpenetrating runs Bullet's full algorithm.
-// - Everything else (primitives, compound-compound and compound-convex per child, planes, soft bodies) goes to
-//   Bullet's algorithms unchanged; so does any pair for which the broadphase has no fresh triangle
-//   data (a character controller's private pair cache after the ghost moved, contactTest, another broadphase).
+// - Everything else (primitives, compound-compound and compound-convex per child, planes against anything but a
+//   GImpact mesh, soft bodies) goes to Bullet's algorithms unchanged; so does any pair for which the broadphase has
+//   no fresh triangle data (a character controller's private pair cache after the ghost moved, contactTest, another
+//   broadphase).
 // - GImpact mesh-mesh pairs computed with Bullet's contacts (the default) have their points computed on the
 //   narrow-phase threads (setNarrowPhaseThreads) while the dispatch loop runs; each pair's algorithm adds them to its
 //   manifold on the calling thread, in Bullet's order: the same manifolds for every thread count.
@@ -88,6 +93,12 @@ struct CullideDispatchStats {
     /// Pairs handed to the narrow-phase threads (setNarrowPhaseThreads) to run their Bullet algorithm: convex (GJK)
     /// pairs and convex against a BVH mesh or heightfield, while no application hook is installed and it pays
     std::size_t threadedPairs = 0;
+    /// GImpact mesh vs static plane pairs (Bullet's vertex loop, most vertices ruled out by a cheaper bound first),
+    /// the vertices of their parts whose box reached the plane (Bullet maps each), and of those the ones Bullet's
+    /// test ran on
+    std::size_t planePairs = 0;
+    std::size_t planeVertices = 0;
+    std::size_t planeVerticesTested = 0;
     double dispatchMs = 0.0;            ///< wall time in dispatchAllCollisionPairs
     void reset() { *this = CullideDispatchStats{}; }
 };
