@@ -462,10 +462,11 @@ private:
         stats.convexUnchecked += counts.unchecked;
     }
 
-    /// GImpact against a shape that is neither GImpact nor convex (either order). A concave shape but a plane:
-    /// processWithConcave (Bullet's contacts), or, for a pair culled with setGImpactMeshCulling, Bullet's
-    /// processCollision with a stand-in mesh that enumerates the surviving triangles (mesh-local vertices as
-    /// processAllTriangles yields them, same margin). Anything else (compounds, planes, GImpact compounds): Bullet's.
+    /// GImpact against a shape that is neither GImpact nor convex (either order). A GImpact mesh against a plane:
+    /// processWithPlane (Bullet's contacts). A concave shape but a plane: processWithConcave (Bullet's contacts), or,
+    /// for a pair culled with setGImpactMeshCulling, Bullet's processCollision with a stand-in mesh that enumerates
+    /// the surviving triangles (mesh-local vertices as processAllTriangles yields them, same margin). Anything else
+    /// (compounds, planes against GImpact compounds or lone parts): Bullet's.
     void processWithMesh(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
                          const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut) {
         bool swapped = false;
@@ -514,34 +515,35 @@ private:
     /// GImpact mesh against a static plane (either order): Bullet's gimpact_vs_shape for a mesh and a plane — each
     /// part, last to first, through its vertex loop (gimpacttrimeshpart_vs_plane_collision) — with the vertices
     /// that cannot make a point ruled out first (GImpactPlaneContacts.h). Same points, same order.
-    void processWithPlane(const btCollisionObjectWrapper* meshWrap, const btCollisionObjectWrapper* planeWrap,
+    void processWithPlane(const btCollisionObjectWrapper* gimpactWrap, const btCollisionObjectWrapper* planeWrap,
                           bool swapped, const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut,
                           CullideDispatchStats& stats) {
         clearCache();
         m_resultOut = resultOut;
         m_dispatchInfo = &dispatchInfo;
         ++stats.planePairs;
-        const auto& mesh = *static_cast<const btGImpactMeshShape*>(meshWrap->getCollisionShape());
+        const auto& mesh = *static_cast<const btGImpactMeshShape*>(gimpactWrap->getCollisionShape());
         const auto& plane = *static_cast<const btStaticPlaneShape*>(planeWrap->getCollisionShape());
         const btVector4 equation = detail::planeEquation(plane, planeWrap->getWorldTransform());
-        const btVector3 facing(equation[0], equation[1], equation[2]);
-        const btVector3 normal = swapped ? -facing : facing;
-        const btCollisionObjectWrapper* first = swapped ? planeWrap : meshWrap;
-        const btCollisionObjectWrapper* second = swapped ? meshWrap : planeWrap;
+        // Bullet passes the plane's equation itself as the normal (its fourth component, the constant, is kept in the
+        // manifold point's normal), or its negation (fourth component 0) for a plane that is the pair's first body.
+        const btVector3 flipped = -static_cast<const btVector3&>(equation);
+        const btVector3& normal = swapped ? flipped : static_cast<const btVector3&>(equation);
+        const btCollisionObjectWrapper* first = swapped ? planeWrap : gimpactWrap;
+        const btCollisionObjectWrapper* second = swapped ? gimpactWrap : planeWrap;
+        const detail::PlanePointSink add = [&](const btVector3& vertex, btScalar distance) {
+            addContactPoint(first, second, vertex, normal, distance);
+        };
         detail::PlaneCounts counts;
         int& part = swapped ? m_part1 : m_part0;
-        for (part = mesh.getMeshPartCount(); part--;) {
-            planePoints.clear();
-            detail::planePartContacts(*mesh.getMeshPart(part), meshWrap->getWorldTransform(), equation,
-                                      plane.getMargin(), planePoints, counts);
-            for (const detail::PlanePoint& p : planePoints) addContactPoint(first, second, p.vertex, normal, p.distance);
-        }
+        for (part = mesh.getMeshPartCount(); part--;)
+            detail::planePartContacts(*mesh.getMeshPart(part), gimpactWrap->getWorldTransform(), equation,
+                                      plane.getMargin(), add, counts);
         stats.planeVertices += counts.vertices;
         stats.planeVerticesTested += counts.tested;
         if (getLastManifold() != nullptr) m_resultOut->refreshContactPoints();
     }
 
-    static thread_local std::vector<detail::PlanePoint> planePoints;
     static thread_local std::vector<std::array<int, 4>> ordered;  // part0, part1, tri0, tri1
     static thread_local std::vector<detail::MeshContact> contacts;
     static thread_local btAlignedObjectArray<int> candidates;      // Bullet's box query of one mesh part
@@ -599,7 +601,6 @@ public:
     };
 };
 
-thread_local std::vector<detail::PlanePoint> CullideGImpactAlgorithm::planePoints;
 thread_local std::vector<std::array<int, 4>> CullideGImpactAlgorithm::ordered;
 thread_local std::vector<int> CullideGImpactAlgorithm::interleaved;
 thread_local btAlignedObjectArray<int> CullideGImpactAlgorithm::candidates;
@@ -891,10 +892,15 @@ btCollisionAlgorithmCreateFunc* replacementFor(const btCollisionObjectWrapper* b
                              (concave(t0) && t1 == GIMPACT_SHAPE_PROXYTYPE);
     const bool gimpactConvexPair = CullideGImpactAlgorithm::trimeshAgainstConvex(body0Wrap, body1Wrap) ||
                                    CullideGImpactAlgorithm::trimeshAgainstConvex(body1Wrap, body0Wrap);
-    // A GImpact mesh against a plane: Bullet's vertex loop, most vertices ruled out by a cheaper bound first.
+    // A GImpact mesh against a plane: Bullet's vertex loop, most vertices ruled out by a cheaper bound first (where
+    // Bullet's algorithm collides GImpact meshes with planes by their vertices at all).
+#ifdef GIMPACT_VS_PLANE_COLLISION
     const bool gimpactPlanePair =
         (t1 == STATIC_PLANE_PROXYTYPE && CullideGImpactAlgorithm::isGImpactMesh(*body0Wrap)) ||
         (t0 == STATIC_PLANE_PROXYTYPE && CullideGImpactAlgorithm::isGImpactMesh(*body1Wrap));
+#else
+    const bool gimpactPlanePair = false;
+#endif
     if ((gimpactPair || gimpactConvexPair || gimpactPlanePair) && registeredIs<btGImpactCollisionAlgorithm::CreateFunc>(registered))
         return &g_gimpactCreate;
     // Convex-mesh pairs read the culler's triangles only with convex-mesh culling on; otherwise Bullet's own

@@ -19,7 +19,7 @@
 #include <LinearMath/btVector3.h>
 
 #include <cstddef>
-#include <vector>
+#include <functional>
 
 namespace cullide::detail {
 
@@ -49,11 +49,8 @@ private:
     btScalar m_errorOffset;
 };
 
-/// A point of Bullet's plane loop: the vertex in world space and its distance (less the margins).
-struct PlanePoint {
-    btVector3 vertex;
-    btScalar distance;
-};
+/// Receives a point of Bullet's plane loop: the vertex in world space and its distance (less the margins).
+using PlanePointSink = std::function<void(const btVector3& vertex, btScalar distance)>;
 
 /// Vertices of the parts whose box reached the plane (Bullet maps each) and of those, the ones the filter let
 /// through to Bullet's test.
@@ -66,8 +63,9 @@ struct PlaneCounts {
 btVector4 planeEquation(const btStaticPlaneShape& plane, const btTransform& planeTransform);
 
 /// Bullet's points of `part` at `partTransform` against the plane `equation` (planeEquation) with margin
-/// `planeMargin`, in Bullet's order, appended to `out` (nothing when the part's box does not reach the plane).
+/// `planeMargin`, handed to `add` in Bullet's order while the part is locked, as Bullet adds them (nothing when the
+/// part's box does not reach the plane).
 void planePartContacts(const btGImpactMeshShapePart& part, const btTransform& partTransform, const btVector4& equation,
-                       btScalar planeMargin, std::vector<PlanePoint>& out, PlaneCounts& counts);
+                       btScalar planeMargin, const PlanePointSink& add, PlaneCounts& counts);
 
 }  // namespace cullide::detail

@@ -141,7 +141,9 @@ std::vector<btScalar> bitState(TestWorld& w) {
         for (int c = 0; c < m->getNumContacts(); ++c) {
             const btManifoldPoint& p = m->getContactPoint(c);
             for (int k = 0; k < 3; ++k) s.insert(s.end(), {p.m_positionWorldOnB[k], p.m_normalWorldOnB[k]});
+            s.push_back(p.m_normalWorldOnB[3]);  // kept by the manifold as the algorithm gave it
             s.insert(s.end(), {p.getDistance(), btScalar(p.getLifeTime()), p.getAppliedImpulse()});
+            s.insert(s.end(), {btScalar(p.m_partId0), btScalar(p.m_index0), btScalar(p.m_partId1), btScalar(p.m_index1)});
         }
     }
     for (btCollisionObject* o : w.objects()) {

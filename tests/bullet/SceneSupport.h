@@ -61,7 +61,8 @@ MirrorRun runMirrored(TestWorld& reference, TestWorld& cullide, const MirrorOpti
 void printMirrorRun(const char* scene, const MirrorRun& run);
 
 /// Position, orientation and velocities of every body, then every manifold in the dispatcher's order (the order the
-/// solver reads them in) with its points: position, normal, distance, age and impulse. Compared as bits.
+/// solver reads them in) with its points: position, normal (all four components), distance, age, impulse and both
+/// shape identifiers (part, triangle). Compared as bits.
 std::vector<btScalar> bitState(TestWorld& w);
 
 /// Steps `reference` and `w` side by side (not mirrored: each world runs on its own) for all `steps` and returns the

@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <functional>
 #include <memory>
 #include <random>
@@ -172,6 +173,77 @@ TEST(GImpactPlane, ContactsAreBulletsBitForBit) {
     EXPECT_GT(stats.planePairs, 1000u);
     EXPECT_GT(stats.planeVertices, 50000u) << "the bodies lie on the planes";
     EXPECT_LT(stats.planeVerticesTested, stats.planeVertices / 3) << "most vertices are out of reach";
+    // Both pair orders made points: the ground (added first) is body 0 of its pairs, the tilted plane body 1.
+    std::size_t planeFirst = 0, planeSecond = 0;
+    for (int i = 0; i < swap.dispatcher().getNumManifolds(); ++i) {
+        const btPersistentManifold* m = swap.dispatcher().getManifoldByIndexInternal(i);
+        if (m->getNumContacts() == 0) continue;
+        const auto isPlane = [](const btCollisionObject* o) {
+            return o->getCollisionShape()->getShapeType() == STATIC_PLANE_PROXYTYPE;
+        };
+        planeFirst += isPlane(m->getBody0()) ? 1 : 0;
+        planeSecond += isPlane(m->getBody1()) ? 1 : 0;
+    }
+    EXPECT_GT(planeFirst, 0u);
+    EXPECT_GT(planeSecond, 0u);
+}
+
+/// The SSE2 path (packed float vertices) and the one-by-one path (any other stride) must let the same vertices
+/// through: the same points, bit for bit, over many poses of one mesh stored both ways.
+TEST(GImpactPlane, PackedAndStridedVerticesGiveTheSamePoints) {
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> unit(-1, 1);
+    const int rings = 20, segments = 30;
+    std::vector<float> packed, padded;
+    std::vector<int> indices;
+    for (int r = 0; r <= rings; ++r)
+        for (int k = 0; k < segments; ++k) {
+            const double theta = 3.141592653589793 * r / rings, phi = 6.283185307179586 * k / segments;
+            const float v[3] = {float(0.6 * std::sin(theta) * std::cos(phi) + 0.01 * unit(rng)),
+                                float(0.4 * std::cos(theta)), float(0.5 * std::sin(theta) * std::sin(phi))};
+            packed.insert(packed.end(), v, v + 3);
+            padded.insert(padded.end(), {v[0], v[1], v[2], 0.0f});
+        }
+    for (int r = 0; r < rings; ++r)
+        for (int k = 0; k < segments; ++k) {
+            const int a = r * segments + k, b = r * segments + (k + 1) % segments;
+            indices.insert(indices.end(), {a, a + segments, b, b, a + segments, b + segments});
+        }
+    const int vertices = static_cast<int>(packed.size() / 3), triangles = static_cast<int>(indices.size() / 3);
+    btTriangleIndexVertexArray packedArray(triangles, indices.data(), 3 * sizeof(int), vertices, packed.data(),
+                                           3 * sizeof(float));
+    btTriangleIndexVertexArray paddedArray(triangles, indices.data(), 3 * sizeof(int), vertices, padded.data(),
+                                           4 * sizeof(float));
+    btGImpactMeshShape packedShape(&packedArray), paddedShape(&paddedArray);
+    for (btGImpactMeshShape* shape : {&packedShape, &paddedShape}) {
+        shape->setLocalScaling(btVector3(1.3f, 0.7f, 1.1f));
+        shape->updateBound();
+    }
+    const btStaticPlaneShape plane(btVector3(0.2f, 1, -0.1f).normalized(), btScalar(0.3));
+    std::size_t points = 0, tested = 0;
+    for (int pose = 0; pose < 300; ++pose) {
+        const btTransform t(btQuaternion(btVector3(btScalar(unit(rng)), btScalar(unit(rng)), btScalar(unit(rng)))
+                                             .normalized(),
+                                         btScalar(3 * unit(rng))),
+                            btVector3(btScalar(unit(rng)), btScalar(0.3 + 0.5 * unit(rng)), btScalar(unit(rng))));
+        const btVector4 equation = detail::planeEquation(plane, btTransform::getIdentity());
+        std::vector<btScalar> got[2];
+        detail::PlaneCounts counts[2];
+        for (int way = 0; way < 2; ++way) {
+            const btGImpactMeshShape& shape = way == 0 ? packedShape : paddedShape;
+            detail::planePartContacts(
+                *shape.getMeshPart(0), t, equation, plane.getMargin(),
+                [&](const btVector3& v, btScalar d) { got[way].insert(got[way].end(), {v[0], v[1], v[2], d}); },
+                counts[way]);
+        }
+        ASSERT_EQ(got[0].size(), got[1].size()) << "pose " << pose;
+        EXPECT_EQ(std::memcmp(got[0].data(), got[1].data(), got[0].size() * sizeof(btScalar)), 0) << "pose " << pose;
+        EXPECT_EQ(counts[0].tested, counts[1].tested) << "pose " << pose;
+        points += got[0].size() / 4;
+        tested += counts[0].tested;
+    }
+    EXPECT_GT(points, 1000u);
+    EXPECT_GT(tested, points);
 }
 
 /// A mesh deformed every step while it rests on the plane: `factor` gives its size (from its shape as made) step by
