@@ -170,6 +170,10 @@ public:
             processWithConvex(body0Wrap, body1Wrap, dispatchInfo, resultOut);
             return;
         }
+        if (trimeshAgainstPlane(body0Wrap, body1Wrap) || trimeshAgainstPlane(body1Wrap, body0Wrap)) {
+            processWithPlane(body0Wrap, body1Wrap, dispatchInfo, resultOut);
+            return;
+        }
         if (body0Wrap->getCollisionShape()->getShapeType() != GIMPACT_SHAPE_PROXYTYPE ||
             body1Wrap->getCollisionShape()->getShapeType() != GIMPACT_SHAPE_PROXYTYPE) {
             processWithMesh(body0Wrap, body1Wrap, dispatchInfo, resultOut);
@@ -312,6 +316,18 @@ public:
     static bool trimeshAgainstConvex(const btCollisionObjectWrapper* mesh, const btCollisionObjectWrapper* convex) {
         const btCollisionShape* c = convex->getCollisionShape();
         return isGImpactMesh(*mesh) && c->isConvex() && !c->isCompound();
+    }
+
+    /// A GImpact triangle mesh (`mesh`) against a static plane (`plane`), where Bullet's algorithm collides the two by
+    /// the mesh's vertices (GIMPACT_VS_PLANE_COLLISION).
+    static bool trimeshAgainstPlane(const btCollisionObjectWrapper* mesh, const btCollisionObjectWrapper* plane) {
+#ifdef GIMPACT_VS_PLANE_COLLISION
+        return isGImpactMesh(*mesh) && plane->getCollisionShape()->getShapeType() == STATIC_PLANE_PROXYTYPE;
+#else
+        (void)mesh;
+        (void)plane;
+        return false;
+#endif
     }
 
 private:
@@ -462,9 +478,9 @@ private:
         stats.convexUnchecked += counts.unchecked;
     }
 
-    /// GImpact against a shape that is neither GImpact nor convex (either order). A GImpact mesh against a plane:
-    /// processWithPlane (Bullet's contacts). A concave shape but a plane: processWithConcave (Bullet's contacts), or,
-    /// for a pair culled with setGImpactMeshCulling, Bullet's processCollision with a stand-in mesh that enumerates
+    /// GImpact against a shape that is neither GImpact nor convex (either order), but not a GImpact mesh against a
+    /// plane (processWithPlane). A concave shape but a plane: processWithConcave (Bullet's contacts), or, for a pair
+    /// culled with setGImpactMeshCulling, Bullet's processCollision with a stand-in mesh that enumerates
     /// the surviving triangles (mesh-local vertices as processAllTriangles yields them, same margin). Anything else
     /// (compounds, planes against GImpact compounds or lone parts): Bullet's.
     void processWithMesh(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
@@ -476,10 +492,6 @@ private:
         const bool gimpactFirst = body0Wrap->getCollisionShape()->getShapeType() == GIMPACT_SHAPE_PROXYTYPE;
         const btCollisionObjectWrapper* gimpactWrap = gimpactFirst ? body0Wrap : body1Wrap;
         const btCollisionObjectWrapper* meshWrap = gimpactFirst ? body1Wrap : body0Wrap;
-        if (meshWrap->getCollisionShape()->getShapeType() == STATIC_PLANE_PROXYTYPE && isGImpactMesh(*gimpactWrap)) {
-            processWithPlane(gimpactWrap, meshWrap, !gimpactFirst, dispatchInfo, resultOut, stats);
-            return;
-        }
         if (!meshWrap->getCollisionShape()->isConcave() ||
             meshWrap->getCollisionShape()->getShapeType() == STATIC_PLANE_PROXYTYPE) {
             // A compound, a plane against a GImpact compound or lone part, ...: Bullet's algorithm as it is.
@@ -514,14 +526,18 @@ private:
 
     /// GImpact mesh against a static plane (either order): Bullet's gimpact_vs_shape for a mesh and a plane — each
     /// part, last to first, through its vertex loop (gimpacttrimeshpart_vs_plane_collision) — with the vertices
-    /// that cannot make a point ruled out first (GImpactPlaneContacts.h). Same points, same order.
-    void processWithPlane(const btCollisionObjectWrapper* gimpactWrap, const btCollisionObjectWrapper* planeWrap,
-                          bool swapped, const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut,
-                          CullideDispatchStats& stats) {
+    /// that cannot make a point ruled out first (GImpactPlaneContacts.h). Same points, same order. The culler keeps
+    /// no record for these pairs: none is looked up.
+    void processWithPlane(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
+                          const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut) {
         clearCache();
         m_resultOut = resultOut;
         m_dispatchInfo = &dispatchInfo;
+        CullideDispatchStats& stats = detail::AdapterAccess::currentStats(cullideDispatcher(m_dispatcher));
         ++stats.planePairs;
+        const bool swapped = !isGImpactMesh(*body0Wrap);  // the plane is the pair's first body
+        const btCollisionObjectWrapper* gimpactWrap = swapped ? body1Wrap : body0Wrap;
+        const btCollisionObjectWrapper* planeWrap = swapped ? body0Wrap : body1Wrap;
         const auto& mesh = *static_cast<const btGImpactMeshShape*>(gimpactWrap->getCollisionShape());
         const auto& plane = *static_cast<const btStaticPlaneShape*>(planeWrap->getCollisionShape());
         const btVector4 equation = detail::planeEquation(plane, planeWrap->getWorldTransform());
@@ -529,10 +545,8 @@ private:
         // manifold point's normal), or its negation (fourth component 0) for a plane that is the pair's first body.
         const btVector3 flipped = -static_cast<const btVector3&>(equation);
         const btVector3& normal = swapped ? flipped : static_cast<const btVector3&>(equation);
-        const btCollisionObjectWrapper* first = swapped ? planeWrap : gimpactWrap;
-        const btCollisionObjectWrapper* second = swapped ? gimpactWrap : planeWrap;
         const detail::PlanePointSink add = [&](const btVector3& vertex, btScalar distance) {
-            addContactPoint(first, second, vertex, normal, distance);
+            addContactPoint(body0Wrap, body1Wrap, vertex, normal, distance);
         };
         detail::PlaneCounts counts;
         int& part = swapped ? m_part1 : m_part0;
@@ -892,16 +906,11 @@ btCollisionAlgorithmCreateFunc* replacementFor(const btCollisionObjectWrapper* b
                              (concave(t0) && t1 == GIMPACT_SHAPE_PROXYTYPE);
     const bool gimpactConvexPair = CullideGImpactAlgorithm::trimeshAgainstConvex(body0Wrap, body1Wrap) ||
                                    CullideGImpactAlgorithm::trimeshAgainstConvex(body1Wrap, body0Wrap);
-    // A GImpact mesh against a plane: Bullet's vertex loop, most vertices ruled out by a cheaper bound first (where
-    // Bullet's algorithm collides GImpact meshes with planes by their vertices at all).
-#ifdef GIMPACT_VS_PLANE_COLLISION
-    const bool gimpactPlanePair =
-        (t1 == STATIC_PLANE_PROXYTYPE && CullideGImpactAlgorithm::isGImpactMesh(*body0Wrap)) ||
-        (t0 == STATIC_PLANE_PROXYTYPE && CullideGImpactAlgorithm::isGImpactMesh(*body1Wrap));
-#else
-    const bool gimpactPlanePair = false;
-#endif
-    if ((gimpactPair || gimpactConvexPair || gimpactPlanePair) && registeredIs<btGImpactCollisionAlgorithm::CreateFunc>(registered))
+    // A GImpact mesh against a plane: Bullet's vertex loop, most vertices ruled out by a cheaper bound first.
+    const bool gimpactPlanePair = CullideGImpactAlgorithm::trimeshAgainstPlane(body0Wrap, body1Wrap) ||
+                                  CullideGImpactAlgorithm::trimeshAgainstPlane(body1Wrap, body0Wrap);
+    if ((gimpactPair || gimpactConvexPair || gimpactPlanePair) &&
+        registeredIs<btGImpactCollisionAlgorithm::CreateFunc>(registered))
         return &g_gimpactCreate;
     // Convex-mesh pairs read the culler's triangles only with convex-mesh culling on; otherwise Bullet's own
     // algorithm runs them without a record lookup per pair and step.
