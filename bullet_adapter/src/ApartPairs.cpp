@@ -3,8 +3,11 @@
 
 #include <BulletCollision/BroadphaseCollision/btCollisionAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btCollisionObject.h>
+#include <BulletCollision/CollisionDispatch/btSphereSphereCollisionAlgorithm.h>
 #include <BulletCollision/CollisionShapes/btCollisionShape.h>
 #include <BulletCollision/NarrowPhaseCollision/btPersistentManifold.h>
+
+#include <typeinfo>
 
 namespace cullide::bullet {
 namespace {
@@ -37,6 +40,25 @@ btScalar currentGapSquared(const btBroadphaseProxy& proxy0, const btCollisionObj
     return boxDistanceSquared(min0, max0, min1, max1);
 }
 
+/// What the pair's algorithm does to its manifolds in a run that finds no point: btSphereSphereCollisionAlgorithm
+/// clears its manifold (Bullet builds it with CLEAR_MANIFOLD); every other algorithm that may be skipped refreshes
+/// it at the end of its run (btManifoldResult::refreshContactPoints: each point moved with the two objects, then
+/// dropped when its distance along the normal exceeds the manifold's threshold or it drifted sideways by more).
+/// A refresh keeps a point whose objects went through each other along its normal (a negative distance, little
+/// drift: a fast body through a thin plate, a trigger falling through a trigger), so such a point stays, as in
+/// Bullet.
+void finishAsBullet(const btCollisionAlgorithm& algorithm, btManifoldArray& manifolds) {
+    const bool clears = typeid(algorithm) == typeid(btSphereSphereCollisionAlgorithm);
+    for (int i = 0; i < manifolds.size(); ++i) {
+        btPersistentManifold& m = *manifolds[i];
+        if (m.getNumContacts() == 0) continue;
+        if (clears)
+            m.clearManifold();
+        else  // the objects' transforms in the manifold's own order, as btManifoldResult picks them
+            m.refreshContactPoints(m.getBody0()->getWorldTransform(), m.getBody1()->getWorldTransform());
+    }
+}
+
 }  // namespace
 
 btScalar boxDistanceSquared(const btVector3& min0, const btVector3& max0, const btVector3& min1,
@@ -57,7 +79,7 @@ btScalar manifoldBreakingThreshold(const btCollisionDispatcher& dispatcher, cons
                  object1.getCollisionShape()->getContactBreakingThreshold(gContactBreakingThreshold));
 }
 
-bool clearIfApart(btBroadphasePair& pair, btCollisionDispatcher& dispatcher, btManifoldArray& scratch) {
+bool skipIfApart(btBroadphasePair& pair, btCollisionDispatcher& dispatcher, btManifoldArray& scratch) {
     if (pair.m_algorithm == nullptr) return false;  // first dispatch of the pair: made as Bullet makes it
     const btBroadphaseProxy& proxy0 = *pair.m_pProxy0;
     const btBroadphaseProxy& proxy1 = *pair.m_pProxy1;
@@ -82,8 +104,7 @@ bool clearIfApart(btBroadphasePair& pair, btCollisionDispatcher& dispatcher, btM
         const btScalar own = scratch[i]->getContactBreakingThreshold();
         if (!(gap2 > own * own)) return false;
     }
-    for (int i = 0; i < scratch.size(); ++i)
-        if (scratch[i]->getNumContacts() > 0) scratch[i]->clearManifold();
+    finishAsBullet(*pair.m_algorithm, scratch);
     return true;
 }
 

@@ -6,9 +6,12 @@
 // contact point: every algorithm adds its points through btManifoldResult::addContactPoint, which drops a point
 // deeper than the manifold's contact breaking threshold t, and the boxes contain the shapes (with their margins),
 // so the shapes are at least as far apart as the boxes. The dispatcher therefore skips the algorithm of a pair whose
-// boxes are more than t apart and clears the points its manifolds still hold — the points a refresh would drop, and
-// that btAxisSweep3 drops with the pair — so the narrow phase costs what btAxisSweep3's does, while the pair cache,
-// and so the simulation islands, stay btDbvtBroadphase's.
+// boxes are more than t apart and does to its manifolds what the algorithm's run would have done with no point found:
+// btSphereSphereCollisionAlgorithm clears its manifold, the others refresh theirs (each point moved with the objects,
+// dropped beyond t along its normal or drifted sideways by more than t). Most such points are dropped; a point whose
+// objects went through each other along its normal (a negative distance: a fast body through a thin plate, a
+// trigger through a trigger) stays, as in Bullet. So the narrow phase costs about what btAxisSweep3's does, while the
+// pair cache, and so the simulation islands and every manifold point, stay btDbvtBroadphase's.
 //
 // Left to Bullet's own near callback (the algorithm runs as in Bullet): pairs the dispatch would not collide
 // (needsCollision: sleeping contacts keep their points), a pair never processed yet (its algorithm and manifold are
@@ -45,10 +48,10 @@ btScalar manifoldBreakingThreshold(const btCollisionDispatcher& dispatcher, cons
 /// If the pair's algorithm can be skipped — both objects rigid bodies or plain collision objects, neither with a
 /// GImpact shape, an algorithm already made that would make or free no manifold there, and their boxes (an inactive
 /// object's from its shape at its transform) more than the breaking threshold of the pair (and of every manifold its
-/// algorithm holds) apart — clears the points of its
-/// manifolds (Bullet's contact-destroyed callbacks run as for a refresh) and returns true. Otherwise changes
-/// nothing. `scratch` is reused between calls. Pairs the dispatch would not collide (`needsCollision`) are left
-/// alone. The caller checks the rest: discrete dispatch, Bullet's own near callback.
-bool clearIfApart(btBroadphasePair& pair, btCollisionDispatcher& dispatcher, btManifoldArray& scratch);
+/// algorithm holds) apart — gives its manifolds the refresh (or, for two spheres, the clearing) that the algorithm's
+/// run would give them (Bullet's contact callbacks run as there) and returns true. Otherwise changes nothing.
+/// `scratch` is reused between calls. Pairs the dispatch would not collide (`needsCollision`) are left alone. The
+/// caller checks the rest: discrete dispatch, Bullet's own near callback.
+bool skipIfApart(btBroadphasePair& pair, btCollisionDispatcher& dispatcher, btManifoldArray& scratch);
 
 }  // namespace cullide::bullet

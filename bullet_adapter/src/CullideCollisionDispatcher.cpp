@@ -24,6 +24,8 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <stdexcept>
+#include <string>
 #include <thread>
 #include <typeinfo>
 #include <unordered_map>
@@ -704,7 +706,7 @@ public:
                  bullet::PairStream* stream)
         : m_dispatcher(dispatcher), m_info(info), m_threadable(threadable), m_stream(stream) {}
     bool processOverlap(btBroadphasePair& pair) override {
-        if (bullet::clearIfApart(pair, m_dispatcher, m_scratch)) {
+        if (bullet::skipIfApart(pair, m_dispatcher, m_scratch)) {
             ++skipped;
             return false;
         }
@@ -763,6 +765,9 @@ CullideCollisionDispatcher::CullideCollisionDispatcher(detail::PrecisionChecked,
       m_meshContacts(std::make_unique<detail::MeshContactBatch>()) {}
 
 void CullideCollisionDispatcher::setNarrowPhaseThreads(unsigned threads) {
+    if (threads > kMaxNarrowPhaseThreads)
+        throw std::invalid_argument("CullideCollisionDispatcher::setNarrowPhaseThreads: " + std::to_string(threads) +
+                                    " threads requested, at most " + std::to_string(kMaxNarrowPhaseThreads));
     if (threads == m_threads) return;
     m_threads = threads;
     m_pool.reset();

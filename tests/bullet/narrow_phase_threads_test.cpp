@@ -30,6 +30,7 @@
 #include <memory>
 #include <mutex>
 #include <set>
+#include <stdexcept>
 #include <thread>
 #include <vector>
 
@@ -181,6 +182,19 @@ struct CompoundScene {
 
     void populate(TestWorld& w) const { Drop{5, 1.4, 1.3, 0.41}.populate(w, landscape, field, kinds); }
 };
+
+// A thread count is an application's setting: beyond the bound it throws (as cullide::Settings::threads does) and
+// leaves the dispatcher as it was, instead of starting that many threads at the next step.
+TEST(NarrowPhaseThreads, TooManyThreadsThrowAndLeaveTheSetting) {
+    btDefaultCollisionConfiguration config;
+    CullideCollisionDispatcher dispatcher(&config);
+    dispatcher.setNarrowPhaseThreads(3);
+    for (const unsigned threads : {CullideCollisionDispatcher::kMaxNarrowPhaseThreads + 1, 4294967295u})
+        EXPECT_THROW(dispatcher.setNarrowPhaseThreads(threads), std::invalid_argument) << threads;
+    EXPECT_EQ(dispatcher.getNarrowPhaseThreads(), 3u);
+    dispatcher.setNarrowPhaseThreads(CullideCollisionDispatcher::kMaxNarrowPhaseThreads);  // the bound itself holds
+    EXPECT_EQ(dispatcher.getNarrowPhaseThreads(), CullideCollisionDispatcher::kMaxNarrowPhaseThreads);
+}
 
 TEST(NarrowPhaseThreads, CompoundsMoveBitForBitAsInBulletForEveryThreadCount) {
     expectBitForBit(CompoundScene{}, {1u, 2u, 5u}, 200, [](TestWorld& w, unsigned threads) {

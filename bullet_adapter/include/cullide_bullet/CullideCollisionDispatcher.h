@@ -135,8 +135,10 @@ public:
     /// manifold in Bullet's order; and pairs whose Bullet algorithm touches only its own manifold (convex GJK pairs,
     /// convex against a BVH mesh or heightfield) run on the pool while the calling thread runs the others in the
     /// cache's order. The manifolds are the same bit for bit for every thread count: manifolds are made and freed,
-    /// Bullet's pools used and the application's callbacks called on the calling thread only.
+    /// Bullet's pools used and the application's callbacks called on the calling thread only. More than
+    /// kMaxNarrowPhaseThreads throws std::invalid_argument (the setting is left as it was).
     void setNarrowPhaseThreads(unsigned threads);
+    static constexpr unsigned kMaxNarrowPhaseThreads = 256;  ///< as cullide::Settings::threads
     unsigned getNarrowPhaseThreads() const { return m_threads; }
 
 private:
