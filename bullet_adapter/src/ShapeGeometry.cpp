@@ -239,11 +239,22 @@ void buildTriangleMesh(const btStridingMeshInterface& mesh, ShapeTriangles& out)
     }
 }
 
-void buildConvexHull(const btConvexHullShape& hull, ShapeTriangles& out) {
+/// Whether a coordinate is one the culler's geometry can take: finite and within 1e15 (btConvexHullComputer maps
+/// points to integers and crashes on a NaN; beyond that the culler's exact arithmetic has no headroom).
+bool usableCoordinate(btScalar c) { return std::isfinite(double(c)) && std::fabs(double(c)) <= 1e15; }
+
+/// The hull's triangles (its points' convex hull, as Bullet's btConvexHullComputer builds it); false, and `out`
+/// unchanged, when a scaled point has an unusable coordinate: such a hull gets no triangles, so its pairs are not
+/// culled and run Bullet's own algorithm.
+bool buildConvexHull(const btConvexHullShape& hull, ShapeTriangles& out) {
     const int n = hull.getNumPoints();
     btAlignedObjectArray<btVector3> points;
     points.resize(n);
-    for (int i = 0; i < n; ++i) points[i] = hull.getScaledPoint(i);
+    for (int i = 0; i < n; ++i) {
+        points[i] = hull.getScaledPoint(i);
+        for (int a = 0; a < 3; ++a)
+            if (!usableCoordinate(points[i][a])) return false;
+    }
     btConvexHullComputer computer;
     computer.compute(points[0].m_floats, static_cast<int>(sizeof(btVector3)), n, 0, 0);
     for (int v = 0; v < computer.vertices.size(); ++v) out.vertices.push_back(computer.vertices[v]);
@@ -262,6 +273,7 @@ void buildConvexHull(const btConvexHullShape& hull, ShapeTriangles& out) {
         }
     }
     out.margin = hull.getMargin();
+    return true;
 }
 
 /// Appends `part` (triangles in its own frame) to `out`, placed by `t`.
@@ -295,15 +307,13 @@ bool buildCompound(const btCompoundShape& compound, const btTransform& placement
         } else if (child->getShapeType() == CONVEX_HULL_SHAPE_PROXYTYPE &&
                    static_cast<const btConvexHullShape*>(child)->getNumPoints() > 0) {
             ShapeTriangles hull;
-            buildConvexHull(*static_cast<const btConvexHullShape*>(child), hull);
+            if (!buildConvexHull(*static_cast<const btConvexHullShape*>(child), hull)) return false;
             appendPlaced(hull, t, out);
         } else if (child->isConvex()) {
             btVector3 mn, mx;  // the child's local box, its collision margin included
             child->getAabb(btTransform::getIdentity(), mn, mx);
             for (int a = 0; a < 3; ++a)
-                if (!std::isfinite(double(mn[a])) || !std::isfinite(double(mx[a])) || std::fabs(double(mn[a])) > 1e15 ||
-                    std::fabs(double(mx[a])) > 1e15)
-                    return false;
+                if (!usableCoordinate(mn[a]) || !usableCoordinate(mx[a])) return false;
             appendBox(mn, mx, t, out);
         } else {
             return false;  // a concave child (mesh, plane, heightfield): the compound stays a box proxy
@@ -363,7 +373,7 @@ std::shared_ptr<ShapeTriangles> buildShapeTriangles(const btCollisionShape* shap
         case GeometryKind::ConvexHull: {
             const auto* hull = static_cast<const btConvexHullShape*>(shape);
             out->sourceCount = hull->getNumPoints();
-            if (out->sourceCount > 0) buildConvexHull(*hull, *out);
+            if (out->sourceCount > 0 && !buildConvexHull(*hull, *out)) return nullptr;
             break;
         }
         case GeometryKind::Compound: {

@@ -174,6 +174,60 @@ TEST(BulletContract, NonFiniteAabbRejectedOnceOthersUnaffected) {
     EXPECT_GE(pairsOfFixed, 2);
 }
 
+// A convex hull with a NaN or a huge point (its box still finite: Bullet's support mapping skips the NaN) has no
+// triangles for the culler: btConvexHullComputer, which builds them, crashes on a NaN. Its pairs are not culled and
+// run Bullet's own algorithm, so the world moves as Bullet's, bit for bit — with every culling switch on, the hull
+// alone and as a compound's child, on a BVH mesh and on a GImpact mesh.
+TEST(BulletContract, HullsWithUnusablePointsRunBulletsAlgorithms) {
+    ShapeStore shapes;
+    btCollisionShape* ground = shapes.landscape(8, btScalar(1), btScalar(0.2));
+    btCollisionShape* gimpactGround = shapes.gimpactTorus(btScalar(3), btScalar(0.8), 24, 12, btScalar(0.04));
+    std::vector<std::unique_ptr<btCollisionShape>> own;
+    const auto badHull = [&](btScalar bad) {
+        auto hull = std::make_unique<btConvexHullShape>();
+        for (int i = 0; i < 10; ++i)
+            hull->addPoint(btVector3(btScalar(std::cos(1.1 * i)), btScalar(std::sin(0.7 * i)), btScalar(std::cos(2.3 * i))) *
+                               btScalar(0.4),
+                           false);
+        hull->addPoint(btVector3(bad, btScalar(0.1), btScalar(0.1)), false);
+        hull->recalcLocalAabb();
+        own.push_back(std::move(hull));
+        return static_cast<btConvexHullShape*>(own.back().get());
+    };
+    btConvexHullShape* nanHull = badHull(std::numeric_limits<btScalar>::quiet_NaN());
+    btConvexHullShape* hugeHull = badHull(btScalar(1e30));
+    auto compound = std::make_unique<btCompoundShape>();
+    compound->addChildShape(btTransform::getIdentity(), nanHull);
+    const auto populate = [&](TestWorld& w) {
+        btGImpactCollisionAlgorithm::registerAlgorithm(&w.dispatcher());
+        w.addBody(ground, 0, btTransform(btQuaternion::getIdentity(), btVector3(-4, 0, -4)));
+        w.addBody(gimpactGround, 0, btTransform(btQuaternion(btVector3(1, 0, 0), SIMD_HALF_PI), btVector3(10, 0, 0)));
+        for (int k = 0; k < 2; ++k) {
+            const btScalar x = btScalar(10 * k);
+            btCollisionShape* bad = k == 0 ? static_cast<btCollisionShape*>(nanHull) : hugeHull;
+            w.addBody(bad, 1, btTransform(btQuaternion::getIdentity(), btVector3(x, btScalar(1.2), btScalar(0.3))));
+            w.addBody(compound.get(), 1, btTransform(btQuaternion::getIdentity(), btVector3(x, btScalar(1.2), 2)));
+        }
+    };
+    TestWorld reference(PipelineKind::Default);
+    TestWorld swap(PipelineKind::Cullide, referenceFactory());
+    CullideBroadphase& broadphase = *swap.cullideBroadphase();
+    broadphase.setConvexMeshCulling(true);
+    broadphase.setGImpactConvexCulling(true);
+    broadphase.setGImpactMeshCulling(true);
+    broadphase.setGImpactPairCulling(true);
+    populate(reference);
+    populate(swap);
+    int differing = -1;
+    std::size_t culled = 0;  // pairs of the bad hulls with the grounds that went through a culling frame
+    for (int step = 0; step < 60; ++step) {
+        if (firstDifferingStep(reference, swap, 1) >= 0 && differing < 0) differing = step;
+        culled += broadphase.getLastFrameStats().culledPairs;
+    }
+    EXPECT_EQ(differing, -1);
+    EXPECT_GT(culled, 0u) << "the culler must see the hulls (before the fix, its frame crashed on the NaN)";
+}
+
 TEST(BulletContract, PrecisionGuardAndAlgorithmPool) {
     EXPECT_EQ(detail::bulletScalarSizeOfLibrary(), int(sizeof(btScalar)));
     EXPECT_NO_THROW(detail::requireMatchingBulletPrecision());
