@@ -5,6 +5,7 @@
 #include <BulletCollision/CollisionDispatch/btCollisionObject.h>
 #include <BulletCollision/CollisionDispatch/btSphereSphereCollisionAlgorithm.h>
 #include <BulletCollision/CollisionShapes/btCollisionShape.h>
+#include <BulletCollision/CollisionShapes/btCylinderShape.h>
 #include <BulletCollision/NarrowPhaseCollision/btPersistentManifold.h>
 
 #include <typeinfo>
@@ -26,6 +27,19 @@ bool gimpact(const btCollisionObject& object) {
 /// heights), so its box proves nothing.
 bool boxDeclared(const btCollisionObject& object) {
     return object.getCollisionShape()->getShapeType() == TERRAIN_SHAPE_PROXYTYPE;
+}
+
+/// A btCylinderShape (any axis) whose second radial half extent is smaller than the one Bullet's support mapping
+/// takes as its radius: the shape reaches beyond its own box along that axis, and Bullet's GJK finds the points
+/// there that btDbvtBroadphase's fattened leaves pair.
+bool outsideOwnBox(const btCollisionObject& object) {
+    const btCollisionShape& shape = *object.getCollisionShape();
+    if (shape.getShapeType() != CYLINDER_SHAPE_PROXYTYPE) return false;
+    const auto& cylinder = static_cast<const btCylinderShape&>(shape);
+    const btVector3 half = cylinder.getHalfExtentsWithoutMargin();
+    const int up = cylinder.getUpAxis();
+    const int radius = up == 0 ? 1 : 0;  // btCylinderShapeX: y; btCylinderShape (y up) and btCylinderShapeZ: x
+    return half[3 - up - radius] < half[radius];
 }
 
 /// The pair's box distance, squared, with each box current: an active object's proxy box (the world refreshes it
@@ -93,6 +107,7 @@ bool skipIfApart(btBroadphasePair& pair, btCollisionDispatcher& dispatcher, btMa
         return false;
     if (!rigidOrPlain(*object0) || !rigidOrPlain(*object1) ||
         gimpact(*object0) || gimpact(*object1) || boxDeclared(*object0) || boxDeclared(*object1) ||
+        outsideOwnBox(*object0) || outsideOwnBox(*object1) ||
         !dispatcher.needsCollision(object0, object1) || !freesNoManifoldWhenApart(*pair.m_algorithm))
         return false;
     const btScalar gap2 = currentGapSquared(proxy0, *object0, proxy1, *object1);

@@ -17,7 +17,9 @@
 // (needsCollision: sleeping contacts keep their points), a pair never processed yet (its algorithm and manifold are
 // made as in Bullet), soft bodies and other non-rigid objects, GImpact shapes (Bullet's clip method can report points
 // from triangle boxes that overlap only in its own box test; CULLIDE's records decide those pairs), heightfields
-// (their box is the height range the application declares, which its data may exceed), algorithms whose run there
+// (their box is the height range the application declares, which its data may exceed), cylinders whose radial half
+// extents differ (Bullet's support mapping takes one as the radius on both radial axes, its box each on its own
+// axis, so they reach beyond their box), algorithms whose run there
 // could make or free a manifold (freesNoManifoldWhenApart: a compound algorithm that still holds child algorithms
 // frees them, and with them their manifolds, which reorders the dispatcher's manifolds as the solver reads them;
 // algorithms other than Bullet's convex ones), and every pair when the application installed its own near callback.

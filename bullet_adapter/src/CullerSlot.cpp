@@ -14,7 +14,8 @@ CullerSlot::CullerSlot(const Settings& settings, Factory factory, double default
     if (!m_factory) m_factory = [](const Settings& s) { return createGpuCuller(s); };
     const std::string error = m_settings.validate();
     if (!error.empty()) throw std::invalid_argument("cullide::CullideBroadphase: invalid settings: " + error);
-    make(m_settings.margin > 0.0 ? m_settings.margin : defaultMargin);
+    const bool gpuDemanded = m_settings.gpuLevels == GpuLevels::Always || m_settings.pipeline == Pipeline::Paper;
+    if (gpuDemanded) make(m_settings.margin > 0.0 ? m_settings.margin : defaultMargin);
 }
 
 /// Replaces the culler by one with margin d; on failure (throws) the current culler stays as it was.
@@ -30,13 +31,19 @@ void CullerSlot::make(double d) {
 }
 
 bool CullerSlot::ready(double required, std::uint64_t step) {
+    if (m_culler == nullptr && m_firstFailed) return false;
     try {
+        // With no culler yet (margin 0) the policy always gives a margin: the one the frame needs.
         if (const auto d = cullingMarginToMake(required, m_margin, m_settings.margin, step, m_shrinkFailed)) make(*d);
         return true;
     } catch (const std::exception& e) {
         reportFailure(e);
+        if (m_culler == nullptr) {
+            m_firstFailed = true;
+            return false;
+        }
         // A culler that could not be made smaller is still sound; one whose margin is too small is not.
-        const bool usable = m_culler != nullptr && required <= m_margin;
+        const bool usable = required <= m_margin;
         if (usable) m_shrinkFailed = true;
         return usable;
     }

@@ -33,8 +33,8 @@ using bullet::shapeOf;
 /// AABB coordinates beyond this are "infinite" (btStaticPlaneShape reports +-BT_LARGE_FLOAT = 1e18 in float builds):
 /// such objects are never handed to the culler; their pairs go to Bullet's algorithms as they are.
 constexpr double kInfiniteCoordinate = 1e15;
-/// Used for the constructor's culler when Settings::margin is 0 (it must exist to report a missing GL device at
-/// construction); the first step recreates it with exactly the margin the scene needs (cullingMarginToMake).
+/// The margin of a culler made at construction (settings that demand GPU levels, CullerSlot.h) when Settings::margin
+/// is 0; the first step recreates it with exactly the margin the scene needs (cullingMarginToMake).
 constexpr double kDefaultMargin = 0.12;
 
 bool infiniteBox(const btBroadphaseProxy* p) {

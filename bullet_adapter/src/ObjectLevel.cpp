@@ -4,7 +4,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <limits>
 
 namespace cullide::bullet {
 namespace {
@@ -15,11 +14,14 @@ bool finiteBox(const btVector3& mn, const btVector3& mx) {
     return true;
 }
 
-/// Where a proxy with a non-finite AABB waits in the tree: a point beyond every finite box Bullet makes (planes
-/// reach BT_LARGE_FLOAT), so it keeps the tree's volumes finite and meets no valid object.
-btVector3 parkedPoint() {
-    const btScalar far = std::numeric_limits<btScalar>::max() / btScalar(4);
-    return btVector3(far, far, far);
+/// Where the parked proxy in slot `slot` waits in the tree: a point beyond every finite box Bullet makes (planes reach
+/// BT_LARGE_FLOAT, 1e18 in float builds), 2^125 ~ 4e37 on each axis, so it keeps the tree's volumes finite and meets
+/// no valid object; each slot at its own z (2^104 apart: distinct floats), so parked proxies do not meet each other
+/// either, whatever their filters. Slots beyond 2^21 share points (then only the filter mask keeps them apart).
+btVector3 parkedPoint(std::size_t slot) {
+    const btScalar far = btScalar(std::ldexp(1.0, 125));
+    const double step = std::ldexp(1.0, 104);
+    return btVector3(far, far, btScalar(std::ldexp(1.0, 125) + double(slot % (std::size_t{1} << 21)) * step));
 }
 
 std::string boxText(const btVector3& mn, const btVector3& mx) {
@@ -37,22 +39,30 @@ ObjectLevel::ObjectLevel(btOverlappingPairCache* pairCache)
 void ObjectLevel::replace(std::unique_ptr<btBroadphaseInterface> level) {
     m_tree = std::move(level);
     m_parked.clear();
+    m_freeSlots.clear();
+    m_slotCount = 0;
+    m_ownTree = false;
 }
 
 btBroadphaseProxy* ObjectLevel::createProxy(const btVector3& mn, const btVector3& mx, int shapeType, void* userPtr,
                                             int group, int mask, btDispatcher* dispatcher) {
     const bool finite = finiteBox(mn, mx);
-    const btVector3 point = parkedPoint();
+    const std::size_t slot = nextSlot();
+    const btVector3 point = parkedPoint(slot);
     btBroadphaseProxy* p =
         m_tree->createProxy(finite ? mn : point, finite ? mx : point, shapeType, userPtr, group, mask, dispatcher);
     ++m_proxyCount;
-    if (!finite) park(p, "createProxy", boxText(mn, mx), dispatcher);
+    if (!finite) park(p, "createProxy", boxText(mn, mx), dispatcher, slot);
     return p;
+}
+
+std::size_t ObjectLevel::nextSlot() const {
+    return m_freeSlots.empty() ? m_slotCount : m_freeSlots.back();
 }
 
 void ObjectLevel::setAabb(btBroadphaseProxy* p, const btVector3& mn, const btVector3& mx, btDispatcher* dispatcher) {
     if (!finiteBox(mn, mx)) {
-        park(p, "setAabb", boxText(mn, mx), dispatcher);
+        park(p, "setAabb", boxText(mn, mx), dispatcher, nextSlot());
         return;
     }
     unpark(p);
@@ -65,14 +75,21 @@ void ObjectLevel::destroyProxy(btBroadphaseProxy* p, btDispatcher* dispatcher) {
     --m_proxyCount;
 }
 
-/// No pairs, a mask of 0 so that none are made, reported once per parking.
-void ObjectLevel::park(btBroadphaseProxy* p, const char* where, const std::string& why, btDispatcher* dispatcher) {
+/// No pairs: the proxy waits at its slot's far point, where it meets nothing; reported once per parking. Bullet's
+/// own btDbvtBroadphase compares those points as they are, so the application's filter mask is left alone; a replaced
+/// object level (a btAxisSweep3 clamps every far point onto its world box's corner) gets a mask of 0 while parked.
+void ObjectLevel::park(btBroadphaseProxy* p, const char* where, const std::string& why, btDispatcher* dispatcher,
+                       std::size_t slot) {
     ++m_parkCalls;
-    const auto [it, added] = m_parked.emplace(p, p->m_collisionFilterMask);
-    const btVector3 point = parkedPoint();
-    m_tree->setAabb(p, point, point, dispatcher);
-    if (!added) return;
-    p->m_collisionFilterMask = 0;
+    const auto found = m_parked.find(p);
+    if (found != m_parked.end()) {  // parked already: stays where it waits
+        m_tree->setAabb(p, parkedPoint(found->second.slot), parkedPoint(found->second.slot), dispatcher);
+        return;
+    }
+    takeSlot(slot);
+    m_parked.emplace(p, Parked{slot, p->m_collisionFilterMask});
+    m_tree->setAabb(p, parkedPoint(slot), parkedPoint(slot), dispatcher);
+    if (!m_ownTree) p->m_collisionFilterMask = 0;
     cache()->removeOverlappingPairsContainingProxy(p, dispatcher);
     std::fprintf(stderr,
                  "cullide::CullideBroadphase: %s: collision object %p (proxy %d) rejected: %s. It gets no pairs "
@@ -81,11 +98,19 @@ void ObjectLevel::park(btBroadphaseProxy* p, const char* where, const std::strin
                  where, static_cast<const void*>(objectOf(p)), p->m_uniqueId, why.c_str());
 }
 
+void ObjectLevel::takeSlot(std::size_t slot) {
+    if (!m_freeSlots.empty() && m_freeSlots.back() == slot)
+        m_freeSlots.pop_back();
+    else
+        m_slotCount = slot + 1;
+}
+
 void ObjectLevel::unpark(btBroadphaseProxy* p) {
     if (m_parked.empty()) return;  // the common case: no hash lookup per setAabb
     const auto it = m_parked.find(p);
     if (it == m_parked.end()) return;
-    p->m_collisionFilterMask = it->second;
+    if (!m_ownTree) p->m_collisionFilterMask = it->second.mask;
+    m_freeSlots.push_back(it->second.slot);
     m_parked.erase(it);
 }
 

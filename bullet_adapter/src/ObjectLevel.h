@@ -1,8 +1,9 @@
 // The broadphase's object level: Bullet's own btDbvtBroadphase (incremental trees, fattened leaves, lazy pair
 // removal, filters, the overlap filter callback, ray and box queries), so that its pair cache holds exactly the pairs
 // Bullet's default pipeline would — or the application's own Bullet broadphase (replace), e.g. a btAxisSweep3 — plus
-// a guard for non-finite AABBs: such a proxy would poison the tree's volumes
-// for every object, so it is parked far away with a filter mask of 0 and its pairs removed until its box is finite.
+// a guard for non-finite AABBs: such a proxy would poison the tree's volumes for every object, so it is parked far
+// away, at a point of its own, and its pairs removed until its box is finite (with a replaced object level, also a
+// filter mask of 0 meanwhile).
 #pragma once
 
 #include <BulletCollision/BroadphaseCollision/btDbvtBroadphase.h>
@@ -11,6 +12,7 @@
 #include <memory>
 #include <string>
 #include <unordered_map>
+#include <vector>
 
 namespace cullide::bullet {
 
@@ -38,14 +40,26 @@ public:
     std::size_t parkCalls() const { return m_parkCalls; }
 
 private:
-    void park(btBroadphaseProxy* p, const char* where, const std::string& why, btDispatcher* dispatcher);
+    /// Parks `p` at `slot` (nextSlot()), unless it is parked already.
+    void park(btBroadphaseProxy* p, const char* where, const std::string& why, btDispatcher* dispatcher,
+              std::size_t slot);
     void unpark(btBroadphaseProxy* p);
+    /// The slot the next parked proxy takes (a freed one first), and taking it.
+    std::size_t nextSlot() const;
+    void takeSlot(std::size_t slot);
 
+    struct Parked {
+        std::size_t slot;  ///< its far point (parkedPoint)
+        int mask;          ///< its filter mask when parked: restored with a replaced object level
+    };
     std::unique_ptr<btBroadphaseInterface> m_tree;
+    bool m_ownTree = true;  ///< Bullet's btDbvtBroadphase made here, not a replacement
     std::size_t m_proxyCount = 0;
     std::size_t m_parkCalls = 0;
-    /// Proxies with a non-finite AABB, with the filter mask they had: restored when the AABB is finite again.
-    std::unordered_map<const btBroadphaseProxy*, int> m_parked;
+    /// Proxies with a non-finite AABB, until the AABB is finite again.
+    std::unordered_map<const btBroadphaseProxy*, Parked> m_parked;
+    std::vector<std::size_t> m_freeSlots;  ///< slots below m_slotCount no proxy holds
+    std::size_t m_slotCount = 0;
 };
 
 }  // namespace cullide::bullet

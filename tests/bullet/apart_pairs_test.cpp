@@ -7,6 +7,7 @@
 #include "ApartPairs.h"
 #include "SceneSupport.h"
 
+#include <BulletCollision/CollisionShapes/btCylinderShape.h>
 #include <BulletCollision/CollisionShapes/btHeightfieldTerrainShape.h>
 #include <BulletCollision/NarrowPhaseCollision/btPersistentManifold.h>
 
@@ -182,6 +183,40 @@ TEST(ApartPairs, HeightfieldAboveItsDeclaredRangeKeepsBulletsPoints) {
         compare(reference, cullide, t);
     }
     expectBulletsPointsFromApartBoxes("heightfield above its range", t, 6);
+}
+
+// A btCylinderShape whose radial half extents differ lies outside its own box: Bullet's support mapping takes one of
+// them as the radius for both radial axes, its getAabb each on its own axis (here radius 0.5 along x and z, box 0.2
+// along z). Bullet's GJK finds the points where it reaches a box beside it, while btDbvtBroadphase's fattened leaves
+// pair them with their boxes apart: such cylinders are never skipped, in every orientation Bullet has (X, Y, Z).
+TEST(ApartPairs, CylinderOutsideItsOwnBoxKeepsBulletsPoints) {
+    btCylinderShape cylinderY(v(0.5, 0.5, 0.2));   // radius x (0.5), box z 0.2
+    btCylinderShapeX cylinderX(v(0.5, 0.5, 0.2));  // radius y (0.5), box z 0.2
+    btCylinderShapeZ cylinderZ(v(0.5, 0.2, 0.5));  // radius x (0.5), box y 0.2
+    ShapeStore shapes;
+    btCollisionShape* box = shapes.box(v(0.5, 0.5, 0.5));
+    Tally total;
+    for (btCylinderShape* cylinder : {static_cast<btCylinderShape*>(&cylinderY), static_cast<btCylinderShape*>(&cylinderX),
+                                      static_cast<btCylinderShape*>(&cylinderZ)}) {
+        const int side = cylinder == &cylinderZ ? 1 : 2;  // the short box axis, where the cylinder sticks out
+        CollisionOnlyWorld reference(PipelineKind::Default), cullide(PipelineKind::Cullide);
+        for (CollisionOnlyWorld* w : {&reference, &cullide}) {
+            w->add(cylinder, btTransform::getIdentity());
+            w->add(box, btTransform::getIdentity());
+        }
+        for (int step = 0; step < 12; ++step) {
+            // The box's near face from 0.36 to 0.30 on that axis: the cylinder reaches 0.5, its box (with the
+            // margin and the world's expansion) ~0.26; the box's proxy starts 0.06 nearer than its face.
+            btVector3 at(0, 0, 0);
+            at[side] = btScalar(0.5 + 0.36 - 0.01 * std::min(step, 6));
+            for (CollisionOnlyWorld* w : {&reference, &cullide}) {
+                w->object(1).setWorldTransform(btTransform(btQuaternion::getIdentity(), at));
+                w->world().performDiscreteCollisionDetection();
+            }
+            compare(reference, cullide, total);
+        }
+    }
+    expectBulletsPointsFromApartBoxes("cylinders outside their own boxes", total, 6);
 }
 
 // With setForceUpdateAllAabbs(false) the world refreshes only active objects' proxy boxes. A static box (asleep, as

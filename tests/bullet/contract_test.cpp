@@ -278,14 +278,53 @@ TEST(BulletContract, AlgorithmsFitThePoolAndCustomRegistrationsWin) {
     EXPECT_EQ(contactsOf(w.world()).count({1, 2}), 0u);
 }
 
-TEST(BulletContract, CullerFactoryErrorsPropagate) {
-    const CullideBroadphase::CullerFactory failing = [](const Settings&) -> std::unique_ptr<Culler> {
+// The culler is made when a step first has pairs for it: a world without any (the default, no culling switch on)
+// never opens a GL context or starts the culler's threads. Settings that demand GPU levels make it at construction,
+// where a missing device throws; a factory failing later is reported once and its pairs get Bullet's algorithms.
+TEST(BulletContract, CullerMadeWhenFirstNeededAndFactoryErrorsPropagate) {
+    int calls = 0;
+    const CullideBroadphase::CullerFactory failing = [&calls](const Settings&) -> std::unique_ptr<Culler> {
+        ++calls;
         throw GlUnavailableError("no EGL device (test)");
     };
-    EXPECT_THROW(CullideBroadphase(Settings{}, nullptr, failing), GlUnavailableError);
+    Settings demanding;
+    demanding.gpuLevels = GpuLevels::Always;
+    EXPECT_THROW(CullideBroadphase(demanding, nullptr, failing), GlUnavailableError);
+    EXPECT_EQ(calls, 1);
     Settings invalid;
     invalid.resolution = 3;
     EXPECT_THROW(CullideBroadphase(invalid, nullptr, referenceFactory()), std::invalid_argument);
+
+    ShapeStore shapes;
+    btCollisionShape* ground = shapes.landscape(8, btScalar(1), btScalar(0.2));
+    btCollisionShape* hull = shapes.hull(btVector3(btScalar(0.4), btScalar(0.3), btScalar(0.35)), 20, 3);
+    const auto populate = [&](TestWorld& w) {
+        w.addBody(ground, 0, btTransform(btQuaternion::getIdentity(), btVector3(-4, 0, -4)));
+        for (int k = 0; k < 4; ++k)
+            w.addBody(hull, 1, btTransform(btQuaternion::getIdentity(), btVector3(btScalar(k), btScalar(0.8), 0)));
+    };
+    TestWorld reference(PipelineKind::Default);
+    TestWorld swap(PipelineKind::Cullide, failing);
+    EXPECT_EQ(calls, 1) << "no culler is made at construction";
+    populate(reference);
+    populate(swap);
+    EXPECT_EQ(firstDifferingStep(reference, swap, 20), -1);
+    EXPECT_EQ(calls, 1) << "no culler is made while no pair goes through it (no culling switch on)";
+    EXPECT_EQ(swap.cullideBroadphase()->getCullingMargin(), 0.0);
+    // Hull-mesh pairs through the culler from now on: the factory is called at the next step and fails; the failure
+    // is reported once, the pairs get Bullet's algorithms (bit for bit), and the factory is not called again.
+    swap.cullideBroadphase()->setConvexMeshCulling(true);
+    testing::internal::CaptureStderr();
+    EXPECT_EQ(firstDifferingStep(reference, swap, 20), -1);
+    const std::string err = testing::internal::GetCapturedStderr();
+    EXPECT_EQ(calls, 2);
+    EXPECT_NE(err.find("no EGL device (test)"), std::string::npos) << err;
+    EXPECT_EQ(err.find("the culler failed"), err.rfind("the culler failed")) << "reported more than once:\n" << err;
+    EXPECT_GT(swap.cullideBroadphase()->getLastFrameStats().culledPairs, 0u);
+    int points = 0;
+    for (int i = 0; i < swap.dispatcher().getNumManifolds(); ++i)
+        points += swap.dispatcher().getManifoldByIndexInternal(i)->getNumContacts();
+    EXPECT_GT(points, 0) << "the hulls rest on the mesh";
 }
 
 /// Three GImpact tori (margin `margin`) falling on a plane, for the culler-recreation tests.
@@ -343,6 +382,7 @@ TEST(BulletContract, NonFiniteProxyNeverHidesOthers) {
         EXPECT_NE(pair.m_pProxy1, parked);
     }
     EXPECT_EQ(broadphase.getLastFrameStats().rejectedObjects, 1u);
+    EXPECT_EQ(parked->m_collisionFilterMask, -1) << "parking leaves the application's filter mask alone";
     // A finite box brings it back, with its own filter mask.
     broadphase.setAabb(parked, btVector3(btScalar(0.5), 0, 0), btVector3(btScalar(1.5), 1, 1), &dispatcher);
     broadphase.calculateOverlappingPairs(&dispatcher);
@@ -353,6 +393,59 @@ TEST(BulletContract, NonFiniteProxyNeverHidesOthers) {
     for (btBroadphaseProxy* p : proxies) broadphase.destroyProxy(p, &dispatcher);
 }
 
+// Parked proxies (non-finite boxes) wait at far points of their own: they meet no valid object and no other parked
+// proxy, whatever their filters, and the filter mask stays the application's: one it writes while the object is
+// parked holds when the object comes back (an outside probe found it overwritten by the mask the object had when
+// parked). Bullet's own tree, with the NaN box in it, keeps or drops the object's old pairs erratically; the swap
+// drops them when it parks the object (documented), so only the mask's effect is compared here.
+TEST(BulletContract, ParkedObjectsKeepTheApplicationsFilterMask) {
+    ShapeStore shapes;
+    btCollisionShape* box = shapes.box(btVector3(1, 1, 1));
+    CollisionOnlyWorld reference(PipelineKind::Default), cullide(PipelineKind::Cullide);
+    const btScalar nan = std::numeric_limits<btScalar>::quiet_NaN();
+    testing::internal::CaptureStderr();
+    for (CollisionOnlyWorld* w : {&reference, &cullide}) {
+        for (int k = 0; k < 4; ++k)
+            w->add(box, btTransform(btQuaternion::getIdentity(), btVector3(btScalar(0.5 * k), 0, 0)),
+                   btBroadphaseProxy::DefaultFilter, btBroadphaseProxy::AllFilter);  // static: the world sets a NaN box
+        w->world().performDiscreteCollisionDetection();
+        // Objects 0 and 1 go NaN; while they are, the application makes object 0 collide with nothing.
+        for (int k = 0; k < 2; ++k)
+            w->object(std::size_t(k)).setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(nan, 0, 0)));
+        w->world().performDiscreteCollisionDetection();
+    }
+    const btOverlappingPairCache& parkedCache = *cullide.world().getBroadphase()->getOverlappingPairCache();
+    for (int i = 0; i < parkedCache.getNumOverlappingPairs(); ++i) {
+        const btBroadphasePair& pair = parkedCache.getOverlappingPairArrayPtr()[i];
+        for (const btBroadphaseProxy* p : {pair.m_pProxy0, pair.m_pProxy1})
+            EXPECT_GE(static_cast<const btCollisionObject*>(p->m_clientObject)->getUserIndex(), 2)
+                << "a parked object has a pair (with a valid one or with the other parked one)";
+    }
+    for (CollisionOnlyWorld* w : {&reference, &cullide}) {
+        w->object(0).getBroadphaseHandle()->m_collisionFilterMask = 0;
+        for (int k = 0; k < 2; ++k)
+            w->object(std::size_t(k))
+                .setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(btScalar(0.5 * k), 0, 0)));
+        for (int step = 0; step < 3; ++step) w->world().performDiscreteCollisionDetection();
+    }
+    testing::internal::GetCapturedStderr();
+    EXPECT_EQ(cullide.object(0).getBroadphaseHandle()->m_collisionFilterMask, 0);
+    EXPECT_EQ(cullide.object(1).getBroadphaseHandle()->m_collisionFilterMask, btBroadphaseProxy::AllFilter);
+    const std::set<std::pair<int, int>> expected{{1, 2}, {1, 3}, {2, 3}};  // object 0 collides with nothing
+    EXPECT_EQ(pairsOf(cullide.world()), expected);
+    EXPECT_EQ(reference.object(0).getBroadphaseHandle()->m_collisionFilterMask, 0);
+}
+
+/// A torus whose margin 0.2 needs d > 0.4 (in each world, the same shape) at (x, y, 0), its box overlapping a torus
+/// of populateTori's, and its object index.
+int addWideTorus(TestWorld& w, btCollisionShape* wide, double x, double y) {
+    const int index = w.nextIndex();
+    w.addBody(wide, 1, btTransform(btQuaternion::getIdentity(), btVector3(btScalar(x), btScalar(y), 0)));
+    return index;
+}
+
+/// A torus with a wider margin joins at step 10: the culler made at the first step has too small a margin and
+/// cannot be remade; frames fall back to AABB pairs (and the dispatcher to Bullet's full algorithms), contacts right.
 TEST(BulletContract, CullerRecreationFailureFallsBackToAabbPairs) {
     ShapeStore shapes;
     int calls = 0;
@@ -363,22 +456,33 @@ TEST(BulletContract, CullerRecreationFailureFallsBackToAabbPairs) {
     TestWorld reference(PipelineKind::Default);
     TestWorld cullide(PipelineKind::Cullide, onlyOnce);
     cullide.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
-    populateTori(reference, shapes, btScalar(0.2));  // needs d > 0.4
-    populateTori(cullide, shapes, btScalar(0.2));
+    populateTori(reference, shapes, btScalar(0.01));  // needs d 0.022
+    populateTori(cullide, shapes, btScalar(0.01));
+    btCollisionShape* wide = shapes.gimpactTorus(1, btScalar(0.3), 16, 8, btScalar(0.2));
     testing::internal::CaptureStderr();
     MirrorOptions options;
     options.steps = 60;
+    options.before = [&](int step, TestWorld& a, TestWorld& b) {
+        if (step != 10) return;
+        addWideTorus(a, wide, 0, 4.5);  // onto the top torus
+        addWideTorus(b, wide, 0, 4.5);
+    };
+    options.tolerance = [](const std::pair<int, int>& pair) {
+        return pair.first == 0 ? 1e-6 : 2.0 * double(gContactBreakingThreshold);
+    };
     const MirrorRun run = runMirrored(reference, cullide, options);
     const std::string err = testing::internal::GetCapturedStderr();
     EXPECT_NE(err.find("EGL context lost (test)"), std::string::npos) << err;
     expectAgreement(run, 50);
-    EXPECT_EQ(run.cullidePairsFromTriangles, 0u);
+    EXPECT_GE(calls, 2);
+    EXPECT_GT(run.cullidePairsFromTriangles, 0u) << "the first culler's triangles, before the wide torus";
     EXPECT_GT(run.fallbackPairs, 0u);
+    EXPECT_LT(cullide.cullideBroadphase()->getCullingMargin(), 0.4);
 }
 
-/// The constructor's culler has a generic margin; the first frame shrinks it to what the scene needs. When that
-/// recreation fails (the factory throws or returns nothing), the larger culler is still sound and stays in use:
-/// no AABB fallback, no crash on later frames, contacts right.
+/// The wide torus leaves at step 30: the margin the scene needs drops below half the culler's, so the culler is
+/// remade smaller. When that fails (the factory throws or returns nothing), the larger culler is still sound and
+/// stays in use: no AABB fallback, no crash on later frames, no retry every frame, contacts right.
 TEST(BulletContract, CullerShrinkFailureKeepsTheSoundCuller) {
     for (bool returnNothing : {false, true}) {
         ShapeStore shapes;
@@ -391,18 +495,26 @@ TEST(BulletContract, CullerShrinkFailureKeepsTheSoundCuller) {
         TestWorld reference(PipelineKind::Default);
         TestWorld cullide(PipelineKind::Cullide, onlyOnce);
         cullide.cullideBroadphase()->setGImpactPairCulling(true);  // the culled GImpact-GImpact path
-        populateTori(reference, shapes, btScalar(0.01));  // needs d 0.022
-        populateTori(cullide, shapes, btScalar(0.01));
+        btCollisionShape* wide = shapes.gimpactTorus(1, btScalar(0.3), 16, 8, btScalar(0.2));
+        int wideIndex = -1;
+        for (TestWorld* w : {&reference, &cullide}) {
+            populateTori(*w, shapes, btScalar(0.01));  // needs d 0.022
+            wideIndex = addWideTorus(*w, wide, 2.5, 1);  // beside the lowest torus from the first step
+        }
         testing::internal::CaptureStderr();
         MirrorOptions options;
         options.steps = 90;
+        options.before = [&](int step, TestWorld& a, TestWorld& b) {
+            if (step != 30) return;
+            for (TestWorld* w : {&a, &b}) w->removeBody(btRigidBody::upcast(w->objectByIndex(wideIndex)));
+        };
         options.tolerance = [](const std::pair<int, int>& pair) {
             return pair.first == 0 ? 1e-6 : 2.0 * double(gContactBreakingThreshold);
         };
         const MirrorRun run = runMirrored(reference, cullide, options);
         testing::internal::GetCapturedStderr();
         EXPECT_EQ(calls, 2) << "one failed attempt to shrink, not one per frame";
-        EXPECT_GT(cullide.cullideBroadphase()->getCullingMargin(), 0.022);
+        EXPECT_GT(cullide.cullideBroadphase()->getCullingMargin(), 0.4);
         expectAgreement(run, 40);
         EXPECT_GT(run.cullidePairsFromTriangles, 0u) << "the culler's triangle lists must still be used";
     }

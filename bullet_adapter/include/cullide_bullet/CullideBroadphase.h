@@ -12,12 +12,14 @@
 //   nothing, and rayTest / aabbTest answer as Bullet's. An application that used another Bullet broadphase (a
 //   btAxisSweep3 with its world bounds, a tuned btDbvtBroadphase) hands it over with setObjectLevel and keeps its
 //   pairs and its costs. A proxy with a non-finite AABB is parked (one line on stderr,
-//   a counter, no pairs, filter mask 0 while parked) instead of poisoning the tree. The valid objects keep their
+//   a counter, no pairs, its filter mask left alone) instead of poisoning the tree. The valid objects keep their
 //   pairs and contacts; the manifolds' order (which the solver follows) may differ from Bullet's from then on.
-// - The CULLIDE levels run only for the cache's pairs whose narrow phase reads the surviving triangles
-//   (GImpact-triangle mesh, plain or btScaledBvhTriangleMeshShape; GImpact-GImpact with setGImpactPairCulling(true);
-//   hull/compound-triangle mesh with setConvexMeshCulling(true)) or that the culler decides (GImpact against a
-//   convex shape), and that the dispatcher will process (needsCollision). The culler gets those pairs only, meshes
+// - The CULLIDE levels run only for the kinds of pair the application switches on (all off by default: then no
+//   culler is ever made, no GL context opened): GImpact-triangle mesh (plain or btScaledBvhTriangleMeshShape) with
+//   setGImpactMeshCulling(true), GImpact-GImpact with setGImpactPairCulling(true), hull/compound-triangle mesh with
+//   setConvexMeshCulling(true), whose narrow phase reads the surviving triangles, and GImpact against a convex shape
+//   with setGImpactConvexCulling(true), which the culler decides; and only for pairs the dispatcher will process
+//   (needsCollision). The culler gets those pairs only, meshes
 //   as the shape's local triangles plus the body's transform (built once per shape, shared by its bodies; static
 //   objects world-space, cached between steps). Planes and infinite boxes are never culled. Every other pair goes
 //   from the object level straight to Bullet's algorithms.
@@ -108,8 +110,12 @@ public:
     /// Creates the culler for `settings` (createGpuCuller unless another factory is given).
     using CullerFactory = std::function<std::unique_ptr<Culler>(const Settings&)>;
 
-    /// Like createGpuCuller: without a usable GL device the culler runs its CPU path (a one-line notice), unless the
-    /// settings demand GPU levels (then GlUnavailableError); std::invalid_argument for invalid settings. `pairCache`
+    /// The culler is made (createGpuCuller: a GL context and worker threads) when a step first has pairs for it (a
+    /// culling switch below is on and such pairs overlap), never in a world without any. Like createGpuCuller,
+    /// without a usable GL device it runs its CPU path (a one-line notice); settings that demand GPU levels
+    /// (GpuLevels::Always, Pipeline::Paper) make it here, so a missing device throws GlUnavailableError here. A
+    /// factory that fails when the culler is made later is reported once on stderr, and the pairs it would have culled
+    /// get Bullet's full algorithms. std::invalid_argument for invalid settings. `pairCache`
     /// (optional, not owned) replaces the internal btHashedOverlappingPairCache, like
     /// btDbvtBroadphase(btOverlappingPairCache*).
     explicit CullideBroadphase(const Settings& settings = Settings{}, btOverlappingPairCache* pairCache = nullptr)
@@ -216,7 +222,7 @@ public:
     CullideMemoryStats getMemoryStats() const;
     /// Number of rejected non-finite AABBs (createProxy/setAabb calls) and geometry since construction.
     std::size_t getRejectedCount() const;
-    /// The culler's current distance margin d.
+    /// The culler's current distance margin d (0 before the culler is made).
     double getCullingMargin() const;
     const Settings& getSettings() const;
 
