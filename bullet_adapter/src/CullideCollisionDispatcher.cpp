@@ -168,6 +168,10 @@ public:
 
     void processCollision(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
                           const btDispatcherInfo& dispatchInfo, btManifoldResult* resultOut) override {
+        if (!shortcutsSound(body0Wrap, body1Wrap, dispatchInfo, *resultOut)) {
+            btGImpactCollisionAlgorithm::processCollision(body0Wrap, body1Wrap, dispatchInfo, resultOut);
+            return;
+        }
         if (trimeshAgainstConvex(body0Wrap, body1Wrap) || trimeshAgainstConvex(body1Wrap, body0Wrap)) {
             processWithConvex(body0Wrap, body1Wrap, dispatchInfo, resultOut);
             return;
@@ -305,6 +309,20 @@ public:
         m_part1 = c.part1;
         m_triface1 = c.face1;
         addContactPoint(body0Wrap, body1Wrap, c.point, c.normal, c.distance);
+    }
+
+    /// Whether the adapter's paths give Bullet's points here. They skip triangles (and culled pairs read the
+    /// culler's) that btManifoldResult would reject as beyond the manifold's breaking threshold; a result of another
+    /// class may accept them (btCollisionWorld::contactTest's btBridgedManifoldResult checks no threshold; an
+    /// application's own). With SAT convex collision on (btDispatcherInfo::m_enableSatConvex), Bullet's convex-triangle
+    /// algorithm clips polyhedral faces, which the skip's reach test does not model, so GImpact against anything but
+    /// another GImpact mesh or a plane (whose points are computed as Bullet computes them) runs Bullet's algorithm.
+    static bool shortcutsSound(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
+                               const btDispatcherInfo& dispatchInfo, const btManifoldResult& resultOut) {
+        if (typeid(resultOut) != typeid(btManifoldResult)) return false;
+        if (!dispatchInfo.m_enableSatConvex) return true;
+        const bool meshPair = isGImpactMesh(*body0Wrap) && isGImpactMesh(*body1Wrap);
+        return meshPair || trimeshAgainstPlane(body0Wrap, body1Wrap) || trimeshAgainstPlane(body1Wrap, body0Wrap);
     }
 
     /// A btGImpactMeshShape (not a GImpact compound, not a lone mesh part).
@@ -834,8 +852,8 @@ bool CullideCollisionDispatcher::listMeshPairs(btOverlappingPairCache* pairCache
         return false;
     // GImpact-convex pairs: their triangles' algorithms run on the workers, so only with no hook that would see a
     // worker's points, and when the previous step collided enough of their triangles.
-    const bool convexAhead =
-        m_lastStep.convexTriangles >= kMinAheadConvexTriangles && bullet::dispatchMayThread(dispatchInfo);
+    const bool convexAhead = m_lastStep.convexTriangles >= kMinAheadConvexTriangles &&
+                             bullet::dispatchMayThread(dispatchInfo) && !dispatchInfo.m_enableSatConvex;
     const int count = pairCache->getNumOverlappingPairs();
     const btBroadphasePair* pairs = count > 0 ? pairCache->getOverlappingPairArrayPtr() : nullptr;
     for (int i = 0; i < count; ++i) {

@@ -2,6 +2,7 @@
 // with a kinematic torus; a deforming GImpact mesh. The application registers GImpact's algorithm on the dispatcher
 // as it must with Bullet's own dispatcher; CULLIDE's surviving triangle pairs are what reaches
 // collide_sat_triangles (GImpact-GImpact) and gimpact_vs_concave (GImpact-mesh).
+#include "ApartPairs.h"
 #include "SceneSupport.h"
 
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
@@ -15,6 +16,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cstdint>
+#include <cstring>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -541,6 +544,153 @@ TEST(BulletDeterminism, SameContactsAcrossRunsAndThreadCounts) {
     for (int r = 1; r < 3; ++r)
         for (std::size_t step = 0; step < runs[0].size(); ++step)
             ASSERT_EQ(runs[0][step], runs[r][step]) << "run " << r << " (threads " << threads[r] << ") step " << step;
+}
+
+}  // namespace
+}  // namespace cullide::test
+
+namespace cullide::test {
+namespace {
+
+/// Every point a contact query reports: distance, positions and the shape identifiers, in order.
+struct QueryPoints final : btCollisionWorld::ContactResultCallback {
+    std::vector<btScalar> values;
+    int beyondThreshold = 0;  ///< points farther than their pair's manifold breaking threshold (a world drops them)
+    btScalar threshold = 0;
+    btScalar addSingleResult(btManifoldPoint& cp, const btCollisionObjectWrapper*, int part0, int index0,
+                             const btCollisionObjectWrapper*, int part1, int index1) override {
+        values.insert(values.end(), {cp.getDistance(), cp.m_positionWorldOnA.x(), cp.m_positionWorldOnA.y(),
+                                     cp.m_positionWorldOnA.z(), cp.m_normalWorldOnB.x(), cp.m_normalWorldOnB.y(),
+                                     cp.m_normalWorldOnB.z(), btScalar(part0), btScalar(index0), btScalar(part1),
+                                     btScalar(index1)});
+        beyondThreshold += cp.getDistance() > threshold ? 1 : 0;
+        return 0;
+    }
+};
+
+// contactTest and contactPairTest hand the algorithm Bullet's btBridgedManifoldResult, which checks no breaking
+// threshold: a triangle the swap's GImpact paths skip as out of the manifold's reach still makes a point there (an
+// outside probe found a compound's box child missing points). Their results must be Bullet's, point for point.
+TEST(BulletGImpact, ContactQueriesGetBulletsPoints) {
+    ShapeStore shapes;
+    btCollisionShape* torus = shapes.gimpactTorus(btScalar(0.8), btScalar(0.25), 24, 12, btScalar(0.04));
+    btCompoundShape compound;
+    compound.addChildShape(btTransform(btQuaternion::getIdentity(), btVector3(btScalar(0.3), 0, 0)),
+                           shapes.box(btVector3(btScalar(0.3), btScalar(0.2), btScalar(0.2))));
+    btCollisionShape* others[] = {&compound, shapes.box(btVector3(btScalar(0.1), btScalar(0.1), btScalar(0.1))),
+                                  shapes.sphere(btScalar(0.1)),
+                                  shapes.hull(btVector3(btScalar(0.3), btScalar(0.2), btScalar(0.25)), 20, 5)};
+    CollisionOnlyWorld reference(PipelineKind::Default), cullide(PipelineKind::Cullide);
+    for (CollisionOnlyWorld* w : {&reference, &cullide}) {
+        w->add(torus, btTransform::getIdentity());
+        for (btCollisionShape* s : others) w->add(s, btTransform(btQuaternion::getIdentity(), btVector3(9, 9, 9)));
+    }
+    std::uint64_t state = 12345;
+    const auto uniform = [&state](double lo, double hi) {
+        state ^= state << 13;
+        state ^= state >> 7;
+        state ^= state << 17;
+        return btScalar(lo + (hi - lo) * double(state >> 11) * (1.0 / 9007199254740992.0));
+    };
+    int differing = 0, withPoints = 0, beyond = 0;
+    for (int pose = 0; pose < 400; ++pose) {
+        const std::size_t k = 1 + std::size_t(pose) % 4;
+        const btVector3 axis(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1));
+        const btTransform t(btQuaternion(axis.normalized(), uniform(0, 6.28)),
+                            btVector3(uniform(-1.3, 1.3), uniform(-0.6, 0.6), uniform(-1.3, 1.3)));
+        QueryPoints got[2][2];
+        CollisionOnlyWorld* worlds[2] = {&reference, &cullide};
+        for (int w = 0; w < 2; ++w) {
+            worlds[w]->object(k).setWorldTransform(t);
+            worlds[w]->world().updateAabbs();
+            for (QueryPoints& q : got[w])
+                q.threshold = bullet::manifoldBreakingThreshold(worlds[w]->dispatcher(), worlds[w]->object(0),
+                                                                worlds[w]->object(k));
+            worlds[w]->world().contactTest(&worlds[w]->object(k), got[w][0]);
+            worlds[w]->world().contactPairTest(&worlds[w]->object(0), &worlds[w]->object(k), got[w][1]);
+            worlds[w]->object(k).setWorldTransform(btTransform(btQuaternion::getIdentity(), btVector3(9, 9, 9)));
+        }
+        for (int q = 0; q < 2; ++q) {
+            const std::vector<btScalar>& a = got[0][q].values;
+            const std::vector<btScalar>& b = got[1][q].values;
+            const bool same = a.size() == b.size() &&
+                              (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(btScalar)) == 0);
+            differing += same ? 0 : 1;
+        }
+        withPoints += got[0][1].values.empty() ? 0 : 1;
+        beyond += got[0][1].beyondThreshold;
+    }
+    std::printf("[ measure  ] contact queries: %d of 400 poses with points, %d points beyond the breaking threshold; "
+                "%d query results differ\n",
+                withPoints, beyond, differing);
+    EXPECT_GT(withPoints, 100);
+    EXPECT_GT(beyond, 10) << "the queries must report points a world's manifold would drop";
+    EXPECT_EQ(differing, 0);
+}
+
+/// Every manifold's points (count, distance, positions, normal, shape identifiers), in the dispatcher's order.
+std::vector<btScalar> manifoldValues(btCollisionDispatcher& d) {
+    std::vector<btScalar> v;
+    for (int i = 0; i < d.getNumManifolds(); ++i) {
+        const btPersistentManifold& m = *d.getManifoldByIndexInternal(i);
+        v.push_back(btScalar(m.getNumContacts()));
+        for (int k = 0; k < m.getNumContacts(); ++k) {
+            const btManifoldPoint& p = m.getContactPoint(k);
+            v.insert(v.end(), {p.getDistance(), p.m_positionWorldOnA.x(), p.m_positionWorldOnA.y(),
+                               p.m_positionWorldOnA.z(), p.m_positionWorldOnB.x(), p.m_positionWorldOnB.y(),
+                               p.m_positionWorldOnB.z(), p.m_normalWorldOnB.x(), p.m_normalWorldOnB.y(),
+                               p.m_normalWorldOnB.z(), btScalar(p.m_partId0), btScalar(p.m_index0),
+                               btScalar(p.m_partId1), btScalar(p.m_index1)});
+        }
+    }
+    return v;
+}
+
+// With SAT convex collision (btDispatcherInfo::m_enableSatConvex) and a polyhedral box (initializePolyhedralFeatures),
+// Bullet's convex-triangle algorithm clips faces: GImpact against convex shapes then runs Bullet's algorithm as it is
+// (an outside probe found other points, and other ones per thread count). Random poses of the box against a torus in
+// a collision world: every manifold point Bullet's, at 1 and 2 threads.
+TEST(BulletGImpact, SatConvexAgainstGImpactKeepsBulletsManifolds) {
+    ShapeStore shapes;
+    btCollisionShape* torus = shapes.gimpactTorus(btScalar(0.8), btScalar(0.25), 24, 12, btScalar(0.04));
+    btBoxShape box(btVector3(btScalar(0.4), btScalar(0.3), btScalar(0.35)));
+    box.initializePolyhedralFeatures();
+    for (const unsigned threads : {1u, 2u}) {
+        CollisionOnlyWorld reference(PipelineKind::Default), cullide(PipelineKind::Cullide);
+        static_cast<CullideCollisionDispatcher&>(cullide.dispatcher()).setNarrowPhaseThreads(threads);
+        for (CollisionOnlyWorld* w : {&reference, &cullide}) {
+            w->world().getDispatchInfo().m_enableSatConvex = true;
+            w->add(&box, btTransform::getIdentity());
+            w->add(torus, btTransform::getIdentity());
+        }
+        std::uint64_t state = 777;
+        const auto uniform = [&state](double lo, double hi) {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            return btScalar(lo + (hi - lo) * double(state >> 11) * (1.0 / 9007199254740992.0));
+        };
+        int differing = 0, withPoints = 0;
+        for (int pose = 0; pose < 300; ++pose) {
+            const btVector3 axis(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1));
+            const btTransform t(btQuaternion(axis.normalized(), uniform(0, 6.28)),
+                                btVector3(uniform(-1.3, 1.3), uniform(-0.6, 0.6), uniform(-1.3, 1.3)));
+            for (CollisionOnlyWorld* w : {&reference, &cullide}) {
+                w->object(0).setWorldTransform(t);
+                w->world().performDiscreteCollisionDetection();
+            }
+            const std::vector<btScalar> a = manifoldValues(reference.dispatcher());
+            const std::vector<btScalar> b = manifoldValues(cullide.dispatcher());
+            const bool same =
+                a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(btScalar)) == 0);
+            differing += same ? 0 : 1;
+            withPoints += a.size() > 1 ? 1 : 0;
+        }
+        std::printf("[ measure  ] SAT box against a GImpact torus, %u threads: %d of 300 poses with points, %d differ\n",
+                    threads, withPoints, differing);
+        EXPECT_GT(withPoints, 20);
+        EXPECT_EQ(differing, 0) << threads << " threads";
+    }
 }
 
 }  // namespace

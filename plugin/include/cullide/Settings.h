@@ -72,7 +72,9 @@ struct Settings {
     /// Auto pipeline: a level whose input has at most this many triangles goes straight to the exact stage.
     std::size_t exactThreshold = 256;
     /// GL device to use: "" = environment variable CULLIDE_GL_DEVICE, else the first hardware device, else
-    /// Mesa's software device / surfaceless platform. Also "software", "hardware" or a device index "0", "1", ...
+    /// Mesa's software device / surfaceless platform. Also "software", "hardware", "surfaceless" or a device index
+    /// "0", "1", ... (up to 4 digits); anything else fails validate(). An index no device has falls back to the CPU
+    /// path with a notice, as a missing device does.
     std::string device;
 
     /// Empty string when valid, else a message naming the offending field.
