@@ -552,6 +552,27 @@ TEST(BulletDeterminism, SameContactsAcrossRunsAndThreadCounts) {
 namespace cullide::test {
 namespace {
 
+/// Random poses around a torus of major radius 0.8 lying in the xz plane (xorshift, seeded: the same in every run).
+class Poses {
+public:
+    explicit Poses(std::uint64_t seed) : m_state(seed) {}
+    btTransform next() {
+        const btVector3 axis(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1));
+        const btQuaternion turn(axis.normalized(), uniform(0, 6.28));
+        const btScalar x = uniform(-1.3, 1.3), y = uniform(-0.6, 0.6), z = uniform(-1.3, 1.3);
+        return btTransform(turn, btVector3(x, y, z));
+    }
+
+private:
+    btScalar uniform(double lo, double hi) {
+        m_state ^= m_state << 13;
+        m_state ^= m_state >> 7;
+        m_state ^= m_state << 17;
+        return btScalar(lo + (hi - lo) * double(m_state >> 11) * (1.0 / 9007199254740992.0));
+    }
+    std::uint64_t m_state;
+};
+
 /// Every point a contact query reports: distance, positions and the shape identifiers, in order.
 struct QueryPoints final : btCollisionWorld::ContactResultCallback {
     std::vector<btScalar> values;
@@ -585,19 +606,11 @@ TEST(BulletGImpact, ContactQueriesGetBulletsPoints) {
         w->add(torus, btTransform::getIdentity());
         for (btCollisionShape* s : others) w->add(s, btTransform(btQuaternion::getIdentity(), btVector3(9, 9, 9)));
     }
-    std::uint64_t state = 12345;
-    const auto uniform = [&state](double lo, double hi) {
-        state ^= state << 13;
-        state ^= state >> 7;
-        state ^= state << 17;
-        return btScalar(lo + (hi - lo) * double(state >> 11) * (1.0 / 9007199254740992.0));
-    };
+    Poses poses(12345);
     int differing = 0, withPoints = 0, beyond = 0;
     for (int pose = 0; pose < 400; ++pose) {
         const std::size_t k = 1 + std::size_t(pose) % 4;
-        const btVector3 axis(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1));
-        const btTransform t(btQuaternion(axis.normalized(), uniform(0, 6.28)),
-                            btVector3(uniform(-1.3, 1.3), uniform(-0.6, 0.6), uniform(-1.3, 1.3)));
+        const btTransform t = poses.next();
         QueryPoints got[2][2];
         CollisionOnlyWorld* worlds[2] = {&reference, &cullide};
         for (int w = 0; w < 2; ++w) {
@@ -663,18 +676,10 @@ TEST(BulletGImpact, SatConvexAgainstGImpactKeepsBulletsManifolds) {
             w->add(&box, btTransform::getIdentity());
             w->add(torus, btTransform::getIdentity());
         }
-        std::uint64_t state = 777;
-        const auto uniform = [&state](double lo, double hi) {
-            state ^= state << 13;
-            state ^= state >> 7;
-            state ^= state << 17;
-            return btScalar(lo + (hi - lo) * double(state >> 11) * (1.0 / 9007199254740992.0));
-        };
+        Poses poses(777);
         int differing = 0, withPoints = 0;
         for (int pose = 0; pose < 300; ++pose) {
-            const btVector3 axis(uniform(-1, 1), uniform(-1, 1), uniform(-1, 1));
-            const btTransform t(btQuaternion(axis.normalized(), uniform(0, 6.28)),
-                                btVector3(uniform(-1.3, 1.3), uniform(-0.6, 0.6), uniform(-1.3, 1.3)));
+            const btTransform t = poses.next();
             for (CollisionOnlyWorld* w : {&reference, &cullide}) {
                 w->object(0).setWorldTransform(t);
                 w->world().performDiscreteCollisionDetection();
