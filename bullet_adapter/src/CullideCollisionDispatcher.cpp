@@ -656,7 +656,10 @@ public:
         const PairTriangles* triangles = cullideTrianglesFor(m_dispatcher, body0Wrap, body1Wrap, swapped, statsPtr);
         CullideDispatchStats& stats = *statsPtr;
         const btCollisionObjectWrapper* meshWrap = MeshFirst ? body0Wrap : body1Wrap;
-        if (triangles == nullptr || !meshWrap->getCollisionShape()->isConcave()) {
+        // A result other than the world's (contactTest's btBridgedManifoldResult checks no breaking threshold) may
+        // accept points from triangles beyond the culler's margin: Bullet's algorithm on all of them.
+        if (triangles == nullptr || !meshWrap->getCollisionShape()->isConcave() ||
+            typeid(*resultOut) != typeid(btManifoldResult)) {
             ++stats.fallbackPairs;
             btConvexConcaveCollisionAlgorithm::processCollision(body0Wrap, body1Wrap, dispatchInfo, resultOut);
             return;

@@ -109,7 +109,8 @@ void ObjectLevel::unpark(btBroadphaseProxy* p) {
     if (m_parked.empty()) return;  // the common case: no hash lookup per setAabb
     const auto it = m_parked.find(p);
     if (it == m_parked.end()) return;
-    if (!m_ownTree) p->m_collisionFilterMask = it->second.mask;
+    // A replaced level parked it behind a mask of 0: restored, unless the application wrote another mask meanwhile.
+    if (!m_ownTree && p->m_collisionFilterMask == 0) p->m_collisionFilterMask = it->second.mask;
     m_freeSlots.push_back(it->second.slot);
     m_parked.erase(it);
 }

@@ -205,6 +205,18 @@ AlgorithmKind algorithmKindOf(const std::type_info& algorithmClass) {
     return AlgorithmKind::Other;
 }
 
+namespace {
+
+/// Whether a single-compound algorithm (or the one a compound-compound algorithm derives from) holds no child
+/// algorithm, and so no manifold.
+bool holdsNoChild(const btCompoundCollisionAlgorithm& compound) {
+    for (int i = 0; i < CompoundAlgorithmState::childCount(compound); ++i)
+        if (compound.getChildAlgorithm(i) != nullptr) return false;
+    return true;
+}
+
+}  // namespace
+
 bool freesNoManifoldWhenApart(const btCollisionAlgorithm& algorithm) {
     const std::type_info& type = typeid(algorithm);
     switch (algorithmKindOf(type)) {
@@ -213,13 +225,12 @@ bool freesNoManifoldWhenApart(const btCollisionAlgorithm& algorithm) {
         case AlgorithmKind::ConvexConcave:
             return true;
         case AlgorithmKind::Compound:
-            if (type == typeid(btCompoundCollisionAlgorithm)) {
-                const auto& compound = static_cast<const btCompoundCollisionAlgorithm&>(algorithm);
-                for (int i = 0; i < CompoundAlgorithmState::childCount(compound); ++i)
-                    if (compound.getChildAlgorithm(i) != nullptr) return false;
-                return true;
-            }
-            return (static_cast<const btCompoundCompoundCollisionAlgorithm&>(algorithm).*
+            if (type == typeid(btCompoundCollisionAlgorithm))
+                return holdsNoChild(static_cast<const btCompoundCollisionAlgorithm&>(algorithm));
+            // Its own child pairs, and those of the single-compound algorithm it derives from, which it runs instead
+            // when either compound has no box tree (btCompoundShape(false)): both must hold none.
+            return holdsNoChild(static_cast<const btCompoundCollisionAlgorithm&>(algorithm)) &&
+                   (static_cast<const btCompoundCompoundCollisionAlgorithm&>(algorithm).*
                     memberPointer(ChildPairCache{}))->getOverlappingPairArray().size() == 0;
         case AlgorithmKind::Other:
             break;

@@ -9,7 +9,7 @@ namespace {
 /// The device names EglContext understands: none (its default order), a kind, or an index of EGL's device list.
 bool deviceNameValid(const std::string& device) {
     if (device.empty() || device == "hardware" || device == "software" || device == "surfaceless") return true;
-    if (device.size() > 4) return false;
+    if (device.size() > 4 || (device.size() > 1 && device[0] == '0')) return false;  // as std::to_string writes it
     for (const char c : device)
         if (c < '0' || c > '9') return false;
     return true;

@@ -7,6 +7,7 @@
 #include "ApartPairs.h"
 #include "SceneSupport.h"
 
+#include <BulletCollision/CollisionShapes/btCompoundShape.h>
 #include <BulletCollision/CollisionShapes/btCylinderShape.h>
 #include <BulletCollision/CollisionShapes/btHeightfieldTerrainShape.h>
 #include <BulletCollision/NarrowPhaseCollision/btPersistentManifold.h>
@@ -183,6 +184,53 @@ TEST(ApartPairs, HeightfieldAboveItsDeclaredRangeKeepsBulletsPoints) {
         compare(reference, cullide, t);
     }
     expectBulletsPointsFromApartBoxes("heightfield above its range", t, 6);
+}
+
+// Compounds without box trees (btCompoundShape(false)): Bullet's compound-compound algorithm then runs the
+// single-compound one it derives from, whose child algorithms (and manifolds) it holds in the base class. A pair
+// holding any is never skipped (freed as children part, in Bullet's order); apart with none, it is (a reviewer found
+// the base class's children unchecked). Two compounds of boxes slide apart and together; every point and the
+// manifold count are compared.
+TEST(ApartPairs, CompoundsWithoutTreesKeepBulletsManifolds) {
+    ShapeStore shapes;
+    // Small parts: the pair's size-relative breaking threshold (~0.01) is well below btDbvtBroadphase's fattening.
+    btCollisionShape* part = shapes.box(v(0.3, 0.2, 0.3));
+    btCompoundShape a(false), b(false);
+    for (btCompoundShape* c : {&a, &b}) {
+        c->addChildShape(btTransform(btQuaternion::getIdentity(), v(0, 0.25, 0)), part);
+        c->addChildShape(btTransform(btQuaternion::getIdentity(), v(0, -0.25, 0)), part);
+    }
+    CollisionOnlyWorld reference(PipelineKind::Default), cullide(PipelineKind::Cullide);
+    for (CollisionOnlyWorld* w : {&reference, &cullide}) {
+        w->add(&a, btTransform::getIdentity());
+        w->add(&b, btTransform(btQuaternion::getIdentity(), v(0.8, 0, 0)), btBroadphaseProxy::DefaultFilter,
+               btBroadphaseProxy::AllFilter)
+            ->setCollisionFlags(0);
+    }
+    btVector3 lo, hi;
+    a.getAabb(btTransform::getIdentity(), lo, hi);
+    Tally t;
+    for (int step = 0; step < 80; ++step) {
+        // Two steps 0.02 into each other, then two steps 0.07 apart (their proxies, each grown by 0.02, 0.03 apart:
+        // more than the threshold, within btDbvtBroadphase's fattening): the jump apart leaves child algorithms
+        // that the next run frees, so that step must not be skipped.
+        const double x = double(hi.x() - lo.x()) + (step % 4 < 2 ? -0.02 : 0.07) + 0.0005 * std::min(step, 2);
+        for (CollisionOnlyWorld* w : {&reference, &cullide}) {
+            w->object(1).setWorldTransform(btTransform(btQuaternion::getIdentity(), v(x, 0.001 * std::min(step, 2), 0)));
+            w->world().performDiscreteCollisionDetection();
+        }
+        compare(reference, cullide, t);
+    }
+    const std::size_t skipped = static_cast<CullideCollisionDispatcher&>(cullide.dispatcher()).getTotalStats().apartPairs;
+    std::printf("[ measure  ] compounds without trees: %zu pair-steps with contacts, %zu skipped, missing %zu, extra "
+                "%zu, point mismatches %zu, manifold counts differing in %zu steps\n",
+                t.pairSteps, skipped, t.missing, t.extra, t.mismatches, t.manifoldCountDiffers);
+    EXPECT_GT(t.pairSteps, 20u);
+    EXPECT_GT(skipped, 5u) << "apart with no child algorithm: skipped";
+    EXPECT_EQ(t.missing, 0u);
+    EXPECT_EQ(t.extra, 0u);
+    EXPECT_EQ(t.mismatches, 0u);
+    EXPECT_EQ(t.manifoldCountDiffers, 0u);
 }
 
 // A btCylinderShape whose radial half extents differ lies outside its own box: Bullet's support mapping takes one of

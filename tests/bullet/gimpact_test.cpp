@@ -630,14 +630,63 @@ TEST(BulletGImpact, ContactQueriesGetBulletsPoints) {
                               (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(btScalar)) == 0);
             differing += same ? 0 : 1;
         }
-        withPoints += got[0][1].values.empty() ? 0 : 1;
-        beyond += got[0][1].beyondThreshold;
+        if (k == 1) {  // the compound: the one whose child reaches the adapter's GImpact algorithm in a query
+            withPoints += got[0][1].values.empty() ? 0 : 1;
+            beyond += got[0][1].beyondThreshold;
+        }
     }
-    std::printf("[ measure  ] contact queries: %d of 400 poses with points, %d points beyond the breaking threshold; "
-                "%d query results differ\n",
+    std::printf("[ measure  ] contact queries: %d of 100 compound poses with points, %d points beyond the breaking "
+                "threshold; %d of 800 query results differ\n",
                 withPoints, beyond, differing);
-    EXPECT_GT(withPoints, 100);
+    EXPECT_GT(withPoints, 25);
     EXPECT_GT(beyond, 10) << "the queries must report points a world's manifold would drop";
+    EXPECT_EQ(differing, 0);
+}
+
+// With convex-mesh culling on, a compound's hull child against a BVH mesh reads the culler's surviving triangles while
+// the pair's record holds (same transforms as the step). A contact query right after the step asks the same
+// algorithm with btBridgedManifoldResult, which accepts points beyond the breaking threshold, so beyond what the
+// culler's margin covers when the mesh has a margin of its own: the query gets Bullet's algorithm on every triangle.
+TEST(BulletGImpact, ContactQueriesOnCulledConvexMeshPairsGetBulletsPoints) {
+    ShapeStore shapes;
+    btCollisionShape* ground = shapes.landscape(8, btScalar(1), btScalar(0.4));
+    ground->setMargin(btScalar(0.06));
+    btCompoundShape compound;
+    compound.addChildShape(btTransform(btQuaternion::getIdentity(), btVector3(btScalar(0.2), 0, 0)),
+                           shapes.hull(btVector3(btScalar(0.4), btScalar(0.3), btScalar(0.35)), 20, 5));
+    CollisionOnlyWorld reference(PipelineKind::Default), cullide(PipelineKind::Cullide);
+    static_cast<CullideBroadphase*>(cullide.world().getBroadphase())->setConvexMeshCulling(true);
+    for (CollisionOnlyWorld* w : {&reference, &cullide}) {
+        w->add(ground, btTransform(btQuaternion::getIdentity(), btVector3(-4, 0, -4)));
+        w->add(&compound, btTransform::getIdentity())->setCollisionFlags(0);
+    }
+    Poses poses(4242);
+    int differing = 0, withPoints = 0, beyond = 0;
+    for (int pose = 0; pose < 200; ++pose) {
+        btTransform t = poses.next();
+        t.getOrigin().setY(t.getOrigin().y() * btScalar(0.5) + btScalar(0.1));  // near the ground's surface
+        QueryPoints got[2];
+        CollisionOnlyWorld* worlds[2] = {&reference, &cullide};
+        for (int w = 0; w < 2; ++w) {
+            worlds[w]->object(1).setWorldTransform(t);
+            worlds[w]->world().performDiscreteCollisionDetection();  // the step: the culled pair's record
+            got[w].threshold = bullet::manifoldBreakingThreshold(worlds[w]->dispatcher(), worlds[w]->object(0),
+                                                                 worlds[w]->object(1));
+            worlds[w]->world().contactPairTest(&worlds[w]->object(0), &worlds[w]->object(1), got[w]);
+        }
+        const std::vector<btScalar>& a = got[0].values;
+        const std::vector<btScalar>& b = got[1].values;
+        const bool same = a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(btScalar)) == 0);
+        differing += same ? 0 : 1;
+        withPoints += a.empty() ? 0 : 1;
+        beyond += got[0].beyondThreshold;
+    }
+    const CullideFrameStats& frame = static_cast<CullideBroadphase*>(cullide.world().getBroadphase())->getLastFrameStats();
+    std::printf("[ measure  ] culled convex-mesh queries: %d of 200 poses with points, %d points beyond the threshold, "
+                "%d differ (last frame: %zu culled pairs)\n",
+                withPoints, beyond, differing, frame.culledPairs);
+    EXPECT_GT(withPoints, 50);
+    EXPECT_GT(beyond, 10);
     EXPECT_EQ(differing, 0);
 }
 
