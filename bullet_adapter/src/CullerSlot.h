@@ -30,8 +30,6 @@ public:
     /// there is none yet, recreated per cullingMarginToMake; false when there is none (making the first one failed,
     /// which is not tried again, or making a larger one failed and the current one's margin is too small).
     bool ready(double required, std::uint64_t step);
-    /// Whether a culler has been made (and with it, for the GPU culler, its GL context and worker threads).
-    bool made() const { return m_culler != nullptr; }
     /// Runs the culler on the listed pairs; false when it failed.
     bool run(const std::vector<Object>& objects, const std::vector<ObjectIndexPair>& pairs, Result& result);
 

@@ -97,6 +97,12 @@ namespace {
 
 CullideCollisionDispatcher& cullideDispatcher(btDispatcher* d) { return *static_cast<CullideCollisionDispatcher*>(d); }
 
+/// Whether the result is the world's own (btManifoldResult exactly), which drops every point beyond the manifold's
+/// breaking threshold: what the adapter's paths rely on when they skip triangles out of that reach or read the
+/// culler's. A result of another class may accept such points (btCollisionWorld::contactTest's
+/// btBridgedManifoldResult checks no threshold; an application's own): Bullet's algorithm as it is then.
+bool thresholdChecked(const btManifoldResult& result) { return typeid(result) == typeid(btManifoldResult); }
+
 /// CULLIDE's surviving triangles for a pair (nullptr: not culled this step, Bullet's own algorithm must run) and
 /// the dispatcher's statistics of the current step.
 const PairTriangles* cullideTrianglesFor(btDispatcher* d, const btCollisionObjectWrapper* body0Wrap,
@@ -311,15 +317,13 @@ public:
         addContactPoint(body0Wrap, body1Wrap, c.point, c.normal, c.distance);
     }
 
-    /// Whether the adapter's paths give Bullet's points here. They skip triangles (and culled pairs read the
-    /// culler's) that btManifoldResult would reject as beyond the manifold's breaking threshold; a result of another
-    /// class may accept them (btCollisionWorld::contactTest's btBridgedManifoldResult checks no threshold; an
-    /// application's own). With SAT convex collision on (btDispatcherInfo::m_enableSatConvex), Bullet's convex-triangle
-    /// algorithm clips polyhedral faces, which the skip's reach test does not model, so GImpact against anything but
-    /// another GImpact mesh or a plane (whose points are computed as Bullet computes them) runs Bullet's algorithm.
+    /// Whether the adapter's paths give Bullet's points here: the world's own result (thresholdChecked), and, with
+    /// SAT convex collision on (btDispatcherInfo::m_enableSatConvex), where Bullet's convex-triangle algorithm clips
+    /// polyhedral faces, which the skip's reach test does not model, only GImpact against another GImpact mesh or a
+    /// plane (whose points are computed as Bullet computes them).
     static bool shortcutsSound(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
                                const btDispatcherInfo& dispatchInfo, const btManifoldResult& resultOut) {
-        if (typeid(resultOut) != typeid(btManifoldResult)) return false;
+        if (!thresholdChecked(resultOut)) return false;
         if (!dispatchInfo.m_enableSatConvex) return true;
         const bool meshPair = isGImpactMesh(*body0Wrap) && isGImpactMesh(*body1Wrap);
         return meshPair || trimeshAgainstPlane(body0Wrap, body1Wrap) || trimeshAgainstPlane(body1Wrap, body0Wrap);
@@ -656,10 +660,7 @@ public:
         const PairTriangles* triangles = cullideTrianglesFor(m_dispatcher, body0Wrap, body1Wrap, swapped, statsPtr);
         CullideDispatchStats& stats = *statsPtr;
         const btCollisionObjectWrapper* meshWrap = MeshFirst ? body0Wrap : body1Wrap;
-        // A result other than the world's (contactTest's btBridgedManifoldResult checks no breaking threshold) may
-        // accept points from triangles beyond the culler's margin: Bullet's algorithm on all of them.
-        if (triangles == nullptr || !meshWrap->getCollisionShape()->isConcave() ||
-            typeid(*resultOut) != typeid(btManifoldResult)) {
+        if (triangles == nullptr || !meshWrap->getCollisionShape()->isConcave() || !thresholdChecked(*resultOut)) {
             ++stats.fallbackPairs;
             btConvexConcaveCollisionAlgorithm::processCollision(body0Wrap, body1Wrap, dispatchInfo, resultOut);
             return;

@@ -19,9 +19,9 @@ bool finiteBox(const btVector3& mn, const btVector3& mx) {
 /// no valid object; each slot at its own z (2^104 apart: distinct floats), so parked proxies do not meet each other
 /// either, whatever their filters. Slots beyond 2^21 share points (then only the filter mask keeps them apart).
 btVector3 parkedPoint(std::size_t slot) {
-    const btScalar far = btScalar(std::ldexp(1.0, 125));
-    const double step = std::ldexp(1.0, 104);
-    return btVector3(far, far, btScalar(std::ldexp(1.0, 125) + double(slot % (std::size_t{1} << 21)) * step));
+    const double far = std::ldexp(1.0, 125);
+    const double z = far + double(slot % (std::size_t{1} << 21)) * std::ldexp(1.0, 104);
+    return btVector3(btScalar(far), btScalar(far), btScalar(z));
 }
 
 std::string boxText(const btVector3& mn, const btVector3& mx) {
@@ -47,12 +47,11 @@ void ObjectLevel::replace(std::unique_ptr<btBroadphaseInterface> level) {
 btBroadphaseProxy* ObjectLevel::createProxy(const btVector3& mn, const btVector3& mx, int shapeType, void* userPtr,
                                             int group, int mask, btDispatcher* dispatcher) {
     const bool finite = finiteBox(mn, mx);
-    const std::size_t slot = nextSlot();
-    const btVector3 point = parkedPoint(slot);
+    const btVector3 point = parkedPoint(nextSlot());  // where park() puts it: created there, not moved
     btBroadphaseProxy* p =
         m_tree->createProxy(finite ? mn : point, finite ? mx : point, shapeType, userPtr, group, mask, dispatcher);
     ++m_proxyCount;
-    if (!finite) park(p, "createProxy", boxText(mn, mx), dispatcher, slot);
+    if (!finite) park(p, "createProxy", boxText(mn, mx), dispatcher);
     return p;
 }
 
@@ -60,9 +59,16 @@ std::size_t ObjectLevel::nextSlot() const {
     return m_freeSlots.empty() ? m_slotCount : m_freeSlots.back();
 }
 
+std::size_t ObjectLevel::takeSlot() {
+    if (m_freeSlots.empty()) return m_slotCount++;
+    const std::size_t slot = m_freeSlots.back();
+    m_freeSlots.pop_back();
+    return slot;
+}
+
 void ObjectLevel::setAabb(btBroadphaseProxy* p, const btVector3& mn, const btVector3& mx, btDispatcher* dispatcher) {
     if (!finiteBox(mn, mx)) {
-        park(p, "setAabb", boxText(mn, mx), dispatcher, nextSlot());
+        park(p, "setAabb", boxText(mn, mx), dispatcher);
         return;
     }
     unpark(p);
@@ -78,15 +84,14 @@ void ObjectLevel::destroyProxy(btBroadphaseProxy* p, btDispatcher* dispatcher) {
 /// No pairs: the proxy waits at its slot's far point, where it meets nothing; reported once per parking. Bullet's
 /// own btDbvtBroadphase compares those points as they are, so the application's filter mask is left alone; a replaced
 /// object level (a btAxisSweep3 clamps every far point onto its world box's corner) gets a mask of 0 while parked.
-void ObjectLevel::park(btBroadphaseProxy* p, const char* where, const std::string& why, btDispatcher* dispatcher,
-                       std::size_t slot) {
+void ObjectLevel::park(btBroadphaseProxy* p, const char* where, const std::string& why, btDispatcher* dispatcher) {
     ++m_parkCalls;
     const auto found = m_parked.find(p);
     if (found != m_parked.end()) {  // parked already: stays where it waits
         m_tree->setAabb(p, parkedPoint(found->second.slot), parkedPoint(found->second.slot), dispatcher);
         return;
     }
-    takeSlot(slot);
+    const std::size_t slot = takeSlot();
     m_parked.emplace(p, Parked{slot, p->m_collisionFilterMask});
     m_tree->setAabb(p, parkedPoint(slot), parkedPoint(slot), dispatcher);
     if (!m_ownTree) p->m_collisionFilterMask = 0;
@@ -96,13 +101,6 @@ void ObjectLevel::park(btBroadphaseProxy* p, const char* where, const std::strin
                  "until its AABB is finite again; every other object is unaffected. (Reported each time it is "
                  "parked; getRejectedCount() counts every call.)\n",
                  where, static_cast<const void*>(objectOf(p)), p->m_uniqueId, why.c_str());
-}
-
-void ObjectLevel::takeSlot(std::size_t slot) {
-    if (!m_freeSlots.empty() && m_freeSlots.back() == slot)
-        m_freeSlots.pop_back();
-    else
-        m_slotCount = slot + 1;
 }
 
 void ObjectLevel::unpark(btBroadphaseProxy* p) {

@@ -40,13 +40,12 @@ public:
     std::size_t parkCalls() const { return m_parkCalls; }
 
 private:
-    /// Parks `p` at `slot` (nextSlot()), unless it is parked already.
-    void park(btBroadphaseProxy* p, const char* where, const std::string& why, btDispatcher* dispatcher,
-              std::size_t slot);
+    /// Parks `p` at a slot of its own (takeSlot), unless it is parked already.
+    void park(btBroadphaseProxy* p, const char* where, const std::string& why, btDispatcher* dispatcher);
     void unpark(btBroadphaseProxy* p);
     /// The slot the next parked proxy takes (a freed one first), and taking it.
     std::size_t nextSlot() const;
-    void takeSlot(std::size_t slot);
+    std::size_t takeSlot();
 
     struct Parked {
         std::size_t slot;  ///< its far point (parkedPoint)
