@@ -4,7 +4,7 @@
 // Bullet's dispatcher makes); a collision world mirrored in Bullet's default pipeline where objects approach, part,
 // sleep and are teleported, with every manifold point compared bit for bit while pairs are skipped; and triggers
 // falling through triggers in a dynamics world, bit for bit. The CPU reference culler is used (no GL needed).
-#include "ApartPairs.h"
+#include "narrowphase/ApartPairs.h"
 #include "SceneSupport.h"
 
 #include <BulletCollision/CollisionShapes/btCompoundShape.h>

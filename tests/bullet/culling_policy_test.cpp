@@ -1,5 +1,5 @@
 // The broadphase's culling policy as pure functions: which pairs go through the CULLIDE levels, and the margin rule.
-#include "CullingPolicy.h"
+#include "broadphase/CullingPolicy.h"
 
 #include <gtest/gtest.h>
 

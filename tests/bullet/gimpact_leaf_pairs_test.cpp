@@ -1,8 +1,8 @@
 // detail::LeafPairSearch against Bullet's own btGImpactQuantizedBvh::find_collision: the same primitive pairs in the
 // same order, for tori in many relative poses (apart, touching, interpenetrating, coincident, scaled, one triangle).
 #include "BulletTestWorld.h"
-#include "GImpactLeafPairs.h"
-#include "GImpactMeshContacts.h"
+#include "narrowphase/GImpactLeafPairs.h"
+#include "narrowphase/GImpactMeshContacts.h"
 #include "cullide/TaskPool.h"
 
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>

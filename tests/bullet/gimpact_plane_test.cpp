@@ -3,7 +3,7 @@
 // double vertices, parts, scaling, vertices no triangle uses, tilted and moved planes on either side of the pair,
 // meshes deformed with and without a refit — and the bound must never rule out a vertex Bullet's float arithmetic
 // puts below the plane.
-#include "GImpactPlaneContacts.h"
+#include "narrowphase/GImpactPlaneContacts.h"
 #include "SceneSupport.h"
 
 #include <BulletCollision/CollisionShapes/btTriangleIndexVertexArray.h>

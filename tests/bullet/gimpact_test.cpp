@@ -2,7 +2,7 @@
 // with a kinematic torus; a deforming GImpact mesh. The application registers GImpact's algorithm on the dispatcher
 // as it must with Bullet's own dispatcher; CULLIDE's surviving triangle pairs are what reaches
 // collide_sat_triangles (GImpact-GImpact) and gimpact_vs_concave (GImpact-mesh).
-#include "ApartPairs.h"
+#include "narrowphase/ApartPairs.h"
 #include "SceneSupport.h"
 
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>

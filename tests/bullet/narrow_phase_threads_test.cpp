@@ -5,7 +5,7 @@
 // solver reads the manifolds in the dispatcher's order, so a manifold made out of order, a point missed or a
 // point added twice changes the trajectories); the threads are used; the application's contact callbacks and a
 // drawing debug drawer keep every pair on the calling thread. The CPU reference culler is used (no GL needed).
-#include "ThreadedPairs.h"
+#include "narrowphase/ThreadedPairs.h"
 #include "SceneSupport.h"
 
 #include <BulletCollision/CollisionDispatch/btBoxBoxCollisionAlgorithm.h>

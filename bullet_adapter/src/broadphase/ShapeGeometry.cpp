@@ -1,4 +1,4 @@
-#include "ShapeGeometry.h"
+#include "broadphase/ShapeGeometry.h"
 
 #include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
 #include <BulletCollision/CollisionShapes/btCompoundShape.h>

@@ -1,6 +1,6 @@
-#include "PairRecords.h"
+#include "broadphase/PairRecords.h"
 
-#include "BulletProxies.h"
+#include "broadphase/BulletProxies.h"
 #include "cullide/TriangleTest.h"
 
 #include <BulletCollision/CollisionDispatch/btCollisionObjectWrapper.h>

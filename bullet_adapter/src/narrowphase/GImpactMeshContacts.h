@@ -11,8 +11,8 @@
 // per-triangle algorithms into a manifold of their own).
 #pragma once
 
-#include "GImpactLeafPairs.h"
-#include "Waiter.h"
+#include "narrowphase/GImpactLeafPairs.h"
+#include "narrowphase/Waiter.h"
 
 #include <BulletCollision/Gimpact/btGImpactShape.h>
 #include <BulletCollision/Gimpact/btTriangleShapeEx.h>

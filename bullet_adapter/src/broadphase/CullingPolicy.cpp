@@ -1,4 +1,4 @@
-#include "CullingPolicy.h"
+#include "broadphase/CullingPolicy.h"
 
 #include <algorithm>
 

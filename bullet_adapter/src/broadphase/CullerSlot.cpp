@@ -1,6 +1,6 @@
-#include "CullerSlot.h"
+#include "broadphase/CullerSlot.h"
 
-#include "CullingPolicy.h"
+#include "broadphase/CullingPolicy.h"
 
 #include <cstdio>
 #include <stdexcept>

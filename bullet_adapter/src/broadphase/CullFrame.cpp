@@ -1,6 +1,6 @@
-#include "CullFrame.h"
+#include "broadphase/CullFrame.h"
 
-#include "BulletProxies.h"
+#include "broadphase/BulletProxies.h"
 
 #include <algorithm>
 #include <cmath>

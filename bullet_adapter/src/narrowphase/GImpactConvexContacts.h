@@ -10,7 +10,7 @@
 // order, and the manifold is Bullet's bit for bit (Bullet's GImpact algorithm makes a new one every step).
 #pragma once
 
-#include "GImpactMeshContacts.h"
+#include "narrowphase/GImpactMeshContacts.h"
 
 #include <BulletCollision/BroadphaseCollision/btDispatcher.h>
 #include <BulletCollision/CollisionDispatch/btCollisionObjectWrapper.h>

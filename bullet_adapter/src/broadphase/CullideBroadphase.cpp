@@ -1,14 +1,14 @@
 #include "cullide_bullet/CullideBroadphase.h"
 #include "cullide/Timer.h"
 
-#include "BulletProxies.h"
-#include "CullFrame.h"
-#include "CullerSlot.h"
-#include "CullingPolicy.h"
-#include "ObjectLevel.h"
-#include "PairRecords.h"
-#include "PairTriangles.h"
-#include "ShapeGeometry.h"
+#include "broadphase/BulletProxies.h"
+#include "broadphase/CullFrame.h"
+#include "broadphase/CullerSlot.h"
+#include "broadphase/CullingPolicy.h"
+#include "broadphase/ObjectLevel.h"
+#include "broadphase/PairRecords.h"
+#include "broadphase/PairTriangles.h"
+#include "broadphase/ShapeGeometry.h"
 #include "cullide/Result.h"
 
 #include <BulletCollision/CollisionDispatch/btCollisionDispatcher.h>

@@ -1,5 +1,5 @@
-#include "ApartPairs.h"
-#include "ThreadedPairs.h"
+#include "narrowphase/ApartPairs.h"
+#include "narrowphase/ThreadedPairs.h"
 
 #include <BulletCollision/BroadphaseCollision/btCollisionAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btCollisionObject.h>

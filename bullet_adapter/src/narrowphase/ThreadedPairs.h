@@ -32,7 +32,7 @@
 // multithreading requires; a Bullet built with its profiler (BT_ENABLE_PROFILE) counts its threads unsafely.
 #pragma once
 
-#include "Waiter.h"
+#include "narrowphase/Waiter.h"
 
 #include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
 #include <BulletCollision/BroadphaseCollision/btDispatcher.h>

@@ -2,7 +2,7 @@
 // CULLIDE levels, and the distance margin d those pairs need. Unit-tested without Bullet worlds (tests/unit).
 #pragma once
 
-#include "ShapeGeometry.h"
+#include "broadphase/ShapeGeometry.h"
 
 #include <cstdint>
 #include <optional>

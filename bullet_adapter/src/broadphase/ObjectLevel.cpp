@@ -1,6 +1,6 @@
-#include "ObjectLevel.h"
+#include "broadphase/ObjectLevel.h"
 
-#include "BulletProxies.h"
+#include "broadphase/BulletProxies.h"
 
 #include <cmath>
 #include <cstdio>

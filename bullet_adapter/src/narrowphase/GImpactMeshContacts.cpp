@@ -1,6 +1,6 @@
-#include "GImpactMeshContacts.h"
-#include "GImpactConvexContacts.h"
-#include "ApartPairs.h"
+#include "narrowphase/GImpactMeshContacts.h"
+#include "narrowphase/GImpactConvexContacts.h"
+#include "narrowphase/ApartPairs.h"
 
 #include "cullide/TaskPool.h"
 

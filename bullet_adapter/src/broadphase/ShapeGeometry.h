@@ -2,7 +2,7 @@
 #pragma once
 
 #include "cullide/Types.h"
-#include "PairTriangles.h"
+#include "broadphase/PairTriangles.h"
 #include "cullide_bullet/CullideBroadphase.h"
 
 #include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>

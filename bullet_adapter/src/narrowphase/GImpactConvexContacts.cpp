@@ -1,6 +1,6 @@
-#include "GImpactConvexContacts.h"
+#include "narrowphase/GImpactConvexContacts.h"
 
-#include "ThreadedPairs.h"
+#include "narrowphase/ThreadedPairs.h"
 
 #include <BulletCollision/BroadphaseCollision/btCollisionAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btCollisionDispatcher.h>

@@ -3,8 +3,8 @@
 // static cache; box proxies for the rest), those pairs by object index, and what the margin rule needs of each.
 #pragma once
 
-#include "CullingPolicy.h"
-#include "ShapeGeometry.h"
+#include "broadphase/CullingPolicy.h"
+#include "broadphase/ShapeGeometry.h"
 #include "cullide/Object.h"
 #include "cullide/Result.h"
 #include "cullide_bullet/CullideBroadphase.h"

@@ -1,4 +1,4 @@
-#include "GImpactPlaneContacts.h"
+#include "narrowphase/GImpactPlaneContacts.h"
 
 #include <BulletCollision/Gimpact/btBoxCollision.h>
 

@@ -12,8 +12,8 @@
 // lives until the next step or until a proxy of its pair is destroyed.
 #pragma once
 
-#include "CullFrame.h"
-#include "PairTriangles.h"
+#include "broadphase/CullFrame.h"
+#include "broadphase/PairTriangles.h"
 #include "cullide/Result.h"
 #include "cullide_bullet/CullideBroadphase.h"
 

@@ -2,7 +2,7 @@
 // public classes befriend this one struct, so that applications see none of them.
 #pragma once
 
-#include "PairTriangles.h"
+#include "broadphase/PairTriangles.h"
 #include "cullide_bullet/CullideBroadphase.h"
 #include "cullide_bullet/CullideCollisionDispatcher.h"
 

@@ -1,4 +1,4 @@
-#include "GImpactLeafPairs.h"
+#include "narrowphase/GImpactLeafPairs.h"
 
 #include <BulletCollision/Gimpact/btBoxCollision.h>
 

@@ -1,4 +1,4 @@
-#include "ThreadedPairs.h"
+#include "narrowphase/ThreadedPairs.h"
 
 #include <BulletCollision/BroadphaseCollision/btCollisionAlgorithm.h>
 #include <BulletCollision/CollisionDispatch/btBoxBoxCollisionAlgorithm.h>
