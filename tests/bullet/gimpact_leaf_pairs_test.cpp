@@ -1,4 +1,4 @@
-// detail::LeafPairSearch against Bullet's own btGImpactQuantizedBvh::find_collision: the same primitive pairs in the
+// bullet::LeafPairSearch against Bullet's own btGImpactQuantizedBvh::find_collision: the same primitive pairs in the
 // same order, for tori in many relative poses (apart, touching, interpenetrating, coincident, scaled, one triangle).
 #include "BulletTestWorld.h"
 #include "narrowphase/GImpactLeafPairs.h"
@@ -34,9 +34,9 @@ std::vector<int> bulletPairs(const btGImpactBoxSet& set0, const btTransform& t0,
 
 std::vector<int> ourPairs(const btGImpactBoxSet& set0, const btTransform& t0, const btGImpactBoxSet& set1,
                           const btTransform& t1) {
-    detail::LeafPairScratch scratch;
+    bullet::LeafPairScratch scratch;
     std::vector<int> out;
-    detail::LeafPairSearch(set0, t0, set1, t1).descend({0, 0}, scratch, out);
+    bullet::LeafPairSearch(set0, t0, set1, t1).descend({0, 0}, scratch, out);
     return out;
 }
 
@@ -145,14 +145,14 @@ TEST(GImpactLeafPairs, EveryNodePairDecidedAsBulletsTestDecidesIt) {
         const btGImpactBoxSet& a = boxSetOf(shapes.gimpactTorus(1.0f, 0.35f, 24, 12, 0.0f, centre));
         const btGImpactBoxSet& b = boxSetOf(
             shapes.gimpactTorus(0.8f * scene.small, 0.3f * scene.small, 20, 10, 0.01f * scene.small, centre1));
-        detail::LeafPairScratch scratch;
+        bullet::LeafPairScratch scratch;
         for (int trial = 0; trial < 12; ++trial) {
             const btTransform turn = randomPose(rng, (trial % 4 < 2 ? btScalar(0.3) : btScalar(1.2)) * scene.small);
             const btTransform t1 =
                 trial < 8 ? btTransform(turn.getBasis(), centre1 - turn.getBasis() * centre1 + turn.getOrigin())
                           : btTransform(btMatrix3x3::getIdentity(), turn.getOrigin());  // moved, not turned
             const btTransform t0 = trial == 0 || trial == 8 ? t1 : btTransform::getIdentity();
-            const detail::LeafPairSearch search(a, t0, b, t1);
+            const bullet::LeafPairSearch search(a, t0, b, t1);
             if (!search.rootsOverlap()) continue;  // Bullet's descent stops at the roots (their 15-axis test)
             BT_BOX_BOX_TRANSFORM_CACHE cache;
             cache.calc_from_homogenic(t0, t1);
@@ -181,8 +181,8 @@ TEST(GImpactLeafPairs, SplitPartsConcatenateToBulletsPairs) {
     const TwoTori tori;
     const btGImpactBoxSet* const* sets = tori.sets;
     std::mt19937 rng(13);
-    detail::LeafPairScratch scratch;
-    std::vector<detail::NodePair> parts;
+    bullet::LeafPairScratch scratch;
+    std::vector<bullet::NodePair> parts;
     std::size_t mostParts = 0;
     for (int trial = 0; trial < 120; ++trial) {
         const btGImpactBoxSet& a = *sets[trial % 2];
@@ -190,11 +190,11 @@ TEST(GImpactLeafPairs, SplitPartsConcatenateToBulletsPairs) {
         const btTransform t0 = randomPose(rng, trial < 60 ? btScalar(0.3) : btScalar(2.0));
         const btTransform t1 = trial % 13 == 0 ? t0 : randomPose(rng, trial < 60 ? btScalar(0.3) : btScalar(2.0));
         const std::vector<int> expected = bulletPairs(a, t0, b, t1);
-        const detail::LeafPairSearch search(a, t0, b, t1);
+        const bullet::LeafPairSearch search(a, t0, b, t1);
         for (std::size_t target : {1, 2, 3, 8, 33, 1000}) {
             search.split(target, scratch, parts);
             std::vector<int> got;
-            for (const detail::NodePair& part : parts) search.descend(part, scratch, got);
+            for (const bullet::NodePair& part : parts) search.descend(part, scratch, got);
             ASSERT_EQ(got, expected) << "trial " << trial << ", target " << target << ", " << parts.size() << " parts";
             if (target == 1) {
                 EXPECT_LE(parts.size(), 1u);
@@ -374,15 +374,15 @@ TEST(GImpactPairs, EveryThreadCountGetsBulletsContactsBitForBit) {
 }
 
 /// Two computed points alike in every bit and identifier.
-bool sameContact(const detail::MeshContact& x, const detail::MeshContact& y) {
+bool sameContact(const bullet::MeshContact& x, const bullet::MeshContact& y) {
     return x.point == y.point && x.normal == y.normal && x.distance == y.distance && x.part0 == y.part0 &&
            x.face0 == y.face0 && x.part1 == y.part1 && x.face1 == y.face1;
 }
 
 /// The points of the batch's lists, in their order.
-std::vector<detail::MeshContact> flatten(const detail::ContactLists& lists) {
-    std::vector<detail::MeshContact> points;
-    lists.forEach([&](const detail::MeshContact& c) { points.push_back(c); });
+std::vector<bullet::MeshContact> flatten(const bullet::ContactLists& lists) {
+    std::vector<bullet::MeshContact> points;
+    lists.forEach([&](const bullet::MeshContact& c) { points.push_back(c); });
     return points;
 }
 
@@ -395,11 +395,11 @@ TEST(GImpactMeshContacts, AheadResultsMatchTheirInputsExactly) {
     btCollisionObject a, b;
     std::mt19937 rng(19);
     const btTransform t0 = randomPose(rng, 0.3f), t1 = randomPose(rng, 0.3f);
-    std::vector<detail::MeshContact> sequential;
-    detail::meshPairContacts(*torus, t0, *torus, t1, detail::threadScratch(), sequential);
+    std::vector<bullet::MeshContact> sequential;
+    bullet::meshPairContacts(*torus, t0, *torus, t1, bullet::threadScratch(), sequential);
     ASSERT_GT(sequential.size(), 4u);
     TaskPool pool(3);
-    detail::MeshContactBatch batch;
+    bullet::MeshContactBatch batch;
     for (TaskPool* p : {static_cast<TaskPool*>(nullptr), &pool}) {
         batch.clear();
         batch.add(&a, &b, *torus, *torus, t0, t1);
@@ -410,9 +410,9 @@ TEST(GImpactMeshContacts, AheadResultsMatchTheirInputsExactly) {
             EXPECT_EQ(batch.find(&a, &b, torus, torus, t0, nudged), nullptr);
             EXPECT_EQ(batch.find(&a, &b, torus, other, t0, t1), nullptr);
             EXPECT_EQ(batch.find(&b, &a, torus, torus, t1, t0), nullptr);
-            const detail::ContactLists* found = batch.find(&a, &b, torus, torus, t0, t1);
+            const bullet::ContactLists* found = batch.find(&a, &b, torus, torus, t0, t1);
             ASSERT_NE(found, nullptr);
-            const std::vector<detail::MeshContact> points = flatten(*found);
+            const std::vector<bullet::MeshContact> points = flatten(*found);
             ASSERT_EQ(points.size(), sequential.size());
             EXPECT_EQ(found->size(), sequential.size());
             for (std::size_t i = 0; i < sequential.size(); ++i)
@@ -433,27 +433,27 @@ TEST(GImpactMeshContacts, SharedTrianglesWithinTheBudgetOrEachTaskItsOwn) {
     auto* fine = static_cast<btGImpactMeshShape*>(shapes.gimpactTorus(2, btScalar(0.5), 128, 32, btScalar(0.01)));
     btCollisionObject a, b, c;
     const std::size_t oneStore =
-        std::size_t(fine->getMeshPart(0)->getNumChildShapes()) * sizeof(detail::PreparedTriangle);
-    const auto same = [](const std::vector<detail::MeshContact>& x, const std::vector<detail::MeshContact>& y) {
+        std::size_t(fine->getMeshPart(0)->getNumChildShapes()) * sizeof(bullet::PreparedTriangle);
+    const auto same = [](const std::vector<bullet::MeshContact>& x, const std::vector<bullet::MeshContact>& y) {
         return std::equal(x.begin(), x.end(), y.begin(), y.end(), sameContact);
     };
     TaskPool pool(3);
     std::mt19937 rng(23);
     for (std::size_t budget : {std::size_t{0}, oneStore, std::size_t{64} << 20}) {
-        detail::MeshContactBatch batch;
+        bullet::MeshContactBatch batch;
         batch.setSharedTriangleBudget(budget);
         for (int round = 0; round < 3; ++round) {  // new poses each dispatch: the reused stores must not keep triangles
             const btTransform t0 = randomPose(rng, 0.3f), t1 = randomPose(rng, 0.3f), t2 = randomPose(rng, 0.3f);
-            std::vector<detail::MeshContact> sequential01, sequential12;
-            detail::meshPairContacts(*fine, t0, *fine, t1, detail::threadScratch(), sequential01);
-            detail::meshPairContacts(*fine, t1, *fine, t2, detail::threadScratch(), sequential12);
+            std::vector<bullet::MeshContact> sequential01, sequential12;
+            bullet::meshPairContacts(*fine, t0, *fine, t1, bullet::threadScratch(), sequential01);
+            bullet::meshPairContacts(*fine, t1, *fine, t2, bullet::threadScratch(), sequential12);
             ASSERT_GT(sequential01.size() + sequential12.size(), 4u);
             batch.clear();
             batch.add(&a, &b, *fine, *fine, t0, t1);
             batch.add(&b, &c, *fine, *fine, t1, t2);  // body b's store serves both pairs
             batch.run(&pool, [&] {
-                const detail::ContactLists* found01 = batch.find(&a, &b, fine, fine, t0, t1);
-                const detail::ContactLists* found12 = batch.find(&b, &c, fine, fine, t1, t2);
+                const bullet::ContactLists* found01 = batch.find(&a, &b, fine, fine, t0, t1);
+                const bullet::ContactLists* found12 = batch.find(&b, &c, fine, fine, t1, t2);
                 ASSERT_NE(found01, nullptr);
                 ASSERT_NE(found12, nullptr);
                 EXPECT_TRUE(same(flatten(*found01), sequential01)) << "budget " << budget << ", round " << round;

@@ -236,12 +236,12 @@ TEST(GImpactPlane, PackedAndStridedVerticesGiveTheSamePoints) {
                                              .normalized(),
                                          btScalar(3 * unit(rng))),
                             btVector3(btScalar(unit(rng)), btScalar(0.3 + 0.5 * unit(rng)), btScalar(unit(rng))));
-        const btVector4 equation = detail::planeEquation(plane, btTransform::getIdentity());
+        const btVector4 equation = bullet::planeEquation(plane, btTransform::getIdentity());
         std::vector<btScalar> got[2];
-        detail::PlaneCounts counts[2];
+        bullet::PlaneCounts counts[2];
         for (int way = 0; way < 2; ++way) {
             const btGImpactMeshShape& shape = way == 0 ? packedShape : paddedShape;
-            detail::planePartContacts(
+            bullet::planePartContacts(
                 *shape.getMeshPart(0), t, equation, plane.getMargin(),
                 [&](const btVector3& v, btScalar d) { got[way].insert(got[way].end(), {v[0], v[1], v[2], d}); },
                 counts[way]);
@@ -319,9 +319,9 @@ TEST(GImpactPlane, TheFilterNeverRulesOutAVertexBulletPutsBelowThePlane) {
                                        btScalar(400 * unit(rng)));
         const btTransform planeAt(btQuaternion(btVector3(0, 1, 0), btScalar(unit(rng))),
                                   btVector3(btScalar(50 * unit(rng)), 0, btScalar(50 * unit(rng))));
-        const btVector4 equation = detail::planeEquation(shape, planeAt);
+        const btVector4 equation = bullet::planeEquation(shape, planeAt);
         const btScalar margin = btScalar(0.05);
-        const detail::PlaneFilter filter(t, scaling, equation, margin);
+        const bullet::PlaneFilter filter(t, scaling, equation, margin);
         const btTransform inverse = t.inverse();
         const btVector3 normal(equation[0], equation[1], equation[2]);
         for (int k = 0; k < 500; ++k) {

@@ -1,46 +1,18 @@
-// CullideBroadphase: a drop-in btBroadphaseInterface whose mesh pairs are decided by CULLIDE (image-space
-// visibility culling, GPU levels where they pay) instead of AABB overlap alone.
+// CullideBroadphase: a drop-in btBroadphaseInterface. Bullet's own broadphase (the object level) finds the object
+// pairs; for the kinds of pair a culling switch below covers, CULLIDE's visibility culling decides which triangles of
+// each pair can come within the culling margin, and CullideCollisionDispatcher reads that verdict. Every other pair
+// goes from the object level straight to Bullet's algorithms.
 //
 //     auto* broadphase = new cullide::CullideBroadphase();  // was: new btDbvtBroadphase()
 //     auto* dispatcher = new cullide::CullideCollisionDispatcher(config, broadphase);
 //                                                           // was: new btCollisionDispatcher(config)
 //
-// Design (see bullet_adapter/README.md for the details and the limits):
-// - The object level is Bullet's own btDbvtBroadphase, owned by this class: the pair cache holds exactly the pairs
-//   Bullet's default pipeline would (filters, the overlap filter callback, static and kinematic objects in
-//   collision-only worlds, ghost objects, planes, fattened leaves, lazy removal), objects that did not move cost
-//   nothing, and rayTest / aabbTest answer as Bullet's. An application that used another Bullet broadphase (a
-//   btAxisSweep3 with its world bounds, a tuned btDbvtBroadphase) hands it over with setObjectLevel and keeps its
-//   pairs and its costs. A proxy with a non-finite AABB is parked (one line on stderr,
-//   a counter, no pairs, its filter mask left alone) instead of poisoning the tree. The valid objects keep their
-//   pairs and contacts; the manifolds' order (which the solver follows) may differ from Bullet's from then on.
-// - The CULLIDE levels run only for the kinds of pair the application switches on (all off by default: then no
-//   culler is ever made, no GL context opened): GImpact-triangle mesh (plain or btScaledBvhTriangleMeshShape) with
-//   setGImpactMeshCulling(true), GImpact-GImpact with setGImpactPairCulling(true), hull/compound-triangle mesh with
-//   setConvexMeshCulling(true), whose narrow phase reads the surviving triangles, and GImpact against a convex shape
-//   with setGImpactConvexCulling(true), which the culler decides; and only for pairs the dispatcher will process
-//   (needsCollision). The culler gets those pairs only, meshes
-//   as the shape's local triangles plus the body's transform (built once per shape, shared by its bodies; static
-//   objects world-space, cached between steps). Planes and infinite boxes are never culled. Every other pair goes
-//   from the object level straight to Bullet's algorithms.
-// - The hand-off to CullideCollisionDispatcher is a per-pair record (internal), valid only for the shapes
-//   and transforms the pair had in calculateOverlappingPairs(): the surviving triangles, or `pruned` for a pair the
-//   culler proved farther apart than its margin (it stays in the cache, as in Bullet; the narrow phase makes no
-//   contact for it). A pair without a record runs Bullet's own algorithm.
-// - The culler's distance margin d is what the frame's narrow phase needs, recomputed every step: for GImpact
-//   pairs 2.2 * the largest GImpact margin (plus float slack at large coordinates; GImpact's triangle routine
-//   reports points within the sum of the two margins and rebuilds its manifold every frame), for pairs with
-//   persistent convex manifolds the margins plus 1.5 * the contact breaking threshold (size-relative, as Bullet's
-//   dispatcher computes it by default). Every triangle pair that Bullet's narrow phase could turn into a contact
-//   point, or keep a persistent one alive, survives. Bullet's own triangle routines are the exact test (the culler
-//   runs with Settings::exactTriangles = false). GImpact-GImpact pairs (by default not culled, and culled ones that
-//   interpenetrate: setDeepPenetrationFallback) get Bullet's GImpact contacts bit for bit: the dispatcher runs
-//   Bullet's pair search and triangle routine, reproduced at a fraction of Bullet's cost.
+// bullet_adapter/README.md describes the step, the options, the guarantees and the known differences.
 #pragma once
 
 #include "cullide/Culler.h"
 #include "cullide/Settings.h"
-#include "cullide/Stats.h"
+#include "cullide_bullet/CullideStats.h"
 #include "cullide_bullet/Precision.h"
 
 #include <BulletCollision/BroadphaseCollision/btBroadphaseInterface.h>
@@ -58,52 +30,12 @@ class btCollisionShape;
 
 namespace cullide {
 
-struct PairTriangles;  // the hand-off to CullideCollisionDispatcher (internal: bullet_adapter/src/PairTriangles.h)
-namespace detail {
-struct AdapterAccess;  // the broadphase's and dispatcher's internal calls (bullet_adapter/src/AdapterAccess.h)
-}
-
-/// Statistics of the last calculateOverlappingPairs().
-struct CullideFrameStats {
-    std::size_t proxies = 0;
-    /// Object level (Bullet's btDbvtBroadphase): pairs in the cache.
-    std::size_t objectPairs = 0;
-    /// ... of which went through the culler (their narrow phase reads triangles, or the culler decides them).
-    std::size_t culledPairs = 0;
-    /// ... of which the culler proved farther apart than the margin: recorded as pruned, no contact this step.
-    std::size_t prunedPairs = 0;
-    std::size_t cullerPairs = 0;         ///< culled pairs the culler kept
-    std::size_t culledObjects = 0;       ///< objects handed to the culler (those of culled pairs)
-    std::size_t meshObjects = 0;         ///< ... of which with triangle geometry
-    std::size_t triangles = 0;           ///< triangles handed to the culler
-    std::size_t rejectedObjects = 0;     ///< parked (non-finite AABB) or rejected by the culler this frame
-    std::size_t pcsTriangles = 0;        ///< triangles that survived culling (the triangle-level PCS), all objects
-    std::size_t trianglePairs = 0;       ///< surviving triangle pairs kept for the dispatcher
-    std::size_t interpenetratingPairs = 0;  ///< GImpact pairs whose meshes intersect (see setDeepPenetrationFallback)
-    /// GImpact pairs that interpenetrated in one of the last 4 steps: not culled, Bullet's full algorithm (with the
-    /// fallback on, such a pair reads nothing the culler computes; it is culled again after 4 steps).
-    std::size_t penetratingSkipped = 0;
-    double margin = 0.0;                 ///< the culler's distance margin d this frame
-    double objectLevelMs = 0.0;          ///< btDbvtBroadphase::calculateOverlappingPairs
-    double buildMs = 0.0;                ///< finding the culled pairs and building the culling frame
-    double cullMs = 0.0;                 ///< culler run
-    double recordMs = 0.0;               ///< records for the dispatcher
-    double totalMs = 0.0;
-    Stats culler;                        ///< the culler's own statistics
-};
-
-/// What the broadphase keeps between steps for the objects that took part in culled pairs (getMemoryStats): local
-/// triangle geometry once per shape, however many bodies share it, and per object its record (transform, keys) plus
-/// a world-space copy of its triangles where one is kept (resting static-flagged objects; with
-/// setGImpactPairCulling(true), objects whose pairs the broadphase tests itself). Heap bytes of the containers
-/// (capacity), not counting the culler's own caches.
-struct CullideMemoryStats {
-    std::size_t shapes = 0;               ///< shapes with local geometry (each held once)
-    std::size_t sharedGeometryBytes = 0;  ///< their vertices, triangles and Bullet ids, in both precisions
-    std::size_t objects = 0;              ///< objects kept
-    std::size_t objectBytes = 0;          ///< their records and world-space copies
-    std::size_t worldCopies = 0;          ///< objects holding a world-space copy
-};
+class CullideBroadphase;
+namespace bullet {
+class PairRecords;  // the per-pair hand-off to CullideCollisionDispatcher (internal: src/broadphase/PairRecords.h)
+/// The records of the broadphase's last step, for the dispatcher (internal).
+const PairRecords& pairRecordsOf(const CullideBroadphase& broadphase);
+}  // namespace bullet
 
 class CullideBroadphase : public btBroadphaseInterface {
 public:
@@ -176,7 +108,7 @@ public:
     /// Convex hulls and compounds against triangle meshes through the culler's levels (default: off). On, the
     /// dispatcher's convex-concave algorithm reads only the mesh triangles CULLIDE kept near the hull; off, such
     /// pairs go from the object level straight to Bullet's algorithm, whose own BVH query of the mesh is already
-    /// cheap: measured on 1,000 hulls over a 32K-triangle landscape (docs/benchmarks.md, cullide-swap-bench), the
+    /// cheap: measured on 1,000 hulls over a 32K-triangle landscape (docs/swap.md), the
     /// culling costs more than the narrow phase it saves on the CPU path (GImpact pairs: setGImpactPairCulling,
     /// setGImpactMeshCulling, setGImpactConvexCulling). Set it
     /// before the first step: CullideCollisionDispatcher picks the culled hull/compound-mesh algorithm when a pair's
@@ -191,7 +123,7 @@ public:
     /// replace Bullet's box-overlapping ones for pairs whose meshes do not intersect (setDeepPenetrationFallback for
     /// those that do): Bullet's clip method then no longer makes its contacts from triangle pairs whose boxes overlap
     /// without the triangles coming near (phantom points up to a box deep), and the manifold's other points can
-    /// differ. Measured on the tori pile (docs/drop-in.md): on costs the culling and saves no narrow-phase time, so
+    /// differ. Measured on the tori pile (docs/swap.md): on costs the culling and saves no narrow-phase time, so
     /// the default is off.
     void setGImpactPairCulling(bool enable);
     bool getGImpactPairCulling() const;
@@ -203,7 +135,7 @@ public:
     /// skipping the candidates too far from the mesh triangle for any point — Bullet runs GJK on each. The same holds
     /// for GImpact against other concave shapes (heightfields; not planes: Bullet's own), never culled. On, the mesh's
     /// triangles are the culler's near ones in sorted order instead of Bullet's query: the 4-point manifold can keep
-    /// other points, and the culling costs more than it saves on the CPU path (docs/drop-in.md, 'gimpact-landscape').
+    /// other points, and the culling costs more than it saves on the CPU path (docs/swap.md, 'gimpact-landscape').
     /// Set it before the first step.
     void setGImpactMeshCulling(bool enable);
     bool getGImpactMeshCulling() const;
@@ -212,7 +144,7 @@ public:
     /// culler (default: off). On, a pair the culler proves farther apart than its margin makes no contact that step
     /// and the others run the dispatcher's loop; off, every pair runs it: Bullet's per-triangle loop (its box query,
     /// then GJK per candidate triangle, Bullet's contacts point for point) minus the candidates too far from the
-    /// convex shape for any point. Measured on the CPU path (docs/drop-in.md, session 17) the culling costs more than
+    /// convex shape for any point. Measured on the CPU path (docs/swap.md) the culling costs more than
     /// the loop it saves. Set it before the first step.
     void setGImpactConvexCulling(bool enable);
     bool getGImpactConvexCulling() const;
@@ -227,12 +159,7 @@ public:
     const Settings& getSettings() const;
 
 private:
-    friend struct detail::AdapterAccess;
-    /// The record of the pair of the two wrapped objects made by the last calculateOverlappingPairs(), while it
-    /// holds (bullet_adapter/src/PairRecords.h states the contract), or nullptr. `swapped` is set when body0Wrap is
-    /// the record's second object.
-    const PairTriangles* trianglePairsFor(const btCollisionObjectWrapper* body0Wrap,
-                                          const btCollisionObjectWrapper* body1Wrap, bool& swapped) const;
+    friend const bullet::PairRecords& bullet::pairRecordsOf(const CullideBroadphase& broadphase);
 
     CullideBroadphase(detail::PrecisionChecked, const Settings& settings, btOverlappingPairCache* pairCache,
                       CullerFactory factory);

@@ -5,9 +5,10 @@
 
 #include "broadphase/CullingPolicy.h"
 #include "broadphase/ShapeGeometry.h"
+#include "cullide/Culler.h"
 #include "cullide/Object.h"
 #include "cullide/Result.h"
-#include "cullide_bullet/CullideBroadphase.h"
+#include "cullide_bullet/CullideStats.h"
 
 #include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
 #include <LinearMath/btTransform.h>

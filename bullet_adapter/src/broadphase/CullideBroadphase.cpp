@@ -255,10 +255,8 @@ void CullideBroadphase::printStats() {
         s.buildMs, s.cullMs, s.recordMs, s.totalMs);
 }
 
-const PairTriangles* CullideBroadphase::trianglePairsFor(const btCollisionObjectWrapper* body0Wrap,
-                                                         const btCollisionObjectWrapper* body1Wrap,
-                                                         bool& swapped) const {
-    return m_impl->records.find(body0Wrap, body1Wrap, swapped);
+const bullet::PairRecords& bullet::pairRecordsOf(const CullideBroadphase& broadphase) {
+    return broadphase.m_impl->records;
 }
 
 void CullideBroadphase::invalidateShape(const btCollisionShape* shape) {

@@ -15,7 +15,7 @@
 #include "broadphase/CullFrame.h"
 #include "broadphase/PairTriangles.h"
 #include "cullide/Result.h"
-#include "cullide_bullet/CullideBroadphase.h"
+#include "cullide_bullet/CullideStats.h"
 
 #include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
 

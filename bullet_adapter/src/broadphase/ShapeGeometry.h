@@ -3,7 +3,6 @@
 
 #include "cullide/Types.h"
 #include "broadphase/PairTriangles.h"
-#include "cullide_bullet/CullideBroadphase.h"
 
 #include <BulletCollision/BroadphaseCollision/btBroadphaseProxy.h>
 #include <LinearMath/btVector3.h>

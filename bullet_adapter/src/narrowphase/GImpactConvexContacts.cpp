@@ -11,7 +11,7 @@
 
 #include <typeinfo>
 
-namespace cullide::detail {
+namespace cullide::bullet {
 namespace {
 
 /// Safety factor on the reach: GJK's and the polyhedral clipper's tolerances are far below it.
@@ -179,4 +179,4 @@ WrapperInResult::~WrapperInResult() {
         m_result.setBody1Wrap(m_previous);
 }
 
-}  // namespace cullide::detail
+}  // namespace cullide::bullet

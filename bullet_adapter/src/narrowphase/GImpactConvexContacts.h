@@ -23,7 +23,7 @@
 
 class btCollisionDispatcher;
 
-namespace cullide::detail {
+namespace cullide::bullet {
 
 /// Where a GImpact triangle can still make a contact point with a convex shape: the convex shape's local box
 /// (btCollisionShape::getAabb, margin included), the map from mesh-local to convex-local coordinates, the contact
@@ -109,4 +109,4 @@ private:
     const btCollisionObjectWrapper* m_previous;
 };
 
-}  // namespace cullide::detail
+}  // namespace cullide::bullet

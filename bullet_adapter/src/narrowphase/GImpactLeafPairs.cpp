@@ -17,7 +17,7 @@
 #endif
 
 namespace cullide {
-namespace detail {
+namespace bullet {
 namespace {
 
 btScalar largestCoordinate(const btVector3& v) {
@@ -350,5 +350,5 @@ bool LeafPairSearch::keeps(int node0, int node1, LeafPairScratch& scratch) const
     return kept(d, node0, node1);
 }
 
-}  // namespace detail
+}  // namespace bullet
 }  // namespace cullide

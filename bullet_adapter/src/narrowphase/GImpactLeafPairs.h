@@ -10,7 +10,7 @@
 #include <vector>
 
 namespace cullide {
-namespace detail {
+namespace bullet {
 
 /// A node pair of the two box sets that Bullet's descent keeps (its test passed; the pair of roots, {0, 0}, when the
 /// roots overlap on all 15 axes): the descent continues below it, or, for two leaves, it is a primitive pair.
@@ -97,5 +97,5 @@ private:
     bool m_aligned = false;  // Bullet's frame change has exactly the identity rotation: one overlap decides
 };
 
-}  // namespace detail
+}  // namespace bullet
 }  // namespace cullide

@@ -11,7 +11,7 @@
 #include <type_traits>
 
 namespace cullide {
-namespace detail {
+namespace bullet {
 
 namespace {
 constexpr std::uint32_t kBusy = 0x80000000u;
@@ -552,5 +552,5 @@ const MeshContactBatch::ConvexAhead* MeshContactBatch::findConvex(
     return p != nullptr && p->convex ? &p->ahead : nullptr;
 }
 
-}  // namespace detail
+}  // namespace bullet
 }  // namespace cullide

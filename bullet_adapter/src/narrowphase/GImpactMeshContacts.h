@@ -31,7 +31,7 @@ struct btDispatcherInfo;
 
 namespace cullide {
 class TaskPool;
-namespace detail {
+namespace bullet {
 
 /// One point as collide_sat_triangles hands it to btGImpactCollisionAlgorithm::addContactPoint, with the part and
 /// triangle of each side that Bullet sets as the result's shape identifiers.
@@ -178,9 +178,9 @@ public:
     void add(const btCollisionObject* object0, const btCollisionObject* object1, const btGImpactMeshShape& shape0,
              const btGImpactMeshShape& shape1, const btTransform& trans0, const btTransform& trans1);
     /// A GImpact-convex pair the dispatch will process with the objects in this order (its pieces computed by
-    /// detail::convexChunkContacts): one shape a btGImpactMeshShape whose parts all have box sets, the other a convex
+    /// bullet::convexChunkContacts): one shape a btGImpactMeshShape whose parts all have box sets, the other a convex
     /// shape whose algorithm with a triangle may run on a worker (bullet::convexTriangleThreadable,
-    /// detail::pointsIndependentOfManifold). `dispatcher` and `info` are the dispatch's, the same for every pair.
+    /// bullet::pointsIndependentOfManifold). `dispatcher` and `info` are the dispatch's, the same for every pair.
     void addConvex(const btCollisionObject* object0, const btCollisionObject* object1, const btCollisionShape& shape0,
                    const btCollisionShape& shape1, const btTransform& trans0, const btTransform& trans1,
                    btCollisionDispatcher& dispatcher, const btDispatcherInfo& info);
@@ -304,5 +304,5 @@ private:
     bool m_running = false;
 };
 
-}  // namespace detail
+}  // namespace bullet
 }  // namespace cullide

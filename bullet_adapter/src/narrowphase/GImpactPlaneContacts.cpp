@@ -10,7 +10,7 @@
 #include <emmintrin.h>
 #endif
 
-namespace cullide::detail {
+namespace cullide::bullet {
 
 PlaneFilter::PlaneFilter(const btTransform& partTransform, const btVector3& scaling, const btVector4& equation,
                          btScalar margin) {
@@ -158,4 +158,4 @@ void planePartContacts(const btGImpactMeshShapePart& part, const btTransform& pa
     part.unlockChildShapes();
 }
 
-}  // namespace cullide::detail
+}  // namespace cullide::bullet

@@ -21,7 +21,7 @@
 #include <cstddef>
 #include <functional>
 
-namespace cullide::detail {
+namespace cullide::bullet {
 
 /// The plane in a part's frame: a lower bound of Bullet's distance (less the margins) of a vertex from its stored
 /// coordinates (before the mesh's scaling), and the error bound that makes it safe.
@@ -68,4 +68,4 @@ btVector4 planeEquation(const btStaticPlaneShape& plane, const btTransform& plan
 void planePartContacts(const btGImpactMeshShapePart& part, const btTransform& partTransform, const btVector4& equation,
                        btScalar planeMargin, const PlanePointSink& add, PlaneCounts& counts);
 
-}  // namespace cullide::detail
+}  // namespace cullide::bullet
