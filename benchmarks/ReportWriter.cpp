@@ -1,5 +1,7 @@
 #include "ReportWriter.h"
 
+#include "ReportFormat.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -22,48 +24,13 @@ const std::vector<std::string> kSceneOrder = {"env1", "env2", "env3", "env3-defo
 const std::vector<std::string> kEngineOrder = {"exact",          "cullide",        "cullide-fast",    "cullide-1t",
                                                "cullide-cpu",    "cullide-gpu",    "cullide-raster",  "cullide-sampled",
                                                "bullet-dbvt",    "bullet-sap",     "fcl",             "fcl-aabb"};
-const std::set<std::string> kPeers = {"bullet-dbvt", "bullet-sap", "fcl", "fcl-aabb"};
-
-std::optional<double> number(const json& j, const std::string& key) {
-    const auto it = j.find(key);
-    if (it == j.end() || !it->is_number()) return std::nullopt;
-    return it->get<double>();
-}
 
 double medianMs(const json& r) { return r.at("ms").at("median").get<double>(); }
-
-std::string fixed(double v, int digits) {
-    char buf[64];
-    std::snprintf(buf, sizeof buf, "%.*f", digits, v);
-    return buf;
-}
-
-/// Milliseconds with precision that suits their size.
-std::string ms(double v) { return fixed(v, v < 1.0 ? 3 : v < 10.0 ? 2 : v < 100.0 ? 1 : 0); }
-
-std::string count(double v) {
-    std::string digits = std::to_string(static_cast<long long>(std::llround(v)));
-    std::string out;
-    const std::size_t n = digits.size();
-    for (std::size_t i = 0; i < n; ++i) {
-        out += digits[i];
-        if (i + 1 < n && (n - i - 1) % 3 == 0 && digits[0] != '-') out += ',';
-    }
-    return out;
-}
 
 std::string optCount(const json& r, const std::string& key) {
     const auto v = number(r, key);
     return v ? count(*v) : "–";
 }
-
-/// Text safe inside a Markdown table cell.
-std::string cell(std::string s) {
-    for (std::size_t i = 0; (i = s.find('|', i)) != std::string::npos; i += 2) s.replace(i, 1, "\\|");
-    return s;
-}
-
-std::string ratio(double v) { return fixed(v, v < 0.1 ? 3 : 2) + "×"; }
 
 std::string engineLabel(const std::string& e, const json& r) {
     const int res = r.value("resolution", 256);
@@ -123,8 +90,6 @@ std::pair<double, double> logFit(const std::vector<std::pair<double, double>>& x
     return {a, (sy - a * sx) / n};
 }
 
-std::string classTitle(const std::string& c) { return c == "gpu" ? "hardware GPU" : "CPU only (software GL)"; }
-
 }  // namespace
 
 ReportWriter::ReportWriter(std::vector<json> results, std::string docPath, std::string plotDir, std::string dataDir)
@@ -161,7 +126,7 @@ std::vector<std::string> ReportWriter::scenes(const Class& c, const std::string&
 
 const json* ReportWriter::bestPeer(const Class& c, const std::string& scene, bool gimpactOnly) const {
     const json* best = nullptr;
-    for (const auto& e : kPeers) {
+    for (const auto& e : peerEngines()) {
         if (gimpactOnly && e.rfind("bullet", 0) != 0) continue;
         const json* r = find(c, "side", scene, e);
         if (r != nullptr && (best == nullptr || medianMs(*r) < medianMs(*best))) best = r;

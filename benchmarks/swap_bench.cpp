@@ -2,9 +2,13 @@
 // btCollisionDispatcher), with btAxisSweep3, and with the README's two-line swap (CullideBroadphase +
 // CullideCollisionDispatcher), side by side in one process (issue #12, item 7).
 //
-//   cullide-swap-bench [--steps N] [--env-frames N] [--scene NAME]... [--json FILE] [--gimpact-pair-culling]
-//                      [--gimpact-mesh-culling] [--gimpact-convex-culling]
+//   cullide-swap-bench [--steps N] [--env-frames N] [--scene NAME]... [--json FILE] [--culling auto|on|off]
+//                      [--gimpact-pair-culling] [--gimpact-mesh-culling] [--gimpact-convex-culling]
+//                      [--convex-mesh-culling] [--auto-culling-anywhere]
 //                      [--no-penetration-fallback] [--narrow-phase-threads N] [--sap-object-level]
+//
+// The culling switches are the broadphase's defaults (Culling::Auto) unless set: --culling sets all four, the
+// --*-culling flags set one On; --auto-culling-anywhere lets Auto trial without a hardware GL device.
 //
 // --sap-object-level: the CULLIDE world's object level is a btAxisSweep3 with the SAP world's bounds
 // (CullideBroadphase::setObjectLevel, for applications that used btAxisSweep3) instead of the default btDbvtBroadphase.
@@ -18,7 +22,7 @@
 // world's body states are copied into the others, so all three detect collisions on identical states every step.
 // Their timings are comparable step by step, and "lost pairs" are exact: object pairs with contact points after the
 // default world's step but not after the CULLIDE world's (on the same state). Prints one table row per scene;
-// --json writes the figures (docs/benchmarks.md, scripts/bench.sh).
+// --json writes the figures (docs/swap.md, scripts/bench.sh).
 #include "BenchScene.h"
 #include "BulletMesh.h"
 #include "SeededRandom.h"
@@ -68,11 +72,13 @@ using Random = cullide::bench::SeededRandom;
 
 /// CullideBroadphase::setDeepPenetrationFallback for the CULLIDE world (--no-penetration-fallback clears it).
 bool g_penetrationFallback = true;
-/// CullideBroadphase::setGImpactPairCulling for the CULLIDE world (--gimpact-pair-culling sets it).
-bool g_gimpactPairCulling = false;
-/// setGImpactMeshCulling / setGImpactConvexCulling (--gimpact-mesh-culling, --gimpact-convex-culling).
-bool g_gimpactMeshCulling = false;
-bool g_gimpactConvexCulling = false;
+/// The CULLIDE world's culling switches, by cullide::CulledKind: Auto (the default) unless --culling auto|on|off sets
+/// all four, or --gimpact-pair-culling, --gimpact-mesh-culling, --gimpact-convex-culling, --convex-mesh-culling set
+/// one On.
+std::array<cullide::Culling, 4> g_culling{cullide::Culling::Auto, cullide::Culling::Auto, cullide::Culling::Auto,
+                                          cullide::Culling::Auto};
+/// CullideBroadphase::setAutoCullingOnAnyDevice (--auto-culling-anywhere): Auto trials without a hardware GL device.
+bool g_autoAnyDevice = false;
 /// CullideCollisionDispatcher::setNarrowPhaseThreads for the CULLIDE world (--narrow-phase-threads N; 0: default).
 unsigned g_narrowPhaseThreads = 0;
 /// The CULLIDE world's object level: btAxisSweep3 with the SAP world's bounds (--sap-object-level) or the default.
@@ -149,7 +155,7 @@ struct Shapes {
         return shape;
     }
 
-    btGImpactMeshShape* torus(double R, double r, int segments, int sides) {
+    btGImpactMeshShape* torus(double R, double r, int segments, int sides, double margin = 0.02) {
         std::vector<btScalar> v;
         std::vector<int> idx;
         for (int i = 0; i < segments; ++i)
@@ -165,7 +171,35 @@ struct Shapes {
                 idx.insert(idx.end(), {a, b, c, a, c, d});
             }
         auto* shape = own(new btGImpactMeshShape(mesh(std::move(v), std::move(idx))));
-        shape->setMargin(btScalar(0.02));
+        shape->setMargin(btScalar(margin));
+        shape->updateBound();
+        return shape;
+    }
+
+    /// A bumpy closed ellipsoid (2 * segments * (rings - 1) triangles), a stand-in for GimpactTestDemo's bunny:
+    /// radii (1.3 r, r, 0.9 r), each vertex's radius scaled by a seeded factor in [0.85, 1.15].
+    btGImpactMeshShape* blob(double r, int segments, int rings, double margin, Random& rng) {
+        std::vector<btScalar> v{0, btScalar(r), 0};
+        for (int j = 1; j < rings; ++j)
+            for (int i = 0; i < segments; ++i) {
+                const double th = M_PI * j / rings, ph = 2 * M_PI * i / segments, k = rng.uniform(0.85, 1.15);
+                v.insert(v.end(), {btScalar(1.3 * r * k * std::sin(th) * std::cos(ph)), btScalar(r * k * std::cos(th)),
+                                   btScalar(0.9 * r * k * std::sin(th) * std::sin(ph))});
+            }
+        v.insert(v.end(), {0, btScalar(-r), 0});
+        std::vector<int> idx;
+        const int south = 1 + (rings - 1) * segments;
+        for (int i = 0; i < segments; ++i) idx.insert(idx.end(), {0, 1 + (i + 1) % segments, 1 + i});
+        for (int j = 0; j < rings - 2; ++j)
+            for (int i = 0; i < segments; ++i) {
+                const int a = 1 + j * segments + i, b = 1 + j * segments + (i + 1) % segments;
+                const int c = a + segments, d = b + segments;
+                idx.insert(idx.end(), {a, b, c, b, d, c});
+            }
+        for (int i = 0; i < segments; ++i)
+            idx.insert(idx.end(), {south, 1 + (rings - 2) * segments + i, 1 + (rings - 2) * segments + (i + 1) % segments});
+        auto* shape = own(new btGImpactMeshShape(mesh(std::move(v), std::move(idx))));
+        shape->setMargin(btScalar(margin));
         shape->updateBound();
         return shape;
     }
@@ -189,6 +223,7 @@ struct BodySpec {
     btScalar mass;
     btTransform transform;
     btVector3 velocity = btVector3(0, 0, 0);  ///< initial linear velocity
+    bool kinematic = false;                    ///< CF_KINEMATIC_OBJECT, never deactivated (mass 0)
 };
 struct SceneSpec {
     std::string name;
@@ -197,6 +232,9 @@ struct SceneSpec {
     int raysPerStep = 0;
     bool gimpact = false;
     btScalar gravity = -10;  ///< along y
+    /// Run on every world before each step (the same on each: kinematic motion, launches), with the step index and
+    /// the world's bodies in BodySpec order.
+    std::function<void(int step, const std::vector<btRigidBody*>& bodies)> beforeStep{};
 };
 
 btTransform at(double x, double y, double z) {
@@ -285,6 +323,59 @@ SceneSpec toriPile(Shapes& s) {
                                    rng.uniform(0, 3)));
         sc.bodies.push_back({torus, 1, t});
     }
+    return sc;
+}
+
+/// Bullet's old GimpactTestDemo in spirit, with every mesh at GImpact margin 0: a kinematic torus turning and
+/// drifting above a column of dynamic tori (crossed in turn, as the demo stacks them), two tori touching tip to tip on
+/// the ground (their outer equators meet at a vertex: float rounding decides whether Bullet sees them apart or a
+/// hair inside each other), and bunny stand-ins shot into the column every 30 steps (parked without gravity until
+/// then).
+SceneSpec gimpactDemo(Shapes& s) {
+    SceneSpec sc{"gimpact-demo", "GimpactTestDemo-like: margin-0 GImpact tori and bunnies, a kinematic torus, bunnies shot in", {}};
+    sc.gimpact = true;
+    sc.bodies.push_back({s.own(new btBoxShape(btVector3(50, 1, 50))), 0, at(0, -10, 0)});
+    btGImpactMeshShape* torus = s.torus(2.0, 0.7, 24, 12, 0.0);
+    Random rng(11);
+    btGImpactMeshShape* bunny = s.blob(1.2, 20, 12, 0.0, rng);
+    const btQuaternion flat(btVector3(0, 0, 1), btScalar(M_PI / 2));
+    const btQuaternion crossed = flat * btQuaternion(btVector3(0, 1, 0), btScalar(M_PI / 2));
+    btTransform kinematic = at(0, 18, -5);
+    kinematic.setRotation(crossed);
+    sc.bodies.push_back({torus, 0, kinematic, btVector3(0, 0, 0), true});
+    double height = 18;
+    for (int i = 0; i < 6; ++i) {
+        height -= 2.5;
+        btTransform t = at(0, height, -5);
+        t.setRotation(i % 2 == 0 ? flat : crossed);
+        sc.bodies.push_back({torus, 1, t});
+    }
+    sc.bodies.push_back({torus, 1, at(-16, -8.3, 6)});
+    sc.bodies.push_back({torus, 1, at(-16 + 2 * (2.0 + 0.7), -8.3, 6)});
+    const std::size_t firstBunny = sc.bodies.size();
+    constexpr int kBunnies = 4;
+    for (int i = 0; i < kBunnies; ++i) sc.bodies.push_back({bunny, 2, at(-40 - 6 * i, 30, -30)});
+    sc.beforeStep = [firstBunny](int step, const std::vector<btRigidBody*>& bodies) {
+        if (step == 0)
+            for (int i = 0; i < kBunnies; ++i) bodies[firstBunny + std::size_t(i)]->setGravity(btVector3(0, 0, 0));
+        btRigidBody& k = *bodies[1];
+        btTransform t = k.getWorldTransform();
+        t.setOrigin(t.getOrigin() + btVector3(btScalar(-0.02), 0, 0));
+        t.setRotation(t.getRotation() * btQuaternion(btVector3(1, 0, 0), btScalar(0.03)));
+        k.setWorldTransform(t);
+        k.getMotionState()->setWorldTransform(t);
+        if (step % 30 == 10 && step / 30 < kBunnies) {
+            btRigidBody& b = *bodies[firstBunny + std::size_t(step / 30)];
+            btTransform launch = at(-14, 8 + step % 7, -5 + 0.5 * (step % 3));
+            launch.setRotation(btQuaternion(btVector3(1, btScalar(0.3), 0).normalized(), btScalar(0.1 * step)));
+            b.setWorldTransform(launch);
+            b.getMotionState()->setWorldTransform(launch);
+            b.setGravity(btVector3(0, -10, 0));
+            b.setLinearVelocity(btVector3(20, 2, 0));
+            b.setAngularVelocity(btVector3(0, 0, 0));
+            b.activate(true);
+        }
+    };
     return sc;
 }
 
@@ -485,7 +576,8 @@ const SceneFactory kScenes[] = {{"boxes-3000", boxesFalling},      {"pyramid-wal
                                 {"landscape-150", landscapeSmall}, {"gimpact-landscape", gimpactLandscape},
                                 {"compounds-400", compoundHeap},   {"heightfield-prims", primitivesOnHeightfield},
                                 {"landscape-compounds", compoundsOnLandscape}, {"small-units", smallUnits},
-                                {"sleeping-5000", sleepingBoxes},  {"tori-plane", toriOnPlane}};
+                                {"sleeping-5000", sleepingBoxes},  {"tori-plane", toriOnPlane},
+                                {"gimpact-demo", gimpactDemo}};
 
 /// A dynamics world that times the parts of its step.
 class TimedWorld final : public btDiscreteDynamicsWorld {
@@ -510,11 +602,9 @@ void makePipeline(Pipeline p, btCollisionConfiguration& config, const btVector3&
                   std::unique_ptr<btBroadphaseInterface>& broadphase, std::unique_ptr<btCollisionDispatcher>& dispatcher) {
     if (p == Pipeline::Cullide) {
         auto bp = std::make_unique<cullide::CullideBroadphase>();
-        if (std::getenv("SWAP_BENCH_CONVEX_MESH") != nullptr) bp->setConvexMeshCulling(true);
         bp->setDeepPenetrationFallback(g_penetrationFallback);
-        bp->setGImpactPairCulling(g_gimpactPairCulling);
-        bp->setGImpactMeshCulling(g_gimpactMeshCulling);
-        bp->setGImpactConvexCulling(g_gimpactConvexCulling);
+        for (std::size_t k = 0; k < g_culling.size(); ++k) bp->setCulling(cullide::CulledKind(k), g_culling[k]);
+        bp->setAutoCullingOnAnyDevice(g_autoAnyDevice);
         if (g_sapObjectLevel) bp->setObjectLevel(std::make_unique<btAxisSweep3>(sapMin, sapMax));
         auto d = std::make_unique<cullide::CullideCollisionDispatcher>(&config, bp.get());
         d->setNarrowPhaseThreads(g_narrowPhaseThreads);
@@ -587,6 +677,11 @@ struct World {
             bodies.push_back(std::make_unique<btRigidBody>(info));
             bodies.back()->setUserIndex(static_cast<int>(bodies.size() - 1));
             bodies.back()->setLinearVelocity(b.velocity);
+            if (b.kinematic) {
+                bodies.back()->setCollisionFlags(bodies.back()->getCollisionFlags() |
+                                                 btCollisionObject::CF_KINEMATIC_OBJECT);
+                bodies.back()->setActivationState(DISABLE_DEACTIVATION);
+            }
             world->addRigidBody(bodies.back().get());
         }
     }
@@ -640,6 +735,11 @@ struct Row {
     double ms[3] = {0, 0, 0}, broadphaseMs[3] = {0, 0, 0}, narrowMs[3] = {0, 0, 0};
     double pairs[3] = {0, 0, 0};
     std::size_t contactPairSteps = 0, lost = 0, extra = 0;
+    /// Steps whose contacts were compared (every step, but for the breakable scene, whose worlds are compared until
+    /// they depart: its own run per world, no state copied).
+    int comparedSteps = 0;
+    /// Culling::Auto's state per kind at the end (CulledKind order; "culled"/"not culled" for On/Off).
+    std::array<std::string, 4> autoState;
     cullide::CullideFrameStats last;
     cullide::CullideMemoryStats memory;  ///< what the CULLIDE broadphase keeps after the last step
     double cullidePairs = 0, fallbackPairs = 0, penetrationPairs = 0, apartPairs = 0;  ///< dispatcher, per step
@@ -683,6 +783,15 @@ const cullide::CullideCollisionDispatcher& cullideOf(const btCollisionDispatcher
 }
 const cullide::CullideBroadphase& cullideOf(const btBroadphaseInterface& b) {
     return static_cast<const cullide::CullideBroadphase&>(b);
+}
+
+/// The CULLIDE world's figures at the end of a run: its last step, what it keeps, the culling switches' states.
+void finishRow(const cullide::CullideBroadphase& broadphase, Row& row) {
+    row.last = broadphase.getLastFrameStats();
+    row.memory = broadphase.getMemoryStats();
+    row.comparedSteps = row.steps;
+    for (std::size_t k = 0; k < row.autoState.size(); ++k)
+        row.autoState[k] = broadphase.getCullingDecision(cullide::CulledKind(k)).state;
 }
 
 /// Adds one step's contact error (see Row).
@@ -786,6 +895,12 @@ Row runScene(const SceneFactory& factory, int steps) {
     row.steps = steps;
     std::vector<btTransform> detectedAt(scene.bodies.size());
     for (int s = 0; s < steps; ++s) {
+        if (scene.beforeStep)
+            for (auto& w : worlds) {
+                std::vector<btRigidBody*> bodies;
+                for (auto& b : w->bodies) bodies.push_back(b.get());
+                scene.beforeStep(s, bodies);
+            }
         for (std::size_t i = 0; i < detectedAt.size(); ++i) detectedAt[i] = worlds[0]->bodies[i]->getWorldTransform();
         for (std::size_t k = 0; k < worlds.size(); ++k) worlds[(k + static_cast<std::size_t>(s)) % worlds.size()]
                                                                ->step(scene.raysPerStep, s);
@@ -808,8 +923,7 @@ Row runScene(const SceneFactory& factory, int steps) {
         row.narrowMs[k] = worlds[k]->world->narrowMs / steps;
         row.pairs[k] = double(worlds[k]->narrowPairs) / steps;
     }
-    row.last = static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get())->getLastFrameStats();
-    row.memory = static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get())->getMemoryStats();
+    finishRow(*static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get()), row);
     return row;
 }
 
@@ -912,8 +1026,7 @@ Row runCollisionScene(const CollisionSceneSpec& spec, int frames) {
         row.narrowMs[k] = worlds[k]->narrowMs / frames;
         row.pairs[k] = double(worlds[k]->narrowPairs) / frames;
     }
-    row.last = static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get())->getLastFrameStats();
-    row.memory = static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get())->getMemoryStats();
+    finishRow(*static_cast<cullide::CullideBroadphase*>(worlds[2]->broadphase.get()), row);
     return row;
 }
 
@@ -942,7 +1055,7 @@ Row runBreakable(int steps) {
                      : p == Pipeline::Sap ? CollisionPipeline::BulletAxisSweep
                                           : CollisionPipeline::Cullide;
         o.deepPenetrationFallback = g_penetrationFallback;
-        o.gimpactPairCulling = g_gimpactPairCulling;
+        o.culling = g_culling[std::size_t(cullide::CulledKind::GImpactPair)];  // the pieces' pairs
         o.narrowPhaseThreads = g_narrowPhaseThreads;
         o.recordContacts = p != Pipeline::Sap;
         worlds.push_back(std::make_unique<cullide::demo::BreakableScene>(o));
@@ -964,11 +1077,16 @@ Row runBreakable(int steps) {
             row.pairs[k] += double(f.broadphasePairs) / steps;
             row.bodies = std::max(row.bodies, f.bodies);
         }
-        const ContactPoints want = contactPointsOf(*worlds[0], ids), got = contactPointsOf(*worlds[2], ids);
-        row.contactPairSteps += want.size();
-        for (const auto& p : want) row.lost += got.count(p.first) ? 0 : 1;
-        for (const auto& p : got) row.extra += want.count(p.first) ? 0 : 1;
-        compareContacts(want, got, row);
+        // Contacts are compared while the two worlds are identical: from the first step that differs (a contact
+        // point the culled path places otherwise moves the pieces otherwise), they are two simulations.
+        if (departed < 0) {
+            const ContactPoints want = contactPointsOf(*worlds[0], ids), got = contactPointsOf(*worlds[2], ids);
+            row.contactPairSteps += want.size();
+            for (const auto& p : want) row.lost += got.count(p.first) ? 0 : 1;
+            for (const auto& p : got) row.extra += want.count(p.first) ? 0 : 1;
+            compareContacts(want, got, row);
+            row.comparedSteps = s + 1;
+        }
         addCullideStep(*worlds[2]->cullideDispatcher(), *worlds[2]->cullideBroadphase(), steps, row);
         if (departed < 0) {
             const auto a = worlds[0]->worldMeshes(), b = worlds[2]->worldMeshes();
@@ -979,8 +1097,9 @@ Row runBreakable(int steps) {
     }
     if (departed >= 0)
         std::fprintf(stderr, "breakable: the swap's world departed from the default pipeline's at step %d\n", departed);
-    row.last = worlds[2]->cullideBroadphase()->getLastFrameStats();
-    row.memory = worlds[2]->cullideBroadphase()->getMemoryStats();
+    const int compared = row.comparedSteps;
+    finishRow(*worlds[2]->cullideBroadphase(), row);
+    row.comparedSteps = compared;
     return row;
 }
 
@@ -1087,8 +1206,7 @@ Row runSoftBodies(int steps) {
         row.ms[k] = worlds[k]->stepMs / steps;
         row.pairs[k] = double(worlds[k]->pairs) / steps;
     }
-    row.last = cullideOf(*worlds[2]->broadphase).getLastFrameStats();
-    row.memory = cullideOf(*worlds[2]->broadphase).getMemoryStats();
+    finishRow(cullideOf(*worlds[2]->broadphase), row);
     return row;
 }
 #endif
@@ -1100,7 +1218,7 @@ void printRow(const Row& r) {
                 "(penetrating %.1f), apart %.1f, threaded %.1f | culling frame %.2f ms, culler %.2f, records %.2f; last step: %zu object pairs, "
                 "%zu pruned | contact keys missing %zu of %zu, deepest point diff max %.3g mean %.3g (%zu pair-steps) | "
                 "GImpact-convex triangles %.0f of %.0f (%.0f unchecked) | GImpact-plane vertices %.0f of %.0f | kept: %zu shapes %zu B shared, %zu objects %zu B "
-                "(%zu world copies), %.0f B per object\n",
+                "(%zu world copies), %.0f B per object | culling: pair %s, mesh %s, convex %s, convex-mesh %s\n",
                 r.scene.c_str(), r.bodies, r.steps, r.ms[0], r.ms[1], r.ms[2], r.ms[2] / best, r.broadphaseMs[0],
                 r.broadphaseMs[1], r.broadphaseMs[2], r.narrowMs[0], r.narrowMs[1], r.narrowMs[2], r.pairs[0],
                 r.pairs[1], r.pairs[2], r.lost, r.contactPairSteps,
@@ -1109,7 +1227,8 @@ void printRow(const Row& r) {
                 r.comparedPairSteps ? r.deepestDiffSum / double(r.comparedPairSteps) : 0.0, r.comparedPairSteps,
                 r.convexTriangles, r.convexCandidates, r.convexUnchecked, r.planeVerticesTested, r.planeVertices, r.memory.shapes, r.memory.sharedGeometryBytes,
                 r.memory.objects, r.memory.objectBytes, r.memory.worldCopies,
-                r.memory.objects ? double(r.memory.objectBytes) / double(r.memory.objects) : 0.0);
+                r.memory.objects ? double(r.memory.objectBytes) / double(r.memory.objects) : 0.0,
+                r.autoState[0].c_str(), r.autoState[1].c_str(), r.autoState[2].c_str(), r.autoState[3].c_str());
     std::fflush(stdout);
 }
 
@@ -1118,7 +1237,7 @@ void writeJson(const std::string& path, const std::vector<Row>& rows) {
     out << "[\n";
     for (std::size_t i = 0; i < rows.size(); ++i) {
         const Row& r = rows[i];
-        char buf[2048];
+        char buf[4096];
         std::snprintf(buf, sizeof buf,
                       "  {\"scene\": \"%s\", \"what\": \"%s\", \"bodies\": %zu, \"steps\": %d, \"dbvt_ms\": %.4f, "
                       "\"sap_ms\": %.4f, \"cullide_ms\": %.4f, \"ratio\": %.4f, \"dbvt_broadphase_ms\": %.4f, "
@@ -1127,13 +1246,17 @@ void writeJson(const std::string& path, const std::vector<Row>& rows) {
                       "\"cullide_pairs\": %.1f, \"apart_pairs\": %.1f, \"threaded_pairs\": %.1f, \"contact_pair_steps\": %zu, \"lost\": %zu, "
                       "\"lost_checked\": %zu, \"lost_apart\": %zu, \"extra\": %zu, \"culled_pairs\": %zu, "
                       "\"pruned_pairs\": %zu, \"points\": %zu, \"points_missing\": %zu, \"deepest_diff_max\": %.6g, "
-                      "\"deepest_diff_mean\": %.6g, \"penetration_fallback\": %s}%s\n",
+                      "\"deepest_diff_mean\": %.6g, \"penetration_fallback\": %s, \"compared_steps\": %d, "
+                      "\"culling\": {\"gimpact_pair\": \"%s\", \"gimpact_mesh\": \"%s\", \"gimpact_convex\": \"%s\", "
+                      "\"convex_mesh\": \"%s\"}}%s\n",
                       r.scene.c_str(), r.what.c_str(), r.bodies, r.steps, r.ms[0], r.ms[1], r.ms[2],
                       r.ms[2] / std::min(r.ms[0], r.ms[1]), r.broadphaseMs[0], r.broadphaseMs[1], r.broadphaseMs[2],
                       r.narrowMs[0], r.narrowMs[1], r.narrowMs[2], r.pairs[0], r.pairs[1], r.pairs[2], r.apartPairs, r.threadedPairs, r.contactPairSteps, r.lost, r.lostChecked, r.lostApart,
                       r.extra, r.last.culledPairs, r.last.prunedPairs, r.points, r.pointsMissing, r.deepestDiffMax,
                       r.comparedPairSteps ? r.deepestDiffSum / double(r.comparedPairSteps) : 0.0,
-                      g_penetrationFallback ? "true" : "false", i + 1 < rows.size() ? "," : "");
+                      g_penetrationFallback ? "true" : "false", r.comparedSteps, r.autoState[0].c_str(),
+                      r.autoState[1].c_str(), r.autoState[2].c_str(), r.autoState[3].c_str(),
+                      i + 1 < rows.size() ? "," : "");
         out << buf;
     }
     out << "]\n";
@@ -1157,11 +1280,24 @@ int main(int argc, char** argv) {
         } else if (a == "--no-penetration-fallback") {
             g_penetrationFallback = false;
         } else if (a == "--gimpact-pair-culling") {
-            g_gimpactPairCulling = true;
+            g_culling[std::size_t(cullide::CulledKind::GImpactPair)] = cullide::Culling::On;
         } else if (a == "--gimpact-mesh-culling") {
-            g_gimpactMeshCulling = true;
+            g_culling[std::size_t(cullide::CulledKind::GImpactMesh)] = cullide::Culling::On;
         } else if (a == "--gimpact-convex-culling") {
-            g_gimpactConvexCulling = true;
+            g_culling[std::size_t(cullide::CulledKind::GImpactConvex)] = cullide::Culling::On;
+        } else if (a == "--convex-mesh-culling") {
+            g_culling[std::size_t(cullide::CulledKind::ConvexMesh)] = cullide::Culling::On;
+        } else if (a == "--culling" && i + 1 < argc) {
+            const std::string mode = argv[++i];
+            if (mode != "auto" && mode != "on" && mode != "off") {
+                std::fprintf(stderr, "cullide-swap-bench: --culling expects auto, on or off, got '%s'\n", mode.c_str());
+                return 2;
+            }
+            g_culling.fill(mode == "auto" ? cullide::Culling::Auto
+                           : mode == "on" ? cullide::Culling::On
+                                          : cullide::Culling::Off);
+        } else if (a == "--auto-culling-anywhere") {
+            g_autoAnyDevice = true;
         } else if (a == "--narrow-phase-threads" && i + 1 < argc) {
             g_narrowPhaseThreads = static_cast<unsigned>(std::max(0, std::atoi(argv[++i])));
         } else if (a == "--sap-object-level") {
@@ -1170,7 +1306,8 @@ int main(int argc, char** argv) {
             json = argv[++i];
         } else {
             std::fprintf(stderr, "usage: cullide-swap-bench [--steps N] [--env-frames N] [--scene NAME]... [--json FILE] "
-                                 "[--gimpact-pair-culling] [--gimpact-mesh-culling] [--gimpact-convex-culling] "
+                                 "[--culling auto|on|off] [--gimpact-pair-culling] [--gimpact-mesh-culling] "
+                                 "[--gimpact-convex-culling] [--convex-mesh-culling] [--auto-culling-anywhere] "
                                  "[--no-penetration-fallback] [--narrow-phase-threads N] "
                                  "[--sap-object-level]\nscenes:");
             for (const SceneFactory& f : kScenes) std::fprintf(stderr, " %s", f.name);

@@ -2,7 +2,7 @@
 //
 //   cullide-demo [--scene breakable|env1|env2|env3] [--frames N] [--resolution N] [--mode reliable|sampled]
 //                [--seed S] [--out DIR] [--snapshot-every K] [--check-every K] [--mesh PATH]
-//                [--breakable-mesh PATH] [--objects N] [--pipeline P] [--gimpact-pair-culling on|off]
+//                [--breakable-mesh PATH] [--objects N] [--pipeline P] [--culling auto|on|off]
 //                [--deep-penetration-fallback on|off]
 //                [--quiet] [--help]
 //
@@ -12,10 +12,10 @@
 #include "FrameLog.h"
 #include "SceneRunner.h"
 
-#include "cullide/Snapshot.h"
 #include "cullide/Timer.h"
 #include "cullide/io/Image.h"
 #include "cullide/io/MeshIO.h"
+#include "cullide/io/Snapshot.h"
 
 #include <nlohmann/json.hpp>
 
@@ -44,7 +44,7 @@ const char* const kUsage =
     "usage: cullide-demo [--scene breakable|env1|env2|env3] [--frames N] [--resolution N] [--mode reliable|sampled]\n"
     "                    [--seed S] [--out DIR] [--snapshot-every K] [--check-every K] [--mesh PATH]\n"
     "                    [--breakable-mesh PATH] [--objects N] [--pipeline P]\n"
-    "                    [--gimpact-pair-culling on|off] [--deep-penetration-fallback on|off]\n"
+    "                    [--culling auto|on|off] [--deep-penetration-fallback on|off]\n"
     "                    [--quiet] [--help]\n"
     "\n"
     "Runs a CULLIDE scene headless and writes per-frame figures, a summary and snapshots.\n"
@@ -65,13 +65,16 @@ const char* const kUsage =
     "  --objects N         object count for env1 / env2 (default 100 / 6)\n"
     "  --pipeline P        breakable: cullide (default), bullet-dbvt or bullet-axis-sweep (Bullet's own\n"
     "                      broadphase and dispatcher with GImpact, for comparison)\n"
-    "  --gimpact-pair-culling on|off\n"
-    "                      breakable, cullide: GImpact-GImpact pairs through the culler (default off:\n"
-    "                      the pieces get Bullet's GImpact contacts bit for bit, at a fraction of its cost)\n"
+    "  --culling auto|on|off\n"
+    "                      breakable, cullide: the broadphase's culling switches. auto (default): the\n"
+    "                      pieces' pairs go through the culler where a trial shows it pays, which needs a\n"
+    "                      hardware GL device (elsewhere they get Bullet's GImpact contacts bit for bit, at a\n"
+    "                      fraction of its cost); on: always through the culler (its CPU path or its GPU\n"
+    "                      levels, as the culler decides); off: never. frames.csv says per frame which path\n"
+    "                      ran. --gimpact-pair-culling on|off is the same as --culling on|off\n"
     "  --deep-penetration-fallback on|off\n"
-    "                      breakable, cullide, with --gimpact-pair-culling on: intersecting GImpact pairs\n"
-    "                      get Bullet's contacts (default on); off, fewer contacts between\n"
-    "                      interpenetrating pieces\n"
+    "                      breakable, cullide, pairs culled: intersecting GImpact pairs get Bullet's\n"
+    "                      contacts (default on); off, fewer contacts between interpenetrating pieces\n"
     "  --quiet             no progress line\n"
     "  --help              show this help\n"
     "\n"
@@ -170,8 +173,15 @@ Options parse(int argc, char** argv, bool& help) {
                 o.runner.pipeline != "bullet-axis-sweep")
                 throw UsageError("--pipeline expects cullide, bullet-dbvt or bullet-axis-sweep, got '" +
                                  o.runner.pipeline + "'");
+        } else if (a == "--culling") {
+            const std::string m = value();
+            if (m == "auto") o.runner.culling = cullide::Culling::Auto;
+            else if (m == "on") o.runner.culling = cullide::Culling::On;
+            else if (m == "off") o.runner.culling = cullide::Culling::Off;
+            else throw UsageError("--culling expects auto, on or off, got '" + m + "'");
+            cullingGiven = true;
         } else if (a == "--gimpact-pair-culling") {
-            o.runner.gimpactPairCulling = onOff();
+            o.runner.culling = onOff() ? cullide::Culling::On : cullide::Culling::Off;
             cullingGiven = true;
         } else if (a == "--deep-penetration-fallback") {
             o.runner.deepPenetrationFallback = onOff();
@@ -189,10 +199,10 @@ Options parse(int argc, char** argv, bool& help) {
     if (!breakable && (!o.runner.mesh.empty() || !o.runner.breakableMesh.empty() || o.runner.pipeline != "cullide"))
         throw UsageError("--mesh, --breakable-mesh and --pipeline apply to --scene breakable only");
     if ((fallbackGiven || cullingGiven) && (!breakable || o.runner.pipeline != "cullide"))
-        throw UsageError("--gimpact-pair-culling or --deep-penetration-fallback: each applies to --scene breakable "
-                         "with --pipeline cullide only");
-    if (fallbackGiven && !o.runner.gimpactPairCulling)
-        throw UsageError("--deep-penetration-fallback applies with --gimpact-pair-culling on only");
+        throw UsageError("--culling or --deep-penetration-fallback: each applies to --scene breakable with "
+                         "--pipeline cullide only");
+    if (fallbackGiven && o.runner.culling == cullide::Culling::Off)
+        throw UsageError("--deep-penetration-fallback applies where pairs may be culled (--culling auto or on) only");
     if (o.runner.objects > 0 && o.runner.scene != "env1" && o.runner.scene != "env2")
         throw UsageError("--objects applies to --scene env1 and env2 only");
     return o;
@@ -256,6 +266,33 @@ std::string cpuModel() {
             return colon == std::string::npos ? line : line.substr(colon + 2);
         }
     return "unknown";
+}
+
+/// What culled the frames: the setting, the frames per path (frames.csv's path column), the culled and pruned pairs,
+/// and Culling::Auto's decision for the pieces' pairs (breakable) with the timings behind it.
+nlohmann::json cullingSummary(const Options& o, const cullide::demo::SceneRunner& runner,
+                              const std::vector<cullide::demo::FrameRecord>& records) {
+    using nlohmann::json;
+    json paths = json::object();
+    std::size_t culled = 0, pruned = 0;
+    for (const auto& r : records) {
+        paths[r.path.empty() ? "none" : r.path] = paths.value(r.path.empty() ? "none" : r.path, 0) + 1;
+        culled += r.culledPairs;
+        pruned += r.prunedPairs;
+    }
+    const char* setting = o.runner.culling == cullide::Culling::Auto ? "auto"
+                          : o.runner.culling == cullide::Culling::On ? "on"
+                                                                     : "off";
+    json summary = {{"setting", o.runner.scene == "breakable" ? setting : "culler"},
+                    {"frames_by_path", paths},
+                    {"culled_pair_steps", culled},
+                    {"pruned_pair_steps", pruned}};
+    if (const auto d = runner.cullingDecision())
+        summary["auto"] = {{"state", d->state},
+                           {"unculled_ms", d->unculledMs},
+                           {"culled_ms", d->culledMs},
+                           {"abandoned_trials", d->abandonedTrials}};
+    return summary;
 }
 
 int run(const Options& o) {
@@ -353,6 +390,7 @@ int run(const Options& o) {
         {"seed", o.runner.seed},
         {"pipeline", o.runner.scene == "breakable" ? o.runner.pipeline : "culler"},
         {"deep_penetration_fallback", o.runner.deepPenetrationFallback},
+        {"culling", cullingSummary(o, *runner, records)},
         {"mode", o.runner.culler.mode == cullide::Mode::Reliable ? "reliable" : "sampled"},
         {"resolution", o.runner.culler.resolution},
         {"renderer", runner->renderer()},

@@ -14,8 +14,8 @@ launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
 generator=()
 command -v ninja >/dev/null && generator=(-G Ninja)
-# Only the fuzz target and the cullide library (instrumented, see tests/fuzz/CMakeLists.txt) are built; warnings
-# are not errors here: clang warns about things gcc (the warnings-as-errors builds) does not.
+# Only the fuzz target and the cullide and cullide_io libraries (instrumented, see tests/fuzz/CMakeLists.txt) are
+# built; warnings are not errors here: clang warns about things gcc (the warnings-as-errors builds) does not.
 CC=clang CXX=clang++ cmake -S . -B "$dir" "${generator[@]}" "${launcher[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DCULLIDE_BUILD_FUZZ=ON -DCULLIDE_BUILD_BENCHMARKS=OFF -DCULLIDE_BUILD_CGAL_ORACLE=OFF -DCULLIDE_WERROR=OFF >/dev/null
 cmake --build "$dir" -j"$(nproc)" --target cullide_fuzz_readers

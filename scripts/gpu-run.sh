@@ -3,7 +3,7 @@
 # package manager, no network) needs to run the GL tests, the benchmarks and the demo on its GPU in one command.
 #   scripts/gpu-run.sh [DIR]          builds build-gpu/ (Release, stripped) and writes the bundle to DIR
 #                                     (default .gpu-bundle/, git-ignored); fails if it is over 64 MiB
-#   DIR/run.sh [--quick] [--device D] OUTDIR     on the GPU machine (see DIR/run.sh and docs/benchmarks.md)
+#   DIR/run.sh [--quick] [--device D] OUTDIR     on the GPU machine (see DIR/run.sh and docs/gpu-run.md)
 # Bundle: bin/ (the programs, RUNPATH $ORIGIN/../lib), lib/ (the project's libraries and every non-glibc library
 # they load, plus libglvnd's GL client libraries; RUNPATH $ORIGIN), data/meshes/ (scripts/fetch_meshes.sh's meshes
 # when present), run.sh, bench-runs.sh (the benchmark run list shared with scripts/bench.sh), BUNDLE-INFO.

@@ -6,17 +6,18 @@
 namespace cullide::demo {
 
 void writeCsvHeader(std::ostream& out) {
-    out << "frame,objects,triangles,prepass_objects,prepass_groups,pcs_objects,pcs_triangles,candidate_pairs,"
-           "triangle_pairs,broadphase_pairs,contacts,new_pieces,prepass_ms,gpu_levels_ms,exact_ms,cull_ms,"
-           "narrowphase_ms,solver_ms,fracture_ms,frame_ms,missed\n";
+    out << "frame,path,culled_pairs,pruned_pairs,objects,triangles,prepass_objects,prepass_groups,levels,pcs_objects,"
+           "pcs_triangles,candidate_pairs,triangle_pairs,broadphase_pairs,contacts,new_pieces,prepass_ms,gpu_levels_ms,"
+           "exact_ms,cull_ms,narrowphase_ms,solver_ms,fracture_ms,frame_ms,missed\n";
 }
 
 void writeCsvRow(std::ostream& out, const FrameRecord& r) {
     char ms[256];
     std::snprintf(ms, sizeof ms, "%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f,%.3f", r.prepassMs, r.gpuLevelsMs, r.exactMs,
                   r.cullMs, r.narrowphaseMs, r.solverMs, r.fractureMs, r.frameMs);
-    out << r.frame << ',' << r.objects << ',' << r.triangles << ',' << r.prepassObjects << ',' << r.prepassGroups
-        << ',' << r.pcsObjects << ',' << r.pcsTriangles << ',' << r.candidatePairs << ',' << r.trianglePairs << ','
+    out << r.frame << ',' << r.path << ',' << r.culledPairs << ',' << r.prunedPairs << ',' << r.objects << ','
+        << r.triangles << ',' << r.prepassObjects << ',' << r.prepassGroups << ',' << r.levels << ',' << r.pcsObjects
+        << ',' << r.pcsTriangles << ',' << r.candidatePairs << ',' << r.trianglePairs << ','
         << r.broadphasePairs << ',' << r.contacts << ',' << r.newPieces << ',' << ms << ',';
     if (r.missed >= 0) out << r.missed;
     out << '\n';

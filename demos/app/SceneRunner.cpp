@@ -42,8 +42,22 @@ long missedPairs(const Result& reference, const Result& result) {
     return missed;
 }
 
+/// The potentially colliding set level by level: "name:in>out" per GPU level.
+std::string levelSizes(const Stats& s) {
+    std::string out;
+    for (const LevelStats& level : s.levels) {
+        if (level.itemsPerIteration.empty()) continue;
+        if (!out.empty()) out += ' ';
+        out += level.name + ':' + std::to_string(level.itemsPerIteration.front()) + '>' +
+               std::to_string(level.itemsPerIteration.back());
+    }
+    return out;
+}
+
 /// The culler's set sizes and stage times (the caller sets the triangle pairs and frame times it knows better).
 void fillFromStats(FrameRecord& r, const Stats& s, std::size_t pcsTriangles) {
+    r.path = s.abandoned ? "abandoned" : s.levels.empty() ? "cpu-path" : "gpu-levels";
+    r.levels = levelSizes(s);
     r.prepassObjects = s.prepassObjectsOut;
     r.prepassGroups = s.prepassGroupsOut;
     r.pcsObjects = s.pcsObjects;
@@ -145,6 +159,9 @@ public:
         r.objects = f.bodies;
         r.triangles = f.triangles;
         fillFromStats(r, f.cullide.culler, f.cullide.pcsTriangles);
+        if (f.cullide.culledPairs == 0) r.path = "not-culled";
+        r.culledPairs = f.cullide.culledPairs;
+        r.prunedPairs = f.cullide.prunedPairs;
         r.trianglePairs = f.trianglePairs;
         r.broadphasePairs = f.broadphasePairs;
         r.contacts = f.contacts;
@@ -183,6 +200,11 @@ public:
     std::string device() const override { return m_scene.lastFrame().cullide.culler.device; }
     bool usedStandIns() const override { return m_scene.usedStandIns(); }
     int fractures() const override { return m_scene.fractures(); }
+    std::optional<CullingDecision> cullingDecision() const override {
+        const CullideBroadphase* bp = m_scene.cullideBroadphase();
+        if (bp == nullptr) return std::nullopt;
+        return bp->getCullingDecision(CulledKind::GImpactPair);
+    }
     int defaultFrames() const override { return 150; }
 
 private:
@@ -193,7 +215,7 @@ private:
         b.fallingMesh = o.mesh;
         b.breakableMesh = o.breakableMesh;
         b.deepPenetrationFallback = o.deepPenetrationFallback;
-        b.gimpactPairCulling = o.gimpactPairCulling;
+        b.culling = o.culling;
         if (o.pipeline == "bullet-dbvt") b.pipeline = CollisionPipeline::BulletDbvt;
         else if (o.pipeline == "bullet-axis-sweep") b.pipeline = CollisionPipeline::BulletAxisSweep;
         else if (o.pipeline != "cullide") throw std::invalid_argument("unknown pipeline '" + o.pipeline + "'");

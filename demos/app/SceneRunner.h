@@ -7,6 +7,7 @@
 #include "cullide/Culler.h"
 #include "cullide/Settings.h"
 #include "cullide/Types.h"
+#include "cullide_bullet/CullideBroadphase.h"
 
 #include <cstdint>
 #include <memory>
@@ -25,7 +26,7 @@ struct RunnerOptions {
     int objects = 0;                  ///< env1/env2 object count (0 = the paper's)
     std::string pipeline = "cullide"; ///< breakable: cullide | bullet-dbvt | bullet-axis-sweep
     bool deepPenetrationFallback = true; ///< breakable, cullide: --deep-penetration-fallback on|off
-    bool gimpactPairCulling = false;     ///< breakable, cullide: --gimpact-pair-culling on|off
+    Culling culling = Culling::Auto;     ///< breakable, cullide: --culling auto|on|off
 };
 
 class SceneRunner {
@@ -46,6 +47,8 @@ public:
     virtual std::string device() const = 0;
     virtual bool usedStandIns() const = 0;
     virtual int fractures() const { return 0; }
+    /// Breakable, cullide: what Culling::Auto decided for the pieces' pairs (GImpact-GImpact); else nothing.
+    virtual std::optional<CullingDecision> cullingDecision() const { return std::nullopt; }
     virtual int defaultFrames() const = 0;
 };
 

@@ -150,7 +150,9 @@ struct BreakableScene::Impl {
         case CollisionPipeline::Cullide: {
             auto bp = std::make_unique<CullideBroadphase>(options.culler);
             bp->setDeepPenetrationFallback(options.deepPenetrationFallback);
-            bp->setGImpactPairCulling(options.gimpactPairCulling);
+            for (CulledKind kind : {CulledKind::GImpactPair, CulledKind::GImpactMesh, CulledKind::GImpactConvex,
+                                    CulledKind::ConvexMesh})
+                bp->setCulling(kind, options.culling);
             cullideBp = bp.get();
             broadphase = std::move(bp);
             auto d = std::make_unique<CullideCollisionDispatcher>(config.get(), cullideBp);

@@ -11,8 +11,17 @@ AutoLevels::Path AutoLevels::choose(std::size_t triangles) {
     // A new trial: the first, a size jump during one, or a size change once the decision has held long enough
     // (a scene whose colliding set keeps changing size would otherwise pay for the slower path every few frames).
     if (m_step == 0 || (resized && (measuring() || m_framesDecided >= m_holdFrames))) {
-        m_step = 0;
-        m_triangles = triangles;
+        const double scale = m_triangles > 0 ? double(triangles) / double(m_triangles) : 1.0;
+        if (m_decided && !measuring() && m_decision == Path::Gpu &&
+            m_cpuMs * scale > 2.0 * m_gpuMs * scale + kBudgetSlackMs) {
+            // The CPU path lost by more than a frame loop can absorb: no CPU trial frame, a longer hold.
+            m_holdFrames = std::min(2 * m_holdFrames, kMaxFramesBetweenTrials);
+            m_framesDecided = 0;
+            m_triangles = triangles;
+        } else {
+            m_step = 0;
+            m_triangles = triangles;
+        }
     }
     if (!measuring()) {
         ++m_framesDecided;
@@ -25,6 +34,7 @@ AutoLevels::Path AutoLevels::choose(std::size_t triangles) {
 void AutoLevels::record(Path path, double ms) {
     if (!m_pending || path != trialPath(m_step)) return;
     m_pending = false;
+    if (path == Path::Cpu) m_lastCpuFrameMs = ms;
     if (m_step >= 2) (path == Path::Cpu ? m_trialCpuMs : m_trialGpuMs) = ms;  // steps 0, 1: warm-ups
     if (++m_step < kTrialFrames) return;
     m_cpuMs = m_trialCpuMs;
@@ -37,6 +47,11 @@ void AutoLevels::record(Path path, double ms) {
     m_decision = decision;
     m_decided = true;
     m_framesDecided = 0;
+}
+
+double AutoLevels::trialBudgetMs() const {
+    if (!m_pending || trialPath(m_step) != Path::Gpu || m_lastCpuFrameMs <= 0.0) return 0.0;
+    return m_lastCpuFrameMs + kBudgetSlackMs;
 }
 
 std::string AutoLevels::decision() const {

@@ -15,8 +15,12 @@ namespace cullide {
 /// path at least kClearLoss times the faster, doubles the hold (up to kMaxFramesBetweenTrials): a scene whose
 /// colliding set keeps changing size does not pay for a far slower path (a GPU that loses by 5x on a machine of
 /// many cores) every two seconds. Any other trial sets the hold back to kMinFramesBetweenTrials.
-/// The same rule on every device: a GPU that loses to the CPU path, and a software renderer that wins, are handled
-/// alike.
+/// No trial frame stalls a frame loop: a GPU trial frame gets a budget (trialBudgetMs: the last CPU frame's time plus
+/// 1 ms); the culler abandons GPU levels that run past it and finishes the frame on the CPU path, so such a frame
+/// costs at most about twice a CPU frame plus 1 ms, and its time (recorded as the GPU's) makes the CPU path win. Once
+/// the GPU levels won, a new trial is skipped (the hold doubled instead) while the CPU path, scaled to the scene's
+/// new size, would take more than twice the GPU frame plus 1 ms: a CPU trial frame would then stall the loop.
+/// GpuCuller runs the levels under Auto on hardware devices only (createGpuCuller; a software renderer never wins).
 class AutoLevels {
 public:
     enum class Path { Cpu, Gpu };
@@ -26,6 +30,9 @@ public:
     Path choose(std::size_t triangles);
     /// The frame just run on `path` (as returned by choose()) took `ms` (wall time of the whole frame).
     void record(Path path, double ms);
+    /// The time a GPU trial frame may spend before its GPU levels are abandoned (the last CPU frame's time plus
+    /// kBudgetSlackMs); 0: no limit (no CPU frame yet, or not a trial frame).
+    double trialBudgetMs() const;
 
     /// A trial is under way (or none has started: the first frame with triangles starts one).
     bool measuring() const { return m_step < kTrialFrames; }
@@ -42,6 +49,7 @@ private:
     static constexpr int kMinFramesBetweenTrials = 120;
     static constexpr int kMaxFramesBetweenTrials = 120 * 32;
     static constexpr double kClearLoss = 2.0;
+    static constexpr double kBudgetSlackMs = 1.0;
     static Path trialPath(int step) { return step % 2 == 0 ? Path::Cpu : Path::Gpu; }
 
     int m_step = 0;                   ///< trial frames done; kTrialFrames = decided
@@ -52,6 +60,7 @@ private:
     std::size_t m_triangles = 0;      ///< triangle count of the scene when the trial started
     double m_trialCpuMs = 0.0, m_trialGpuMs = 0.0;
     double m_cpuMs = 0.0, m_gpuMs = 0.0;
+    double m_lastCpuFrameMs = 0.0;    ///< the last trial frame on the CPU path, warm-up or timed
     Path m_decision = Path::Cpu;
 };
 

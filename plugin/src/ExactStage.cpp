@@ -99,7 +99,7 @@ void ExactStage::buildTrees(const std::vector<TreeInput>& inputs, std::vector<co
 
 void ExactStage::run(const std::vector<Object>& objects, const std::vector<ExactJob>& jobs, double margin, bool exact,
                      std::vector<ExactJobResult>& results, Stats& stats, const std::vector<BoxJob>& boxJobs,
-                     std::vector<std::uint8_t>* touches) {
+                     std::vector<std::uint8_t>* touches, const Deadline* deadline) {
     results.assign(jobs.size(), ExactJobResult{});
     // Phase 1: a box tree over each object's surviving triangles (once, however many pairs the object is in: a
     // landscape under many bodies), the two trees of each job descended together, split into tasks for every worker.
@@ -166,6 +166,10 @@ void ExactStage::run(const std::vector<Object>& objects, const std::vector<Exact
             const std::size_t j = tasks[t].first;
             const std::vector<BoxTree::NodePair>& frontier = frontiers[j];
             pairs.clear();
+            if (deadline != nullptr && deadline->expired()) {  // the run is abandoned: its results are not read
+                assignKeeping(onlyTask(j) ? results[j].triangles : taskOut[t], pairs.begin(), pairs.end());
+                continue;
+            }
             for (std::size_t i = tasks[t].second, last = std::min(frontier.size(), i + kChunk); i < last; ++i)
                 BoxTree::leafPairs(tree(jobListA[j]), tree(jobListB[j]), frontier[i], stack, pairs);
             taskCandidates[t] = pairs.size();

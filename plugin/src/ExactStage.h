@@ -2,6 +2,7 @@
 // the two objects' surviving triangles together, then the robust triangle test, on worker threads.
 #pragma once
 
+#include "Deadline.h"
 #include "cullide/TaskPool.h"
 #include "cullide/Object.h"
 #include "cullide/Result.h"
@@ -55,9 +56,11 @@ public:
 
     /// With `exact` false, every candidate is reported (no triangle test).
     /// Box jobs are answered in `touches` (1: some triangle box overlaps), from the same trees.
+    /// Tasks that start once `deadline` (optional) has passed do nothing: the caller, seeing it passed, discards
+    /// the results.
     void run(const std::vector<Object>& objects, const std::vector<ExactJob>& jobs, double margin, bool exact,
              std::vector<ExactJobResult>& results, Stats& stats, const std::vector<BoxJob>& boxJobs = {},
-             std::vector<std::uint8_t>* touches = nullptr);
+             std::vector<std::uint8_t>* touches = nullptr, const Deadline* deadline = nullptr);
 
 private:
     /// What one box tree is built over: a surviving-triangle list, the mesh's triangle boxes, and optionally the

@@ -3,6 +3,7 @@
 // says what it reads and writes; the culler keeps one between frames only to reuse its allocations.
 #pragma once
 
+#include "Deadline.h"
 #include "FrameObjects.h"
 #include "MeshCache.h"
 #include "cullide/Object.h"
@@ -38,6 +39,11 @@ struct FrameState {
     /// Per object: 1 when its box meets another's (only those can collide; the others are not looked at again).
     std::vector<std::uint8_t> active;
     bool gpuLevels = false;  ///< whether the visibility levels run this frame
+    /// A GPU trial frame's budget (AutoLevels::trialBudgetMs): the levels stop at a level's start past it
+    /// (LevelPipelines throws LevelsAbandoned) and the frame is finished on the CPU path.
+    Deadline levelsDeadline;
+    /// The run's budget (Culler::run with a budget): a stage that finds it spent throws RunAbandoned.
+    Deadline runDeadline;
 
     /// Per object: all its mesh's triangles in a spatial order kept between frames (TriangleOrders), or null. Set
     /// for every active mesh when GPU levels run (their groups follow it); on the CPU path for the meshes whose

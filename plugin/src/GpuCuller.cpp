@@ -2,6 +2,7 @@
 // (object, sub-object and triangle levels of image-space pruning, on a PruningBackend) or the CPU path, then the
 // exact stage. Each stage is a function of the frame's state (FrameState.h), passed explicitly.
 #include "AutoLevels.h"
+#include "Deadline.h"
 #include "CullerBackends.h"
 #include "ExactStage.h"
 #include "FrameObjects.h"
@@ -18,6 +19,7 @@
 #include "cullide/Culler.h"
 #include "cullide/Timer.h"
 
+#include <chrono>
 #include <cstdio>
 #include <memory>
 #include <mutex>
@@ -40,9 +42,11 @@ void noticeOnce(const std::string& reason) {
 
 class GpuCuller final : public Culler {
 public:
-    GpuCuller(const Settings& settings, const PruningBackendFactory& makeBackend)
+    /// `autoOnHardwareOnly`: GpuLevels::Auto opens no backend unless the selected device is a hardware one
+    /// (createGpuCuller; a custom backend factory decides for itself).
+    GpuCuller(const Settings& settings, const PruningBackendFactory& makeBackend, bool autoOnHardwareOnly)
         : m_settings(settings), m_pool(settings.threads), m_exact(m_pool) {
-        openBackend(makeBackend);
+        openBackend(makeBackend, autoOnHardwareOnly);
     }
 
     const Settings& settings() const override { return m_settings; }
@@ -54,9 +58,30 @@ public:
         runFrame(objects, &only, result);
     }
 
+    void run(const std::vector<Object>& objects, const std::vector<ObjectIndexPair>& only, Result& result,
+             double budgetMs) override {
+        checkPairList(only, objects.size());
+        runFrame(objects, &only, result, budgetMs);
+    }
+
 private:
     /// One frame: every overlapping pair, or only those listed in `only`.
-    void runFrame(const std::vector<Object>& objects, const std::vector<ObjectIndexPair>* only, Result& result) {
+    void runFrame(const std::vector<Object>& objects, const std::vector<ObjectIndexPair>* only, Result& result,
+                  double budgetMs = 0.0) {
+        try {
+            runStages(objects, only, result, Deadline::after(std::chrono::steady_clock::now(), budgetMs));
+        } catch (const RunAbandoned&) {
+            Stats stats = std::move(result.stats);
+            result.clear();
+            stats.abandoned = true;
+            result.stats = std::move(stats);
+            m_frame.objects = nullptr;
+        }
+    }
+
+    /// The frame's stages; RunAbandoned from a stage that found `runDeadline` spent.
+    void runStages(const std::vector<Object>& objects, const std::vector<ObjectIndexPair>* only, Result& result,
+                   const Deadline& runDeadline) {
         Timer total;
         const TaskPool::Busy busy(m_pool);  // workers woken now, polling through the frame's serial steps
         const TaskPool::Counters poolBefore = m_pool.counters();
@@ -68,22 +93,34 @@ private:
         stats.gpuUnavailable = m_gpuUnavailable;
         FrameState& frame = m_frame;
 
+        const auto start = std::chrono::steady_clock::now();
+        frame.runDeadline = runDeadline;
         Timer prepass;
         prepareObjects(objects, only, frame, result);
-        const bool autoActive = choosePath(frame, stats);
-        assignOrders(objects, frame, stats);
-        buildTriangleBoxesAndGroups(frame, static_cast<std::uint32_t>(m_settings.groupSize), m_settings.margin,
-                                    m_settings.pipeline != Pipeline::Paper, m_pool, m_scratch, stats);
+        const bool autoActive = choosePath(frame, start, stats);
+        if (runDeadline.expired()) throw RunAbandoned{};
+        prepareTriangles(objects, frame, stats);
         stats.prepassMs = prepass.ms();
+        if (runDeadline.expired()) throw RunAbandoned{};
 
         Timer levels;
-        findSurvivingTriangles(frame, stats);
+        if (!findSurvivingTriangles(frame, stats)) {
+            // A GPU trial frame past its budget: finished on the CPU path (its time then makes the CPU path win).
+            const Timer cpu;
+            frame.gpuLevels = false;
+            clearLists(frame.surviving, objects.size());
+            prepareTriangles(objects, frame, stats);
+            findSurvivingTriangles(frame, stats);
+            stats.prepassMs += cpu.ms();
+        }
         // Without GPU levels this stage is the CPU collection of the pre-pass's triangles: count it there.
         (frame.gpuLevels ? stats.gpuLevelsMs : stats.prepassMs) += levels.ms() - stats.uploadMs;
 
+        if (runDeadline.expired()) throw RunAbandoned{};
         Timer exact;
         if (!frame.gpuLevels) stats.meshOrdersComputed += assignTreeOrders(objects, frame);
         m_assembly.run(frame, m_settings, m_exact, result);
+        if (runDeadline.expired()) throw RunAbandoned{};  // some exact-stage tasks were skipped
         if (!frame.gpuLevels) m_trees.listPairedTriangles(result, frame, m_pool);
         stats.exactMs = exact.ms();
         stats.pcsObjects = result.pcs.size();
@@ -137,8 +174,9 @@ private:
     /// Sets frame.gpuLevels: whether this frame runs the visibility levels (a backend is there): always in the
     /// paper pipeline and with GpuLevels::Always; with GpuLevels::Auto, as AutoLevels decides from timing both
     /// paths on this scene. Returns whether the choice was AutoLevels' (the frame's time is then recorded).
-    bool choosePath(FrameState& frame, Stats& stats) {
+    bool choosePath(FrameState& frame, std::chrono::steady_clock::time_point start, Stats& stats) {
         frame.gpuLevels = false;
+        frame.levelsDeadline = Deadline();
         if (!m_backend) return false;
         const bool autoActive = m_settings.pipeline != Pipeline::Paper && m_settings.gpuLevels == GpuLevels::Auto;
         if (!autoActive) {
@@ -151,7 +189,15 @@ private:
         m_autoPath = m_auto.choose(triangles);
         stats.autoDecision = m_auto.decision();
         frame.gpuLevels = m_autoPath == AutoLevels::Path::Gpu;
+        frame.levelsDeadline = Deadline::after(start, m_auto.trialBudgetMs());
         return true;
+    }
+
+    /// The triangles' orders, boxes and groups for the path frame.gpuLevels says.
+    void prepareTriangles(const std::vector<Object>& objects, FrameState& frame, Stats& stats) {
+        assignOrders(objects, frame, stats);
+        buildTriangleBoxesAndGroups(frame, static_cast<std::uint32_t>(m_settings.groupSize), m_settings.margin,
+                                    m_settings.pipeline != Pipeline::Paper, m_pool, m_scratch, stats);
     }
 
     /// The meshes' kept spatial orders needed before the triangle stages: every active mesh's with GPU levels (their
@@ -171,16 +217,23 @@ private:
     }
 
     /// frame.surviving: by the visibility levels, or by the CPU path. A backend error mid-frame costs this frame its
-    /// pruning, never a contact: every triangle that the CPU pre-pass keeps goes to the exact stage.
-    void findSurvivingTriangles(FrameState& frame, Stats& stats) {
+    /// pruning, never a contact: every triangle that the CPU pre-pass keeps goes to the exact stage. False when the
+    /// levels ran past the frame's levelsDeadline: the caller finishes the frame on the CPU path.
+    bool findSurvivingTriangles(FrameState& frame, Stats& stats) {
         if (!frame.gpuLevels) {
+            if (frame.runDeadline.expired()) throw RunAbandoned{};
             m_trees.build(frame, m_settings.margin, m_pool, stats);
+            if (frame.runDeadline.expired()) throw RunAbandoned{};
             collectDirect(frame, static_cast<std::uint32_t>(m_settings.groupSize), m_settings.margin, m_pool,
                           m_scratch);
-            return;
+            return true;
         }
         try {
             m_levels.run(frame, m_settings, *m_backend, m_pool, m_scratch, stats);
+        } catch (const LevelsAbandoned&) {
+            ++stats.autoTrialsAbandoned;
+            stats.levels.clear();
+            return false;
         } catch (const BackendError& e) {
             ++stats.gpuFallbacks;
             stats.gpuError = e.what();
@@ -190,6 +243,7 @@ private:
                              m_fallbackTriangles);
             addSurvivingTriangles(frame, m_fallbackTriangles, {});
         }
+        return true;
     }
 
     /// The CPU path: kept spatial orders for the meshes (without a whole tree) whose surviving triangles are enough
@@ -212,9 +266,15 @@ private:
     /// The pruning backend (the GL visibility pass in production), unless GPU levels are off (GpuLevels::Never: no
     /// EGL at all). Without a usable GL device the CPU path runs instead, with a one-line notice — unless GPU levels
     /// were demanded (GpuLevels::Always, Pipeline::Paper): then GlUnavailableError.
-    void openBackend(const PruningBackendFactory& makeBackend) {
+    void openBackend(const PruningBackendFactory& makeBackend, bool autoOnHardwareOnly) {
         if (m_settings.gpuLevels == GpuLevels::Never) {
             m_gpuUnavailable = "GPU levels off (GpuLevels::Never): no GL context opened";
+            return;
+        }
+        const bool autoLevels = m_settings.gpuLevels == GpuLevels::Auto && m_settings.pipeline != Pipeline::Paper;
+        if (autoOnHardwareOnly && autoLevels && !hasHardwareGlDevice(m_settings.device)) {
+            m_gpuUnavailable = "GpuLevels::Auto runs GPU levels on hardware devices only, and the selected GL device "
+                               "is not one: no GL context opened";
             return;
         }
         try {
@@ -255,11 +315,13 @@ private:
 std::unique_ptr<Culler> createGpuCuller(const Settings& settings, const PruningBackendFactory& makeBackend) {
     const std::string error = settings.validate();
     if (!error.empty()) throw std::invalid_argument("cullide::Settings: " + error);
-    return std::make_unique<GpuCuller>(settings, makeBackend);
+    return std::make_unique<GpuCuller>(settings, makeBackend, false);
 }
 
 std::unique_ptr<Culler> createGpuCuller(const Settings& settings) {
-    return createGpuCuller(settings, [](const Settings& s) { return createGlPruningBackend(s); });
+    const std::string error = settings.validate();
+    if (!error.empty()) throw std::invalid_argument("cullide::Settings: " + error);
+    return std::make_unique<GpuCuller>(settings, [](const Settings& s) { return createGlPruningBackend(s); }, true);
 }
 
 }  // namespace cullide

@@ -95,6 +95,8 @@ void addTriangleItems(LevelRun& run, const std::vector<FrameTriangle>& triangles
 
 /// Runs the level built since beginLevel; run.survivors says which items survive.
 void prune(LevelRun& run, const char* name) {
+    if (run.frame.runDeadline.expired()) throw RunAbandoned{};
+    if (run.frame.levelsDeadline.expired()) throw LevelsAbandoned{};
     run.stats.levels.push_back(LevelStats{});
     LevelStats& level = run.stats.levels.back();
     level.name = name;

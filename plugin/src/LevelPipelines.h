@@ -20,10 +20,15 @@ namespace cullide {
 /// pre-pass keeps goes to the exact stage.
 constexpr double kRasterisableExtent = 1e30;
 
+/// Thrown at the start of a level once the frame's levelsDeadline has passed: the device holds nothing half done, and
+/// the caller finishes the frame on the CPU path.
+struct LevelsAbandoned {};
+
 /// Runs the levels over every cluster of frame.active (clustersOf): each cluster goes to the device relative to its
 /// own centre and each level's views are fitted to it, so objects far from each other cost what near ones cost.
 /// Expects buildTriangleBoxesAndGroups to have run with frame.gpuLevels set. Throws BackendError (from the backend)
-/// with frame.surviving partly filled: the caller starts over without the levels.
+/// or LevelsAbandoned (past frame.levelsDeadline) with frame.surviving partly filled: the caller starts over without
+/// the levels.
 class LevelPipelines {
 public:
     void run(FrameState& frame, const Settings& settings, PruningBackend& backend, TaskPool& pool,

@@ -35,7 +35,7 @@ void PairAssembly::run(const FrameState& frame, const Settings& settings, ExactS
         result.pairs.push_back(std::move(pair));
     }
     exact.run(*frame.objects, jobs, settings.margin, settings.exactTriangles, m_jobResults, result.stats, boxJobs,
-              &m_touches);
+              &m_touches, &frame.runDeadline);
     std::vector<std::uint8_t> keep(result.pairs.size(), 1);
     for (std::size_t j = 0; j < boxJobs.size(); ++j) keep[boxJobPair[j]] = m_touches[j];
     for (std::size_t j = 0; j < jobs.size(); ++j) {

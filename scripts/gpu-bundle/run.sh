@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The GPU bundle's one command (made by scripts/gpu-run.sh; docs/benchmarks.md, "Running on a GPU machine"):
+# The GPU bundle's one command (made by scripts/gpu-run.sh; docs/gpu-run.md):
 #   run.sh [--quick] [--device hardware|software|surfaceless|N] OUTDIR
 # 1. prints the machine, the driver and the EGL device/renderer CULLIDE picks (cullide-bench-run --probe);
 # 2. runs the GL tests (CI=true: a missing device fails) -> OUTDIR/gl-tests.json, the Bullet adapter tests ->

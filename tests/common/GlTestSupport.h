@@ -3,7 +3,7 @@
 #pragma once
 
 #include "cullide/Culler.h"
-#include "cullide/Snapshot.h"
+#include "cullide/io/Snapshot.h"
 
 #include <gtest/gtest.h>
 

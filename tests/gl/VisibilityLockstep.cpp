@@ -1,5 +1,9 @@
 #include "VisibilityLockstep.h"
 
+#include "Compare.h"
+
+#include <gtest/gtest.h>
+
 #include <sstream>
 #include <utility>
 
@@ -106,6 +110,37 @@ PruningBackendFactory lockstepFactory(std::shared_ptr<LockstepLog> log, GlBacken
         return std::make_unique<LockstepBackend>(createGlPruningBackend(settings, options),
                                                  createReferencePruningBackend(settings), log);
     };
+}
+
+std::string lockstepName(const LockstepCase& c) {
+    return std::string(c.pipeline == Pipeline::Paper ? "Paper" : "Auto") +
+           (c.mode == Mode::Reliable ? "Reliable" : "Sampled") + (c.backend == Backend::Raster ? "Raster" : "Compute") +
+           std::to_string(c.resolution);
+}
+
+void PrintTo(const LockstepCase& c, std::ostream* os) { *os << lockstepName(c); }
+
+Settings lockstepSettings(const LockstepCase& c) {
+    Settings s;
+    s.pipeline = c.pipeline;
+    s.mode = c.mode;
+    s.backend = c.backend;
+    s.resolution = c.resolution;
+    s.gpuLevels = GpuLevels::Always;
+    s.exactThreshold = 0;  // every level runs
+    s.threads = 2;
+    return s;
+}
+
+LockstepLog runInLockstep(const Settings& settings, const std::vector<std::vector<TriangleMesh>>& frames) {
+    auto log = std::make_shared<LockstepLog>();
+    std::unique_ptr<Culler> culler = createGpuCuller(settings, lockstepFactory(log));
+    for (const std::vector<TriangleMesh>& meshes : frames) {
+        Result r;
+        culler->run(asObjects(meshes), r);
+        EXPECT_EQ(r.stats.gpuFallbacks, 0u) << r.stats.gpuError;
+    }
+    return *log;
 }
 
 }  // namespace cullide::test

@@ -6,8 +6,11 @@
 
 #include "CullerBackends.h"
 #include "PruningBackend.h"
+#include "cullide/Settings.h"
+#include "cullide/Types.h"
 
 #include <memory>
+#include <ostream>
 #include <string>
 #include <vector>
 
@@ -27,5 +30,24 @@ struct LockstepLog {
 /// A factory for createGpuCuller(settings, factory): each culler gets a lockstep backend writing into `log`, around a
 /// GL backend made with `options`.
 PruningBackendFactory lockstepFactory(std::shared_ptr<LockstepLog> log, GlBackendOptions options = {});
+
+/// One configuration checked in lockstep.
+struct LockstepCase {
+    Pipeline pipeline;
+    Mode mode;
+    Backend backend;
+    int resolution;
+};
+
+/// The case as a test-name part, e.g. "PaperReliableCompute64".
+std::string lockstepName(const LockstepCase& c);
+void PrintTo(const LockstepCase& c, std::ostream* os);
+
+/// Settings of the case that run every level (GpuLevels::Always, exactThreshold 0) on two threads.
+Settings lockstepSettings(const LockstepCase& c);
+
+/// Runs `frames` through a culler whose GL backend is checked against the reference; returns the comparison. The
+/// caller has already made sure a GL device is there (CULLIDE_GPU_CULLER_OR_SKIP).
+LockstepLog runInLockstep(const Settings& settings, const std::vector<std::vector<TriangleMesh>>& frames);
 
 }  // namespace cullide::test

@@ -54,7 +54,7 @@ TEST(AutoLevels, MeasuresAgainWhenTheSceneHalvesOrDoubles) {
     for (int frame = 2; frame < 120; ++frame) EXPECT_EQ(a.choose(frame % 2 == 0 ? 5000 : 1000), Path::Cpu) << frame;
     EXPECT_FALSE(a.measuring());
     // Doubled and more, 120 frames on: a new trial, and this time the GPU wins.
-    runTrial(a, 2001, 9.0, 2.0);
+    runTrial(a, 2001, 4.0, 2.0);  // (a CPU path that loses by more than 2x + 1 ms would not be trialled again)
     EXPECT_EQ(a.decision(), "gpu");
     for (int frame = 0; frame < 120; ++frame) EXPECT_EQ(a.choose(2001), Path::Gpu);
     // Less than half: measured again.
@@ -141,6 +141,41 @@ TEST(AutoLevels, ACloseOrChangedDecisionSetsTheShortHoldBack) {
     runTrial(a, size, 9.0, 2.0);  // the GPU wins now, clearly: a new decision starts at the short hold
     EXPECT_EQ(a.decision(), "gpu");
     EXPECT_EQ(a.holdFrames(), 120);
+}
+
+TEST(AutoLevels, AGpuTrialFrameGetsTheLastCpuFramePlusSlack) {
+    AutoLevels a;
+    EXPECT_EQ(a.choose(100), Path::Cpu);
+    EXPECT_EQ(a.trialBudgetMs(), 0.0);  // a CPU trial frame has no budget
+    a.record(Path::Cpu, 3.0);
+    EXPECT_EQ(a.choose(100), Path::Gpu);
+    EXPECT_DOUBLE_EQ(a.trialBudgetMs(), 4.0);
+    a.record(Path::Gpu, 50.0);  // the GPU's warm-up
+    EXPECT_EQ(a.choose(100), Path::Cpu);
+    a.record(Path::Cpu, 2.0);
+    EXPECT_EQ(a.choose(100), Path::Gpu);
+    EXPECT_DOUBLE_EQ(a.trialBudgetMs(), 3.0);
+    // Abandoned past its budget and finished on the CPU path: its time, recorded as the GPU's, makes the CPU win.
+    a.record(Path::Gpu, 5.0);
+    EXPECT_EQ(a.decision(), "cpu");
+    EXPECT_EQ(a.choose(100), Path::Cpu);
+    EXPECT_EQ(a.trialBudgetMs(), 0.0);  // no trial frame
+}
+
+TEST(AutoLevels, NoCpuTrialFrameWhereItWouldStallTheLoop) {
+    AutoLevels far;
+    runTrial(far, 1000, 9.0, 2.0);  // the GPU wins by more than 2x + 1 ms
+    for (int frame = 0; frame < 120; ++frame) EXPECT_EQ(far.choose(1000), Path::Gpu);
+    // Twice the size after the hold: a trial would run a CPU frame of ~18 ms against GPU frames of ~4: skipped.
+    EXPECT_EQ(far.choose(2001), Path::Gpu);
+    EXPECT_FALSE(far.measuring());
+    EXPECT_EQ(far.holdFrames(), 240);  // held twice as long instead
+
+    AutoLevels near;
+    runTrial(near, 1000, 3.0, 2.0);  // the GPU wins, but a CPU frame would cost less than 2x + 1 ms
+    for (int frame = 0; frame < 120; ++frame) EXPECT_EQ(near.choose(1000), Path::Gpu);
+    EXPECT_EQ(near.choose(2001), Path::Cpu);  // a new trial, starting on the CPU path
+    EXPECT_TRUE(near.measuring());
 }
 
 }  // namespace

@@ -1,5 +1,7 @@
-// Spatial orders of whole meshes and the cache that keeps them between frames (TriangleOrders), without GL.
+// The cache that keeps whole meshes' spatial orders between frames (TriangleOrders), without GL: shared by
+// instances, only for active meshes that are wanted, recomputed when a mesh may have changed, unused ones dropped.
 #include "TriangleOrders.h"
+#include "TriangleRow.h"
 #include "cullide/scenes/Procedural.h"
 
 #include <gtest/gtest.h>
@@ -39,8 +41,6 @@ std::vector<Object> meshObjects(std::initializer_list<const TriangleMesh*> meshe
     return objects;
 }
 
-TriangleMesh triangleRow(std::uint32_t n);
-
 /// Two world-space row meshes in an active frame, with a cache of orders and a pool of one worker.
 struct TwoRows {
     TriangleMesh a = triangleRow(10);
@@ -51,41 +51,6 @@ struct TwoRows {
     TriangleOrders orders;
     auto parts() { return std::tie(objects, frame, pool, orders); }  ///< references to each part
 };
-
-/// `n` separate triangles along x, listed in a scrambled order.
-TriangleMesh triangleRow(std::uint32_t n) {
-    TriangleMesh mesh;
-    for (std::uint32_t i = 0; i < n; ++i) {
-        const double x = static_cast<double>((i * 7919u) % n);
-        const auto v = static_cast<std::uint32_t>(mesh.vertices.size());
-        mesh.vertices.push_back(Vec3(x, 0, 0));
-        mesh.vertices.push_back(Vec3(x + 0.5, 0, 0));
-        mesh.vertices.push_back(Vec3(x, 0.5, 0));
-        mesh.triangles.push_back({v, v + 1, v + 2});
-    }
-    return mesh;
-}
-
-TEST(SpatialOrder, APermutationAlongTheMortonCurveOnAnyNumberOfWorkers) {
-    constexpr std::uint32_t kTriangles = 1000;  // under 1,024 cells along x: one triangle per cell
-    const TriangleMesh row = triangleRow(kTriangles);
-    std::vector<std::uint32_t> serial;
-    spatialOrder(row, serial);
-    ASSERT_EQ(serial.size(), kTriangles);
-    for (std::size_t i = 1; i < serial.size(); ++i)
-        ASSERT_LT(row.vertices[row.triangles[serial[i - 1]][0]][0], row.vertices[row.triangles[serial[i]][0]][0]);
-    const TriangleMesh sphere = scenes::makeSphere(1.0, 200, 100);
-    spatialOrder(sphere, serial);
-    std::vector<std::uint32_t> sorted = serial;
-    std::sort(sorted.begin(), sorted.end());
-    std::vector<std::uint32_t> identity(sphere.triangles.size());
-    std::iota(identity.begin(), identity.end(), 0u);
-    EXPECT_EQ(sorted, identity);
-    TaskPool three(3);
-    std::vector<std::uint32_t> onThree;
-    spatialOrder(sphere, onThree, &three);
-    EXPECT_EQ(onThree, serial);
-}
 
 TEST(TriangleOrders, KeptBetweenFramesAndSharedByInstances) {
     const TriangleMesh sphere = scenes::makeSphere(1.0, 20, 10);

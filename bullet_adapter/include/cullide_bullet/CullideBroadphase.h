@@ -37,13 +37,44 @@ class PairRecords;  // the per-pair hand-off to CullideCollisionDispatcher (inte
 const PairRecords& pairRecordsOf(const CullideBroadphase& broadphase);
 }  // namespace bullet
 
+/// A culling switch's setting.
+enum class Culling {
+    /// Culled where a trial on the running scene shows it pays (CullideBroadphase's culling switches); the default.
+    Auto,
+    On,    ///< always culled
+    Off,   ///< never culled
+};
+/// The kinds of pair a culling switch covers.
+enum class CulledKind {
+    /// GImpact mesh against GImpact mesh. Not culled, such a pair gets Bullet's GImpact contacts bit for bit
+    /// (CullideCollisionDispatcher reproduces Bullet's box-set search and triangle routine at a fraction of its
+    /// cost). Culled, the culler's near triangle pairs go to Bullet's triangle routine; a pair whose meshes
+    /// intersect gets Bullet's contacts (setDeepPenetrationFallback), and so does a pair whose near pairs make no
+    /// point.
+    GImpactPair,
+    /// GImpact mesh against a triangle mesh (btBvhTriangleMeshShape, its scaled form). Not culled, Bullet's
+    /// contacts point for point (Bullet's gimpact_vs_concave minus candidates too far for any point); culled, the
+    /// mesh's triangles are the culler's near ones, in sorted order.
+    GImpactMesh,
+    /// GImpact mesh against a convex shape (box, sphere, hull, compound of convex children). Culled, a pair the
+    /// culler proves farther apart than its margin makes no contact that step; the others, and every pair not
+    /// culled, run Bullet's per-triangle loop minus the candidates too far for any point.
+    GImpactConvex,
+    /// Convex hull or compound against a triangle mesh. Culled, the dispatcher's convex-concave algorithm reads
+    /// only the mesh triangles the culler kept near the hull; not culled, Bullet's own algorithm. The algorithm of
+    /// a pair is chosen when the pair first appears: a pair made while the switch could not be on (Off, or Auto
+    /// where it never trials) keeps Bullet's algorithm.
+    ConvexMesh,
+};
+
 class CullideBroadphase : public btBroadphaseInterface {
 public:
     /// Creates the culler for `settings` (createGpuCuller unless another factory is given).
     using CullerFactory = std::function<std::unique_ptr<Culler>(const Settings&)>;
 
     /// The culler is made (createGpuCuller: a GL context and worker threads) when a step first has pairs for it (a
-    /// culling switch below is on and such pairs overlap), never in a world without any. Like createGpuCuller,
+    /// culling switch below is On, or Auto where it trials, and such pairs overlap), never in a world without any;
+    /// for Auto alone on another thread. Like createGpuCuller,
     /// without a usable GL device it runs its CPU path (a one-line notice); settings that demand GPU levels
     /// (GpuLevels::Always, Pipeline::Paper) make it here, so a missing device throws GlUnavailableError here. A
     /// factory that fails when the culler is made later is reported once on stderr, and the pairs it would have culled
@@ -105,49 +136,48 @@ public:
     /// replacement its own.
     void setObjectLevel(std::unique_ptr<btBroadphaseInterface> objectLevel);
 
-    /// Convex hulls and compounds against triangle meshes through the culler's levels (default: off). On, the
-    /// dispatcher's convex-concave algorithm reads only the mesh triangles CULLIDE kept near the hull; off, such
-    /// pairs go from the object level straight to Bullet's algorithm, whose own BVH query of the mesh is already
-    /// cheap: measured on 1,000 hulls over a 32K-triangle landscape (docs/swap.md), the
-    /// culling costs more than the narrow phase it saves on the CPU path (GImpact pairs: setGImpactPairCulling,
-    /// setGImpactMeshCulling, setGImpactConvexCulling). Set it
-    /// before the first step: CullideCollisionDispatcher picks the culled hull/compound-mesh algorithm when a pair's
-    /// algorithm is created (pairs created while it is off keep Bullet's own algorithm, which stays correct).
-    void setConvexMeshCulling(bool enable);
-    bool getConvexMeshCulling() const;
+    // ---- The culling switches: which kinds of pair go through the culler's levels ----
+    //
+    // Each kind of pair (CulledKind) has a switch (Culling): On culls every such pair, Off none, Auto (the default)
+    // culls them where a trial on the running scene shows it pays. Auto trials only on a machine with a hardware GL
+    // device (hasHardwareGlDevice for Settings::device), unless setAutoCullingOnAnyDevice(true); elsewhere it never
+    // culls, makes no culler and opens no GL context, and every pair gets the unculled path (Bullet's contacts bit
+    // for bit). Where it trials, the culler is made on another thread (no step waits for it), then each kind with
+    // pairs is timed in turn: a step with the kind not culled, a warm-up step culled, a timed step culled; the kind
+    // is culled from then on if the timed step (culling plus narrow phase) cost less. A culled trial step gives the
+    // culler at most the unculled step's cost plus 1 ms, then abandons it (its pairs run Bullet's algorithms): no
+    // trial step costs more than about twice a step without it plus 1 ms. The decision holds until the kind's pair
+    // count halves or doubles (at least 120 steps; longer while the same decision keeps winning by at least twice).
+    // getCullingDecision reports the state and the trial's timings. A culled pair gets a point in every step in which
+    // Bullet's pipeline gives it one (the culling margin rule: docs/architecture.md); its points can differ from
+    // Bullet's (docs/swap.md reports by how much).
 
-    /// GImpact-GImpact pairs through the culler's levels (default: off). Off, such a pair gets Bullet's GImpact
-    /// contacts bit for bit: CullideCollisionDispatcher runs Bullet's own box-set pair search and triangle routine,
-    /// reproduced at a fraction of Bullet's cost (the same triangle pairs in the same order, each triangle mapped to
-    /// world space once per pair of bodies instead of once per triangle pair). On, the culler's near triangle pairs
-    /// replace Bullet's box-overlapping ones for pairs whose meshes do not intersect (setDeepPenetrationFallback for
-    /// those that do): Bullet's clip method then no longer makes its contacts from triangle pairs whose boxes overlap
-    /// without the triangles coming near (phantom points up to a box deep), and the manifold's other points can
-    /// differ. Measured on the tori pile (docs/swap.md): on costs the culling and saves no narrow-phase time, so
-    /// the default is off.
-    void setGImpactPairCulling(bool enable);
-    bool getGImpactPairCulling() const;
+    void setCulling(CulledKind kind, Culling mode);
+    Culling getCulling(CulledKind kind) const;
+    /// Whether pairs of the kind are culled in the step under way (On, or Auto's current decision).
+    bool isCulled(CulledKind kind) const;
+    /// Whether pairs of the kind may be culled in some step: On, or Auto where it trials.
+    bool mayCull(CulledKind kind) const;
+    /// What Culling::Auto decided for the kind, with the timings behind it.
+    CullingDecision getCullingDecision(CulledKind kind) const;
+    /// Culling::Auto trials wherever the culler runs (its CPU path, a software renderer), not only on a machine with a
+    /// hardware GL device (default: false). For measuring, or an application that knows culling pays on its CPU.
+    void setAutoCullingOnAnyDevice(bool enable);
 
-    /// GImpact meshes against triangle meshes (btBvhTriangleMeshShape, btScaledBvhTriangleMeshShape) through the
-    /// culler's levels (default: off). Off, such a pair gets Bullet's contacts point for point:
-    /// CullideCollisionDispatcher runs Bullet's own gimpact_vs_concave (the mesh's triangles within the GImpact part's
-    /// box, in Bullet's order, each against the GImpact part's box-query candidates through the convex algorithm),
-    /// skipping the candidates too far from the mesh triangle for any point — Bullet runs GJK on each. The same holds
-    /// for GImpact against other concave shapes (heightfields; not planes: Bullet's own), never culled. On, the mesh's
-    /// triangles are the culler's near ones in sorted order instead of Bullet's query: the 4-point manifold can keep
-    /// other points, and the culling costs more than it saves on the CPU path (docs/swap.md, 'gimpact-landscape').
-    /// Set it before the first step.
-    void setGImpactMeshCulling(bool enable);
-    bool getGImpactMeshCulling() const;
-
-    /// GImpact meshes against convex shapes (boxes, spheres, hulls, compounds of convex children) decided by the
-    /// culler (default: off). On, a pair the culler proves farther apart than its margin makes no contact that step
-    /// and the others run the dispatcher's loop; off, every pair runs it: Bullet's per-triangle loop (its box query,
-    /// then GJK per candidate triangle, Bullet's contacts point for point) minus the candidates too far from the
-    /// convex shape for any point. Measured on the CPU path (docs/swap.md) the culling costs more than
-    /// the loop it saves. Set it before the first step.
-    void setGImpactConvexCulling(bool enable);
-    bool getGImpactConvexCulling() const;
+    /// The switches by kind, as setCulling; `true` is Culling::On, `false` Culling::Off. The getters say whether the
+    /// kind is culled in the step under way (isCulled).
+    void setGImpactPairCulling(Culling mode) { setCulling(CulledKind::GImpactPair, mode); }
+    void setGImpactPairCulling(bool on) { setGImpactPairCulling(on ? Culling::On : Culling::Off); }
+    bool getGImpactPairCulling() const { return isCulled(CulledKind::GImpactPair); }
+    void setGImpactMeshCulling(Culling mode) { setCulling(CulledKind::GImpactMesh, mode); }
+    void setGImpactMeshCulling(bool on) { setGImpactMeshCulling(on ? Culling::On : Culling::Off); }
+    bool getGImpactMeshCulling() const { return isCulled(CulledKind::GImpactMesh); }
+    void setGImpactConvexCulling(Culling mode) { setCulling(CulledKind::GImpactConvex, mode); }
+    void setGImpactConvexCulling(bool on) { setGImpactConvexCulling(on ? Culling::On : Culling::Off); }
+    bool getGImpactConvexCulling() const { return isCulled(CulledKind::GImpactConvex); }
+    void setConvexMeshCulling(Culling mode) { setCulling(CulledKind::ConvexMesh, mode); }
+    void setConvexMeshCulling(bool on) { setConvexMeshCulling(on ? Culling::On : Culling::Off); }
+    bool getConvexMeshCulling() const { return isCulled(CulledKind::ConvexMesh); }
 
     const CullideFrameStats& getLastFrameStats() const;
     /// What is kept between steps (computed on each call: a pass over the kept objects and shapes).

@@ -6,6 +6,7 @@
 #include "cullide/Stats.h"
 
 #include <cstddef>
+#include <string>
 
 namespace cullide {
 
@@ -47,6 +48,18 @@ struct CullideMemoryStats {
     std::size_t worldCopies = 0;          ///< objects holding a world-space copy
 };
 
+/// What Culling::Auto decided for one kind of pair (CullideBroadphase::getCullingDecision).
+struct CullingDecision {
+    /// "culled" or "not culled" (the switch is On or Off), "not trialled" (Auto where it does not trial: no hardware
+    /// GL device), "waiting" (Auto, no trial yet: no such pairs, or the culler is still being made), "measuring",
+    /// "on" or "off" (the last trial's outcome).
+    std::string state;
+    bool culled = false;        ///< culled in the step under way
+    double unculledMs = 0.0;    ///< the last trial's step without culling the kind (culling + narrow phase), ms
+    double culledMs = 0.0;      ///< ... and its timed step with it culled (0 before a trial completes)
+    std::size_t abandonedTrials = 0;  ///< trial steps whose culler ran past its budget (all kinds)
+};
+
 /// One or more dispatchAllCollisionPairs() of CullideCollisionDispatcher. Every count is of pairs of the dispatched
 /// pair cache unless it says otherwise; "culled" pairs are those a culling switch of the broadphase covers.
 struct CullideDispatchStats {
@@ -61,7 +74,9 @@ struct CullideDispatchStats {
     // ---- culled pairs (the broadphase's record of the step: CULLIDE's surviving triangles) ----
     std::size_t cullidePairs = 0;        ///< culled pairs processed from CULLIDE's triangle lists
     std::size_t trianglePairs = 0;       ///< ... their triangle pairs (GImpact-GImpact) or mesh triangles handed over
-    std::size_t clearedPairs = 0;        ///< ... of which had no surviving triangle: no point this step
+    /// ... of which had no surviving triangle (GImpact-convex, convex-mesh: no point this step), or whose surviving
+    /// triangle pairs made no point (GImpact-GImpact: Bullet's contacts instead, see CulledKind::GImpactPair)
+    std::size_t clearedPairs = 0;
     /// ... of which were interpenetrating GImpact pairs, given Bullet's full algorithm
     /// (CullideBroadphase::setDeepPenetrationFallback)
     std::size_t penetrationPairs = 0;

@@ -30,10 +30,6 @@ void CullFrame::build(const std::vector<ProxyPair>& candidates, std::uint64_t st
     for (const auto& [a, b] : candidates) {
         CulledObject& ca = enter(a, step, stats);
         CulledObject& cb = enter(b, step, stats);
-        if (objectOf(a)->isStaticObject() && objectOf(b)->isStaticObject()) {
-            // Two static objects whose filters admit each other: both count as moving for the margin rule.
-            m_marginEntries[ca.cullIndex].moving = m_marginEntries[cb.cullIndex].moving = true;
-        }
         m_pairs.emplace_back(std::min(ca.cullIndex, cb.cullIndex), std::max(ca.cullIndex, cb.cullIndex));
     }
     std::sort(m_pairs.begin(), m_pairs.end());
@@ -60,7 +56,6 @@ CulledObject& CullFrame::enter(btBroadphaseProxy* p, std::uint64_t step, Cullide
     Object o;
     MarginEntry entry;
     entry.kind = geometryKindOf(shape);
-    entry.moving = !isStatic;
     entry.motionDisc = double(shape->getAngularMotionDisc());
     if (geometryFor(c, shape)) {
         if (isStatic) {
@@ -79,10 +74,10 @@ CulledObject& CullFrame::enter(btBroadphaseProxy* p, std::uint64_t step, Cullide
             c.toWorld = toTransform(obj->getWorldTransform());
             o.mesh = &c.geometry->local;
             o.transform = &c.toWorld;
-            for (int k = 0; k < 3; ++k)
-                entry.coordinate = std::max({entry.coordinate, std::fabs(double(p->m_aabbMin[k])),
-                                             std::fabs(double(p->m_aabbMax[k]))});
         }
+        for (int k = 0; k < 3; ++k)
+            entry.coordinate = std::max({entry.coordinate, std::fabs(double(p->m_aabbMin[k])),
+                                         std::fabs(double(p->m_aabbMax[k]))});
         ++stats.meshObjects;
         stats.triangles += c.geometry->triangles.size();
     } else {

@@ -2,6 +2,7 @@
 
 #include "broadphase/CullingPolicy.h"
 
+#include <chrono>
 #include <cstdio>
 #include <stdexcept>
 #include <string>
@@ -18,19 +19,56 @@ CullerSlot::CullerSlot(const Settings& settings, Factory factory, double default
     if (gpuDemanded) make(m_settings.margin > 0.0 ? m_settings.margin : defaultMargin);
 }
 
-/// Replaces the culler by one with margin d; on failure (throws) the current culler stays as it was.
-void CullerSlot::make(double d) {
+CullerSlot::~CullerSlot() {
+    if (m_pending.valid()) m_pending.wait();  // the other thread's culler goes with this slot
+}
+
+/// A culler with margin d from the factory (throws on failure).
+std::unique_ptr<Culler> CullerSlot::build(double d) const {
     Settings s = m_settings;
     s.margin = d;
     // Bullet's triangle routines are the exact stage here: the culler hands over its surviving candidates.
     s.exactTriangles = false;
     std::unique_ptr<Culler> made = m_factory(s);
     if (!made) throw std::runtime_error("cullide::CullideBroadphase: the culler factory returned nothing");
-    m_culler = std::move(made);
+    return made;
+}
+
+/// Replaces the culler by one with margin d; on failure (throws) the current culler stays as it was.
+void CullerSlot::make(double d) {
+    m_culler = build(d);
     m_margin = m_culler->settings().margin;
 }
 
+void CullerSlot::collectPending() {
+    if (!m_pending.valid() || m_pending.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return;
+    try {
+        m_culler = m_pending.get();
+        m_margin = m_culler->settings().margin;
+    } catch (const std::exception& e) {
+        reportFailure(e);
+        if (m_culler == nullptr) m_firstFailed = true;
+        else if (m_pendingMargin < m_margin) m_shrinkFailed = true;
+    }
+}
+
+bool CullerSlot::readyWithoutWaiting(double required, std::uint64_t step) {
+    collectPending();
+    if (m_culler == nullptr && m_firstFailed) return false;
+    if (!m_pending.valid()) {
+        if (const auto d = cullingMarginToMake(required, m_margin, m_settings.margin, step, m_shrinkFailed)) {
+            m_pendingMargin = *d;
+            m_pending = std::async(std::launch::async, [this, d = *d] { return build(d); });
+        }
+    }
+    return m_culler != nullptr && required <= m_margin;
+}
+
 bool CullerSlot::ready(double required, std::uint64_t step) {
+    if (m_pending.valid()) {  // a switch turned On while Auto's culler was being made: wait for it
+        m_pending.wait();
+        collectPending();
+    }
     if (m_culler == nullptr && m_firstFailed) return false;
     try {
         // With no culler yet (margin 0) the policy always gives a margin: the one the frame needs.
@@ -49,10 +87,14 @@ bool CullerSlot::ready(double required, std::uint64_t step) {
     }
 }
 
-bool CullerSlot::run(const std::vector<Object>& objects, const std::vector<ObjectIndexPair>& pairs, Result& result) {
+bool CullerSlot::run(const std::vector<Object>& objects, const std::vector<ObjectIndexPair>& pairs, Result& result,
+                     double budgetMs) {
     result.clear();
     try {
-        m_culler->run(objects, pairs, result);
+        if (budgetMs > 0.0)
+            m_culler->run(objects, pairs, result, budgetMs);
+        else
+            m_culler->run(objects, pairs, result);
         return true;
     } catch (const std::exception& e) {
         reportFailure(e);

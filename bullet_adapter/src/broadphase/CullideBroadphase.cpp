@@ -5,11 +5,13 @@
 #include "broadphase/CullFrame.h"
 #include "broadphase/CullerSlot.h"
 #include "broadphase/CullingPolicy.h"
+#include "broadphase/CullingSwitches.h"
 #include "broadphase/ObjectLevel.h"
 #include "broadphase/PairRecords.h"
 #include "broadphase/PairTriangles.h"
 #include "broadphase/ShapeGeometry.h"
 #include "cullide/Result.h"
+#include "cullide_bullet/CullideCollisionDispatcher.h"
 
 #include <BulletCollision/CollisionDispatch/btCollisionDispatcher.h>
 #include <BulletCollision/CollisionDispatch/btCollisionObject.h>
@@ -18,6 +20,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
@@ -69,18 +72,18 @@ struct CullideBroadphase::Impl {
     bullet::CullerSlot culler;
     bullet::CullFrame cullFrame;
     bullet::PairRecords records;
-    std::vector<bullet::CullFrame::ProxyPair> candidates;  ///< this step's cache pairs that go through the culler
+    bullet::CullingSwitches switches;
+    /// This step's cache pairs of a kind that may be culled, with their kind; and of those, the ones culled.
+    std::vector<std::pair<bullet::CullFrame::ProxyPair, CulledKind>> possiblePairs;
+    std::vector<bullet::CullFrame::ProxyPair> candidates;
     Result result;
     CullideFrameStats stats;
     std::uint64_t step = 0;
     std::size_t cullerRejections = 0;  ///< objects the culler rejected, every step (getRejectedCount)
-
     bool deepPenetrationFallback = true;
-    /// The kinds of pair that go through the culler's levels for their triangles (see trianglesConsumed).
-    bullet::CulledKinds culledKinds;
 
     Impl(const Settings& s, btOverlappingPairCache* pairCache, CullerFactory f)
-        : objectLevel(pairCache), culler(s, std::move(f), kDefaultMargin) {}
+        : objectLevel(pairCache), culler(s, std::move(f), kDefaultMargin), switches(s.device) {}
 
     void destroyProxy(btBroadphaseProxy* p, btDispatcher* dispatcher) {
         cullFrame.forget(p);
@@ -88,47 +91,66 @@ struct CullideBroadphase::Impl {
         objectLevel.destroyProxy(p, dispatcher);
     }
 
-    /// Whether the pair goes through the culler: its narrow phase reads triangles, or the culler decides it
-    /// (CullingPolicy); never for parked objects or infinite boxes (planes, huge AABBs: Bullet's algorithms).
-    bool culled(const btBroadphaseProxy* a, const btBroadphaseProxy* b) const {
+    /// The culling switch that covers the pair, among `kinds`; never for parked objects or infinite boxes (planes,
+    /// huge AABBs: Bullet's algorithms).
+    std::optional<CulledKind> kindOf(const btBroadphaseProxy* a, const btBroadphaseProxy* b,
+                                     const bullet::CulledKinds& kinds) const {
         const btCollisionShape* sa = shapeOf(a);
         const btCollisionShape* sb = shapeOf(b);
-        if (sa == nullptr || sb == nullptr) return false;
-        // Every culled pair has a GImpact shape, or a triangle mesh with convex-mesh culling on: most pairs stop here.
+        if (sa == nullptr || sb == nullptr) return std::nullopt;
+        // Every culled pair has a GImpact shape, or a triangle mesh: most pairs stop here.
         auto mayBe = [&](const btCollisionShape* s) {
             const int type = s->getShapeType();
-            return type == GIMPACT_SHAPE_PROXYTYPE || (culledKinds.convexVsMesh && bullet::isTriangleMeshType(type));
+            return type == GIMPACT_SHAPE_PROXYTYPE || (kinds[CulledKind::ConvexMesh] && bullet::isTriangleMeshType(type));
         };
-        if (!mayBe(sa) && !mayBe(sb)) return false;
-        const bullet::GeometryKind ka = bullet::geometryKindOf(sa);
-        const bullet::GeometryKind kb = bullet::geometryKindOf(sb);
-        if (!bullet::trianglesConsumed(ka, kb, culledKinds) &&
-            !bullet::prunedByCuller(ka, sa->isConvex(), kb, sb->isConvex(), culledKinds))
-            return false;
-        return !objectLevel.isParked(a) && !objectLevel.isParked(b) && !infiniteBox(a) && !infiniteBox(b);
+        if (!mayBe(sa) && !mayBe(sb)) return std::nullopt;
+        const std::optional<CulledKind> kind = bullet::culledKindOf(bullet::geometryKindOf(sa), sa->isConvex(),
+                                                                    bullet::geometryKindOf(sb), sb->isConvex());
+        if (!kind || !kinds[*kind]) return std::nullopt;
+        if (objectLevel.isParked(a) || objectLevel.isParked(b) || infiniteBox(a) || infiniteBox(b)) return std::nullopt;
+        return kind;
     }
 
-    /// The pairs of the cache that go through the culler this step; pairs the dispatcher will not process
-    /// (needsCollision: both asleep, collide-with exclusions) cost nothing, and pairs recently found
-    /// interpenetrating are recorded as such without culling.
-    void collectCandidates(btDispatcher* dispatcher) {
-        candidates.clear();
-        if (!culledKinds.any()) return;  // the defaults: no scan of the cache's pairs at all
+    /// The pairs of the cache that may be culled this step, and their count per kind; pairs the dispatcher will not
+    /// process (needsCollision: both asleep, collide-with exclusions) cost nothing.
+    bullet::AutoCulling::Counts collectPossible(btDispatcher* dispatcher) {
+        possiblePairs.clear();
+        bullet::AutoCulling::Counts counts{};
         btOverlappingPairCache* pairs = objectLevel.cache();
         const int n = pairs->getNumOverlappingPairs();
-        if (n == 0) return;
+        if (n == 0) return counts;
+        const bullet::CulledKinds kinds = switches.possible();
+        if (!kinds.any()) return counts;  // no switch can be on: no scan of the cache's pairs at all
         btBroadphasePair* array = pairs->getOverlappingPairArrayPtr();
         for (int i = 0; i < n; ++i) {
             btBroadphaseProxy* a = array[i].m_pProxy0;
             btBroadphaseProxy* b = array[i].m_pProxy1;
-            if (a == nullptr || b == nullptr || !culled(a, b)) continue;
+            if (a == nullptr || b == nullptr) continue;
+            const std::optional<CulledKind> kind = kindOf(a, b, kinds);
+            if (!kind) continue;
             if (dispatcher != nullptr && !dispatcher->needsCollision(objectOf(a), objectOf(b))) continue;
-            if (records.recentlyPenetrating(a, b)) {
-                records.recordPenetrating(a, b);
+            possiblePairs.emplace_back(bullet::CullFrame::ProxyPair(a, b), *kind);
+            ++counts[static_cast<std::size_t>(*kind)];
+        }
+        return counts;
+    }
+
+    /// Of the possible pairs, those of the kinds culled this step (of a kind in an Auto trial's ramp, its first
+    /// ones); pairs recently found interpenetrating are recorded as such without culling.
+    void collectCandidates(const bullet::AutoCulling::Counts& counts) {
+        candidates.clear();
+        const bullet::CulledKinds& culled = switches.culled();
+        bullet::AutoCulling::Counts left{};
+        for (std::size_t k = 0; k < left.size(); ++k) left[k] = switches.pairsToCull(CulledKind(k), counts[k]);
+        for (const auto& [pair, kind] : possiblePairs) {
+            if (!culled[kind] || left[static_cast<std::size_t>(kind)] == 0) continue;
+            --left[static_cast<std::size_t>(kind)];
+            if (records.recentlyPenetrating(pair.first, pair.second)) {
+                records.recordPenetrating(pair.first, pair.second);
                 ++stats.penetratingSkipped;
                 continue;
             }
-            candidates.emplace_back(a, b);
+            candidates.push_back(pair);
         }
     }
 
@@ -146,28 +168,51 @@ struct CullideBroadphase::Impl {
     }
 
     /// The culler over this step's culled pairs, and its verdicts recorded for the dispatcher. Without a culler
-    /// (it could not be made, or it failed) the pairs get no record: Bullet's full algorithms run for them.
+    /// (it could not be made, it failed, or Auto's is still being made) the pairs get no record: Bullet's full
+    /// algorithms run for them.
     void cullCandidates(btDispatcher* dispatcher, cullide::Timer& build) {
         cullFrame.build(candidates, step, stats);
-        const double required = bullet::requiredCullingMargin(cullFrame.marginEntries(), breakingRule(dispatcher));
-        const bool ready = culler.ready(required, step);
+        const double required = bullet::requiredCullingMargin(cullFrame.marginEntries(), cullFrame.pairs(), breakingRule(dispatcher));
+        // An On switch makes its culler here; Auto's is made on another thread, and the step waits for nothing.
+        const bool ready = switches.anyOn() ? culler.ready(required, step) : culler.readyWithoutWaiting(required, step);
+        if (!ready) switches.cancelStep();
         stats.buildMs = build.ms();
         cullide::Timer cull;
-        const bool ran = ready && culler.run(cullFrame.objects(), cullFrame.pairs(), result);
+        const bool ran = ready && culler.run(cullFrame.objects(), cullFrame.pairs(), result, switches.cullerBudgetMs());
         stats.cullMs = cull.ms();
-        if (!ran) result.clear();
         stats.culler = result.stats;
+        const bool verdicts = ran && !result.stats.abandoned;
+        if (!verdicts) result.clear();
         for (const auto& list : result.pcsTriangles) stats.pcsTriangles += list.size();
         cullide::Timer recordTimer;
-        if (ran) {
+        if (verdicts) {
             for (const ObjectDiagnostic& d : result.rejected) reportRejected(d);
             records.recordVerdicts(result, cullFrame, deepPenetrationFallback, stats);
         }
         stats.recordMs = recordTimer.ms();
     }
 
+    /// Culling::Auto's culler, made on another thread for the Auto kinds' pairs of this step (none is culled yet).
+    void prepareAutoCuller(btDispatcher* dispatcher) {
+        candidates.clear();
+        for (const auto& [pair, kind] : possiblePairs)
+            if (switches.get(kind) == Culling::Auto) candidates.push_back(pair);
+        cullFrame.build(candidates, step, stats);
+        culler.readyWithoutWaiting(
+            bullet::requiredCullingMargin(cullFrame.marginEntries(), cullFrame.pairs(), breakingRule(dispatcher)), step);
+        stats.culledObjects = stats.culledPairs = stats.meshObjects = stats.triangles = 0;
+    }
+
+    /// The previous step's cost for Culling::Auto: the broadphase's culling and the dispatcher's narrow phase.
+    void finishPreviousStep(btDispatcher* dispatcher) {
+        const auto* cullide = dynamic_cast<const CullideCollisionDispatcher*>(dispatcher);
+        const double narrowMs = cullide != nullptr ? cullide->getLastStepStats().dispatchMs : 0.0;
+        switches.endStep(stats.buildMs + stats.cullMs + stats.recordMs + narrowMs, stats.culler.abandoned);
+    }
+
     void calculateOverlappingPairs(btDispatcher* dispatcher) {
         cullide::Timer total;
+        if (step > 0) finishPreviousStep(dispatcher);
         ++step;
         stats = CullideFrameStats{};
         records.beginStep(step, deepPenetrationFallback);
@@ -181,8 +226,14 @@ struct CullideBroadphase::Impl {
         stats.rejectedObjects = objectLevel.parkedCount();
 
         cullide::Timer build;
-        collectCandidates(dispatcher);
-        if (!candidates.empty()) cullCandidates(dispatcher, build);
+        const bullet::AutoCulling::Counts counts = collectPossible(dispatcher);
+        const bool measurable = dynamic_cast<const CullideCollisionDispatcher*>(dispatcher) != nullptr;
+        switches.beginStep(counts, culler.hasCuller(), measurable);
+        collectCandidates(counts);
+        if (!candidates.empty())
+            cullCandidates(dispatcher, build);
+        else if (!culler.hasCuller() && switches.wantsCuller(counts))
+            prepareAutoCuller(dispatcher);
         stats.margin = culler.margin();
         stats.totalMs = total.ms();
     }
@@ -266,8 +317,6 @@ void CullideBroadphase::invalidateShape(const btCollisionShape* shape) {
 void CullideBroadphase::setDeepPenetrationFallback(bool enable) { m_impl->deepPenetrationFallback = enable; }
 bool CullideBroadphase::getDeepPenetrationFallback() const { return m_impl->deepPenetrationFallback; }
 
-void CullideBroadphase::setConvexMeshCulling(bool enable) { m_impl->culledKinds.convexVsMesh = enable; }
-bool CullideBroadphase::getConvexMeshCulling() const { return m_impl->culledKinds.convexVsMesh; }
 
 void CullideBroadphase::setObjectLevel(std::unique_ptr<btBroadphaseInterface> objectLevel) {
     if (objectLevel == nullptr) throw std::invalid_argument("CullideBroadphase::setObjectLevel: null broadphase");
@@ -280,12 +329,14 @@ void CullideBroadphase::setObjectLevel(std::unique_ptr<btBroadphaseInterface> ob
     m_impl->objectLevel.replace(std::move(objectLevel));
 }
 
-void CullideBroadphase::setGImpactPairCulling(bool enable) { m_impl->culledKinds.gimpactVsGimpact = enable; }
-bool CullideBroadphase::getGImpactPairCulling() const { return m_impl->culledKinds.gimpactVsGimpact; }
-void CullideBroadphase::setGImpactMeshCulling(bool enable) { m_impl->culledKinds.gimpactVsMesh = enable; }
-bool CullideBroadphase::getGImpactMeshCulling() const { return m_impl->culledKinds.gimpactVsMesh; }
-void CullideBroadphase::setGImpactConvexCulling(bool enable) { m_impl->culledKinds.gimpactVsConvex = enable; }
-bool CullideBroadphase::getGImpactConvexCulling() const { return m_impl->culledKinds.gimpactVsConvex; }
+void CullideBroadphase::setCulling(CulledKind kind, Culling mode) { m_impl->switches.set(kind, mode); }
+Culling CullideBroadphase::getCulling(CulledKind kind) const { return m_impl->switches.get(kind); }
+bool CullideBroadphase::isCulled(CulledKind kind) const { return m_impl->switches.isCulled(kind); }
+bool CullideBroadphase::mayCull(CulledKind kind) const { return m_impl->switches.possible()[kind]; }
+CullingDecision CullideBroadphase::getCullingDecision(CulledKind kind) const {
+    return m_impl->switches.decision(kind);
+}
+void CullideBroadphase::setAutoCullingOnAnyDevice(bool enable) { m_impl->switches.setAutoOnAnyDevice(enable); }
 
 const CullideFrameStats& CullideBroadphase::getLastFrameStats() const { return m_impl->stats; }
 CullideMemoryStats CullideBroadphase::getMemoryStats() const { return m_impl->cullFrame.memory(); }

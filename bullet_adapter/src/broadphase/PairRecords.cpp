@@ -135,7 +135,7 @@ void PairRecords::recordKept(const ObjectPair& op, CullFrame& frame, bool deepPe
         updateWorld(cb, objectOf(pb)->getWorldTransform());
         const bool flip = rec.first != pa;
         rec.triangles.interpenetrating =
-            nearGImpactPairs(pa, ca, pb, cb, op, flip, deepPenetrationFallback, rec.triangles.pairs);
+            nearGImpactPairs(ca, cb, op, flip, deepPenetrationFallback, rec.triangles.pairs);
         stats.trianglePairs += rec.triangles.pairs.size();
         if (rec.triangles.interpenetrating) {
             ++stats.interpenetratingPairs;
@@ -149,29 +149,21 @@ void PairRecords::recordKept(const ObjectPair& op, CullFrame& frame, bool deepPe
     m_records[pairKey(pa, pb)] = std::move(rec);
 }
 
-/// GImpact-GImpact: of the culler's triangle pairs, those whose triangle boxes, grown by the shapes' margins,
-/// overlap, as Bullet's (part, index) pairs in record orientation, sorted. A pair whose grown boxes are apart is
-/// farther apart than both margins; the clip method can then make a contact only from a point of one triangle more
-/// than both margins behind the other's plane: inside the other mesh where it is thicker than that, i.e. deep
-/// interpenetration, which the fallback hands to Bullet's full algorithm. Returns whether the meshes intersect
-/// (some kept pair shares a point; tested only with the fallback on), and then no list: the dispatcher runs Bullet's
-/// full algorithm. Otherwise the dispatcher keeps, of these pairs, those that Bullet's own BVH search would also
-/// produce.
-bool PairRecords::nearGImpactPairs(const btBroadphaseProxy* pa, const CulledObject& ca, const btBroadphaseProxy* pb,
-                                   const CulledObject& cb, const ObjectPair& op, bool flip,
+/// GImpact-GImpact: the culler's triangle pairs (every pair within the culling margin, which covers the reach of
+/// Bullet's box-set search: CullingPolicy.h), as Bullet's (part, index) pairs in record orientation, sorted. The
+/// dispatcher keeps of them those that Bullet's own search would also produce (its leaf-box test, exactly), so no
+/// pair is dropped here on a narrower test. Returns whether the meshes intersect (some kept pair shares a point;
+/// tested only with the fallback on), and then no list: the dispatcher runs Bullet's full algorithm.
+bool PairRecords::nearGImpactPairs(const CulledObject& ca, const CulledObject& cb, const ObjectPair& op, bool flip,
                                    bool deepPenetrationFallback, std::vector<BulletTrianglePair>& out) {
-    const double ma = double(triangleMarginOf(shapeOf(pa)));
-    const double mb = double(triangleMarginOf(shapeOf(pb)));
     const TriangleMesh& wa = ca.world;
     const TriangleMesh& wb = cb.world;
     m_boxesA.begin(wa.triangles.size());
     m_boxesB.begin(wb.triangles.size());
     out.reserve(op.triangles.size());
     for (const TrianglePair& tp : op.triangles) {
-        const Aabb& a = m_boxesA.of(wa, tp.a);
-        const Aabb& b = m_boxesB.of(wb, tp.b);
-        if (!a.inflated(ma).overlaps(b.inflated(mb))) continue;
-        if (deepPenetrationFallback && a.overlaps(b)) {  // triangles that meet have meeting boxes
+        if (deepPenetrationFallback && m_boxesA.of(wa, tp.a).overlaps(m_boxesB.of(wb, tp.b))) {
+            // Triangles that meet have meeting boxes.
             const TriangleIndices& x = wa.triangles[tp.a];
             const TriangleIndices& y = wb.triangles[tp.b];
             if (trianglesIntersect(wa.vertices[x[0]], wa.vertices[x[1]], wa.vertices[x[2]], wb.vertices[y[0]],

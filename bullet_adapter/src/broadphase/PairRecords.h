@@ -75,9 +75,8 @@ private:
 
     static Record recordFor(const btBroadphaseProxy* pa, const btBroadphaseProxy* pb);
     void recordKept(const ObjectPair& op, CullFrame& frame, bool deepPenetrationFallback, CullideFrameStats& stats);
-    bool nearGImpactPairs(const btBroadphaseProxy* pa, const CulledObject& ca, const btBroadphaseProxy* pb,
-                          const CulledObject& cb, const ObjectPair& op, bool flip, bool deepPenetrationFallback,
-                          std::vector<BulletTrianglePair>& out);
+    bool nearGImpactPairs(const CulledObject& ca, const CulledObject& cb, const ObjectPair& op, bool flip,
+                          bool deepPenetrationFallback, std::vector<BulletTrianglePair>& out);
 
     std::unordered_map<std::uint64_t, Record> m_records;
     /// Pairs found interpenetrating: the last step in which they skip the culler (kPenetrationRecheck).

@@ -37,7 +37,8 @@ AlgorithmTable::AlgorithmTable(NarrowPhaseContext& context)
 
 AlgorithmTable::Kind AlgorithmTable::kindOf(const btCollisionObjectWrapper* body0Wrap,
                                             const btCollisionObjectWrapper* body1Wrap,
-                                            const btCollisionAlgorithmCreateFunc* registered, bool convexMeshCulling) {
+                                            const btCollisionAlgorithmCreateFunc* registered,
+                                            const CullideBroadphase& broadphase) {
     const int t0 = body0Wrap->getCollisionShape()->getShapeType();
     const int t1 = body1Wrap->getCollisionShape()->getShapeType();
     const bool gimpact = t0 == GIMPACT_SHAPE_PROXYTYPE || t1 == GIMPACT_SHAPE_PROXYTYPE;
@@ -58,7 +59,7 @@ AlgorithmTable::Kind AlgorithmTable::kindOf(const btCollisionObjectWrapper* body
     }
     // Convex-mesh pairs read the culler's triangles only with convex-mesh culling on; otherwise Bullet's own
     // algorithm runs them without a record lookup per pair and step.
-    if (!convexMesh || !convexMeshCulling) return Kind::None;
+    if (!convexMesh || !broadphase.mayCull(CulledKind::ConvexMesh)) return Kind::None;
     if (isTriangleMeshType(t1) && culledConvex(body0Wrap) &&
         registeredIs<btConvexConcaveCollisionAlgorithm::CreateFunc>(registered))
         return Kind::ConvexMesh;
@@ -71,8 +72,8 @@ AlgorithmTable::Kind AlgorithmTable::kindOf(const btCollisionObjectWrapper* body
 btCollisionAlgorithmCreateFunc* AlgorithmTable::replacementFor(const btCollisionObjectWrapper* body0Wrap,
                                                                const btCollisionObjectWrapper* body1Wrap,
                                                                const btCollisionAlgorithmCreateFunc* registered,
-                                                               bool convexMeshCulling) {
-    const Kind kind = kindOf(body0Wrap, body1Wrap, registered, convexMeshCulling);
+                                                               const CullideBroadphase& broadphase) {
+    const Kind kind = kindOf(body0Wrap, body1Wrap, registered, broadphase);
     return kind == Kind::None ? nullptr : m_entries[static_cast<std::size_t>(kind)];
 }
 

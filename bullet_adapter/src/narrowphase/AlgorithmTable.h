@@ -13,6 +13,7 @@
 // btConvexConcaveCollisionAlgorithm while convex-mesh culling is on: an application's own registration wins.
 #pragma once
 
+#include "cullide_bullet/CullideBroadphase.h"
 #include "narrowphase/ConvexMeshAlgorithm.h"
 #include "narrowphase/GImpactAlgorithmBase.h"
 #include "narrowphase/GImpactConcaveAlgorithm.h"
@@ -55,15 +56,16 @@ public:
     AlgorithmTable& operator=(const AlgorithmTable&) = delete;
 
     /// The pair's kind if one of the adapter's algorithms takes it over from `registered` (the application's table
-    /// entry for the two shape types), else Kind::None.
+    /// entry for the two shape types), else Kind::None. `broadphase` says whether convex-mesh pairs may be culled
+    /// (asked only for such pairs: most lookups come from per-triangle loops).
     static Kind kindOf(const btCollisionObjectWrapper* body0Wrap, const btCollisionObjectWrapper* body1Wrap,
-                       const btCollisionAlgorithmCreateFunc* registered, bool convexMeshCulling);
+                       const btCollisionAlgorithmCreateFunc* registered, const CullideBroadphase& broadphase);
 
     /// The creation function of the adapter's algorithm for the pair, or nullptr to keep `registered`.
     btCollisionAlgorithmCreateFunc* replacementFor(const btCollisionObjectWrapper* body0Wrap,
                                                    const btCollisionObjectWrapper* body1Wrap,
                                                    const btCollisionAlgorithmCreateFunc* registered,
-                                                   bool convexMeshCulling);
+                                                   const CullideBroadphase& broadphase);
 
 private:
     CreateWithContext<GImpactMeshMeshAlgorithm> m_gimpactGImpact;

@@ -75,7 +75,7 @@ btCollisionAlgorithm* CullideCollisionDispatcher::findAlgorithm(const btCollisio
             m_doubleDispatchContactPoints[body0Wrap->getCollisionShape()->getShapeType()]
                                          [body1Wrap->getCollisionShape()->getShapeType()];
         if (btCollisionAlgorithmCreateFunc* replacement = m_algorithms->replacementFor(
-                body0Wrap, body1Wrap, registered, m_broadphase->getConvexMeshCulling())) {
+                body0Wrap, body1Wrap, registered, *m_broadphase)) {
             btCollisionAlgorithmConstructionInfo ci;
             ci.m_dispatcher1 = this;
             ci.m_manifold = sharedManifold;

@@ -3,7 +3,8 @@
 //   Bullet's box-set pair search and triangle routine reproduced at a fraction of Bullet's cost
 //   (bullet::meshPairContacts), or taken from the batch the narrow-phase threads computed ahead.
 // - Culled (CullideBroadphase::setGImpactPairCulling): the record's surviving triangle pairs that Bullet's own
-//   box-set search would also produce go to Bullet's triangle routine (collide_sat_triangles' loop).
+//   box-set search would also produce go to Bullet's triangle routine (collide_sat_triangles' loop); a pair whose
+//   kept triangles make no point gets Bullet's contacts (CullingPolicy.h, pairReach, says why).
 // A GImpact compound or a lone mesh part on either side runs Bullet's algorithm as it is.
 #pragma once
 

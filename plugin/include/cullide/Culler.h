@@ -42,15 +42,33 @@ public:
     /// first < second < objects.size(): std::invalid_argument otherwise (nothing is run).
     virtual void run(const std::vector<Object>& objects, const std::vector<ObjectIndexPair>& only,
                      Result& result) = 0;
+    /// run(objects, only, result) within a time budget: a frame that has taken `budgetMs` when it looks (between its
+    /// stages, its visibility levels and its exact-stage tasks) is abandoned: `result` then holds no pair and
+    /// Stats::abandoned is set, and the caller decides that frame without the culler. budgetMs <= 0: no budget. The
+    /// culler stays usable. The default implementation (the reference cullers) ignores the budget.
+    virtual void run(const std::vector<Object>& objects, const std::vector<ObjectIndexPair>& only, Result& result,
+                     double budgetMs) {
+        (void)budgetMs;
+        run(objects, only, result);
+    }
     virtual const Settings& settings() const = 0;
 };
 
 /// The CULLIDE GPU culler. Throws std::invalid_argument for invalid settings. GL is only needed for GPU levels:
-/// with GpuLevels::Never no GL context is opened at all; with GpuLevels::Auto and no usable GL device the culler
-/// runs the CPU path (box pre-pass, per-object box trees, exact stage: the same results) after a one-line notice on
-/// stderr (once per process and reason), and Stats::gpuUnavailable says why (Stats::device "none"); where GPU levels
-/// are demanded (GpuLevels::Always, Pipeline::Paper) it throws GlUnavailableError without a usable GL device.
+/// with GpuLevels::Never no GL context is opened at all, and with GpuLevels::Auto none unless the device it would use
+/// is a hardware one (hasHardwareGlDevice): a software renderer never wins Auto's trial, so the culler runs the CPU
+/// path there without opening a context (Stats::gpuUnavailable says so). With GpuLevels::Auto and no usable GL
+/// device at all the culler runs the CPU path (box pre-pass, per-object box trees, exact stage: the same results)
+/// after a one-line notice on stderr (once per process and reason), and Stats::gpuUnavailable says why
+/// (Stats::device "none"); where GPU levels are demanded (GpuLevels::Always, Pipeline::Paper) it throws
+/// GlUnavailableError without a usable GL device.
 std::unique_ptr<Culler> createGpuCuller(const Settings& settings);
+
+/// Whether the GL device that `device` (as Settings::device: "" for the environment variable CULLIDE_GL_DEVICE, else
+/// automatic) selects is a hardware one, found by EGL device enumeration without opening a display or context (the
+/// EGL library is loaded; no GL driver is initialised). False for "software" and "surfaceless", for a device index
+/// naming Mesa's software device, and where EGL offers no device enumeration. Answered once per process and value.
+bool hasHardwareGlDevice(const std::string& device = "");
 
 /// The CULLIDE culler with its image-space visibility test computed on the CPU by the reference implementation
 /// (ReferenceVisibility: the shaders' float arithmetic, pixel for pixel; the GL tests hold the GPU to exactly its

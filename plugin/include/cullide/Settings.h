@@ -33,11 +33,14 @@ enum class Backend {
 };
 
 enum class GpuLevels {
-    /// Run the GPU visibility levels where they pay, by measurement: the first four frames of a scene (and again
-    /// when its triangle count halves or doubles, at most once per 120 frames, or less often while the same path
-    /// keeps winning by at least twice) alternate the CPU path and the GPU levels, and the faster runs from then on
-    /// (Stats::autoDecision, autoCpuMs, autoGpuMs). The same rule on every device. Results are identical either way
-    /// (with Settings::exactTriangles false the candidate supersets differ). Without a GL device: the CPU path.
+    /// Run the GPU visibility levels where they pay, by measurement, on a hardware GL device: the first four frames
+    /// of a scene (and again when its triangle count halves or doubles, at most once per 120 frames, or less often
+    /// while the same path keeps winning by at least twice) alternate the CPU path and the GPU levels, and the faster
+    /// runs from then on (Stats::autoDecision, autoCpuMs, autoGpuMs). A GPU trial frame that runs past the last CPU
+    /// frame's time plus 1 ms is finished on the CPU path (Stats::autoTrialsAbandoned), and a CPU trial frame is
+    /// skipped where it would take more than twice a GPU frame plus 1 ms: no trial stalls a frame loop. Results are
+    /// identical either way (with Settings::exactTriangles false the candidate supersets differ). On a software
+    /// renderer (Mesa's llvmpipe) or without a GL device: the CPU path, with no GL context opened.
     Auto,
     /// Always run the GPU levels (tests, benchmarks, the paper-faithful pipeline).
     Always,

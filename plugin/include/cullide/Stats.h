@@ -84,7 +84,7 @@ struct Stats {
     std::size_t poolCalls = 0;
     std::size_t poolWorkerWakes = 0;
     std::size_t poolCallerSleeps = 0;
-    /// GpuLevels::Auto with a GL device: "measuring" (the first four frames of a scene, and again after its triangle
+    /// GpuLevels::Auto with a hardware GL device: "measuring" (the first four frames of a scene, and again after its triangle
     /// count halved or doubled, at most once per 120 frames, alternate the CPU path and the GPU levels and time
     /// them; each trial that again finds one path at least twice as fast doubles that interval, up to 3,840 frames),
     /// then "gpu" or "cpu", the faster of the two. Empty where nothing was decided (GpuLevels::Always or
@@ -92,6 +92,11 @@ struct Stats {
     std::string autoDecision;
     double autoCpuMs = 0.0;  ///< the timed trial frames behind autoDecision, whole-frame ms (0 until one is done)
     double autoGpuMs = 0.0;
+    /// GPU trial frames whose levels ran past their budget (the last CPU trial frame plus 1 ms) and were finished on
+    /// the CPU path: a trial never stalls a frame loop by more than about one CPU frame plus 1 ms.
+    std::size_t autoTrialsAbandoned = 0;
+    /// The frame ran past the budget of Culler::run(objects, only, result, budgetMs) and was abandoned: no pairs.
+    bool abandoned = false;
     /// GPU levels abandoned this frame because of a GL error: the frame was finished on the CPU path instead (the
     /// same exact pairs: the GPU levels only prune; with exactTriangles false, more candidates), and gpuError says
     /// why. The next frame tries the GPU again.

@@ -217,6 +217,10 @@ bool EglContext::tryMakeCurrent() noexcept {
            eglMakeCurrent(m_display, EGL_NO_SURFACE, EGL_NO_SURFACE, m_context) == EGL_TRUE;
 }
 
+void EglContext::release() noexcept {
+    if (eglGetCurrentContext() == m_context) eglMakeCurrent(m_display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+}
+
 void EglContext::makeCurrent() {
     if (!tryMakeCurrent()) throw GlUnavailableError("eglMakeCurrent failed for the culler's context");
 }
@@ -228,4 +232,45 @@ EglContext::~EglContext() {
     releaseDisplay(m_display);
 }
 
+bool hardwareDeviceSelected(const std::string& preferenceArg) {
+    std::string preference = preferenceArg;
+    if (preference.empty()) {
+        if (const char* env = std::getenv("CULLIDE_GL_DEVICE")) preference = env;
+    }
+    if (preference == "software" || preference == "surfaceless" || !epoxy_has_egl()) return false;
+    const char* clientExtensions = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
+    const bool enumeration = hasExtension(clientExtensions, "EGL_EXT_device_enumeration") ||
+                             hasExtension(clientExtensions, "EGL_EXT_device_base");
+    if (!enumeration || !hasExtension(clientExtensions, "EGL_EXT_platform_device")) return false;
+    EGLint count = 0;
+    if (!eglQueryDevicesEXT(0, nullptr, &count) || count <= 0) return false;
+    std::vector<EGLDeviceEXT> devices(static_cast<std::size_t>(count));
+    if (!eglQueryDevicesEXT(count, devices.data(), &count)) return false;
+    for (std::size_t i = 0; i < static_cast<std::size_t>(count); ++i) {
+        const bool software =
+            hasExtension(eglQueryDeviceStringEXT(devices[i], EGL_EXTENSIONS), "EGL_MESA_device_software");
+        if (preference.empty() || preference == "hardware") {
+            if (!software) return true;
+        } else if (preference == std::to_string(i)) {
+            return !software;
+        }
+    }
+    return false;
+}
+
 }  // namespace cullide::gl
+
+namespace cullide {
+
+bool hasHardwareGlDevice(const std::string& device) {
+    static std::mutex mutex;
+    static std::map<std::string, bool> answers;
+    const std::lock_guard<std::mutex> lock(mutex);
+    const auto it = answers.find(device);
+    if (it != answers.end()) return it->second;
+    const bool hardware = gl::hardwareDeviceSelected(device);
+    answers.emplace(device, hardware);
+    return hardware;
+}
+
+}  // namespace cullide

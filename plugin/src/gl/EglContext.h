@@ -11,6 +11,10 @@ namespace cullide::gl {
 /// Owns an EGL display + context made current on the calling thread. Device choice: the EGL device platform
 /// (a hardware device first, else Mesa's software device), then Mesa's surfaceless platform. Throws
 /// cullide::GlUnavailableError naming what is missing and the Debian package that provides it.
+/// Whether `preference` (as EglContext's) selects a hardware EGL device, by device enumeration alone (no display,
+/// no context). The environment variable is read when `preference` is empty.
+bool hardwareDeviceSelected(const std::string& preference);
+
 class EglContext {
 public:
     /// `preference`: "" (env CULLIDE_GL_DEVICE, else automatic), "hardware", "software", "surfaceless", or a device
@@ -24,6 +28,9 @@ public:
     void makeCurrent();
     /// The same without throwing (destructors): false when the context cannot be made current.
     bool tryMakeCurrent() noexcept;
+    /// Releases the context from the calling thread (if current there), so that another thread may make it
+    /// current: a culler may be made on one thread and used on another, one thread at a time.
+    void release() noexcept;
     const std::string& device() const { return m_device; }
     const std::string& renderer() const { return m_renderer; }
     bool hasTimerQueries() const { return m_timerQueries; }

@@ -1,10 +1,10 @@
-// The headless snapshot renderer (cullide/Snapshot.h): one non-indexed draw of every drawable triangle with its
+// The headless snapshot renderer (cullide/io/Snapshot.h): one non-indexed draw of every drawable triangle with its
 // colour baked into the vertices, into an off-screen multisampled framebuffer, resolved by a blit and read back.
 //
 // Why this shape: llvmpipe costs ~0.2 ms per draw call, so the whole scene is one buffer and one draw; a
 // non-indexed buffer lets every triangle carry its own colour (base / highlight / mark / faded) without a second
 // lookup; the shader derives the flat normal and edge distances itself, so a vertex is 16 bytes.
-#include "cullide/Snapshot.h"
+#include "cullide/io/Snapshot.h"
 
 #include "bindings.h"
 #include "gl/EglContext.h"

@@ -167,6 +167,9 @@ struct VisibilityPass::Impl {
         maxGroups = static_cast<std::size_t>(std::max(1, limit));
         reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * CULLIDE_COUNTER_COUNT);
         checkGlError("creating the visibility pass");
+        // Every call makes the context current on its own thread: the culler may be used from another thread than
+        // the one that made it (the Bullet adapter makes Culling::Auto's culler off the step's thread).
+        context.release();
     }
 
     ~Impl() {

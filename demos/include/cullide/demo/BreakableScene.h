@@ -33,11 +33,13 @@ struct BreakableOptions {
     double breakImpulse = -1;   ///< total contact impulse (N s) that breaks it; < 0: scaled to the falling mass
     CollisionPipeline pipeline = CollisionPipeline::Cullide;
     Settings culler;            ///< CULLIDE settings (pipeline Cullide)
-    /// CullideBroadphase::setDeepPenetrationFallback (pipeline Cullide, with gimpactPairCulling): intersecting GImpact
+    /// CullideBroadphase::setDeepPenetrationFallback (pipeline Cullide, culled GImpact pairs): intersecting GImpact
     /// pairs get Bullet's contacts; off: interpenetrating pieces see fewer contacts.
     bool deepPenetrationFallback = true;
-    /// Cullide pipeline: CullideBroadphase::setGImpactPairCulling (off: the pieces get Bullet's GImpact contacts).
-    bool gimpactPairCulling = false;
+    /// Cullide pipeline: every culling switch of the broadphase (Culling::Auto, the default: culled where a trial
+    /// shows it pays on a machine with a hardware GL device; Off: the pieces get Bullet's GImpact contacts bit for
+    /// bit; On: the pieces' pairs go through the culler).
+    Culling culling = Culling::Auto;
     /// Cullide pipeline: CullideCollisionDispatcher::setNarrowPhaseThreads (0: the dispatcher's default).
     unsigned narrowPhaseThreads = 0;
     /// Keep every step's contact points (lastStepContacts), for comparing pipelines; off: not collected.

@@ -1,7 +1,8 @@
 // PNG files and simple image layout for snapshots (cullide::Image, rows top to bottom, RGBA8).
+// Part of the cullide_io library (CMake: cullide::io; pkg-config: cullide-io), not of the culler.
 #pragma once
 
-#include "cullide/Snapshot.h"
+#include "cullide/io/Snapshot.h"
 
 #include <array>
 #include <cstdint>

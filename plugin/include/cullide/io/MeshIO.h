@@ -7,6 +7,7 @@
 // number of vertices). Limits, far beyond any real file: a token (number, OBJ face vertex, keyword) is at most
 // kMaxMeshTokenBytes; a scene file at most kMaxSceneFileBytes. Error messages are bounded: file names longer than
 // 200 bytes and tokens longer than 32 are shortened, control bytes (NUL included) are shown escaped.
+// Part of the cullide_io library (CMake: cullide::io; pkg-config: cullide-io), not of the culler.
 #pragma once
 
 #include "cullide/Types.h"

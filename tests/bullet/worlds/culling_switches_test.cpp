@@ -1,0 +1,112 @@
+// The broadphase's culling switches in worlds (CullideBroadphase.h: Culling, CulledKind). The default, Auto: on a
+// machine without a hardware GL device it culls nothing, makes no culler, and the world stays bit for bit Bullet's
+// default pipeline; trialled (setAutoCullingOnAnyDevice), it decides on the running scene, loses no contact while it
+// measures, and keeps its trial steps within their bound. On and Off, and the bool setters.
+#include "SceneSupport.h"
+#include "cullide/Culler.h"
+#include "cullide/Timer.h"
+
+#include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <vector>
+
+namespace cullide::test {
+namespace {
+
+const CulledKind kKinds[] = {CulledKind::GImpactPair, CulledKind::GImpactMesh, CulledKind::GImpactConvex,
+                             CulledKind::ConvexMesh};
+
+/// A pile of GImpact tori on a ground box: GImpact pairs of two kinds (GImpact-GImpact, GImpact-convex).
+void populate(TestWorld& w, ShapeStore& shapes) {
+    btGImpactCollisionAlgorithm::registerAlgorithm(&w.dispatcher());
+    w.addBody(shapes.box(btVector3(8, 1, 8)), 0, btTransform(btQuaternion::getIdentity(), btVector3(0, -1, 0)));
+    btCollisionShape* torus = shapes.gimpactTorus(1, btScalar(0.3), 24, 12, btScalar(0.02));
+    for (int k = 0; k < 12; ++k)
+        w.addBody(torus, 1,
+                  btTransform(btQuaternion(btVector3(1, btScalar(0.3 * k), 0).normalized(), btScalar(0.5 * k)),
+                              btVector3(btScalar(1.1 * (k % 3) - 1.1), btScalar(0.6 + 0.7 * k), btScalar(0.4 * (k % 2)))));
+}
+
+TEST(CullingSwitches, TheSettersAndWhatTheyReport) {
+    CullideBroadphase bp(Settings{}, nullptr, referenceFactory());
+    for (const CulledKind k : kKinds) {
+        EXPECT_EQ(bp.getCulling(k), Culling::Auto) << int(k);  // the default
+        EXPECT_FALSE(bp.isCulled(k)) << int(k);               // nothing decided yet
+    }
+    bp.setGImpactPairCulling(true);
+    EXPECT_EQ(bp.getCulling(CulledKind::GImpactPair), Culling::On);
+    EXPECT_TRUE(bp.getGImpactPairCulling());
+    EXPECT_TRUE(bp.mayCull(CulledKind::GImpactPair));
+    EXPECT_EQ(bp.getCullingDecision(CulledKind::GImpactPair).state, "culled");
+    bp.setGImpactPairCulling(false);
+    EXPECT_EQ(bp.getCulling(CulledKind::GImpactPair), Culling::Off);
+    EXPECT_FALSE(bp.getGImpactPairCulling());
+    EXPECT_FALSE(bp.mayCull(CulledKind::GImpactPair));
+    EXPECT_EQ(bp.getCullingDecision(CulledKind::GImpactPair).state, "not culled");
+    bp.setConvexMeshCulling(Culling::On);
+    EXPECT_TRUE(bp.getConvexMeshCulling());
+    if (!hasHardwareGlDevice()) {
+        EXPECT_FALSE(bp.mayCull(CulledKind::GImpactMesh));  // Auto: never trialled here
+        EXPECT_EQ(bp.getCullingDecision(CulledKind::GImpactMesh).state, "not trialled");
+    }
+    bp.setAutoCullingOnAnyDevice(true);
+    EXPECT_TRUE(bp.mayCull(CulledKind::GImpactMesh));
+    EXPECT_EQ(bp.getCullingDecision(CulledKind::GImpactMesh).state, "waiting");
+}
+
+TEST(CullingSwitches, AutoWithoutAHardwareDeviceMakesNoCullerAndStaysBulletsPipeline) {
+    if (hasHardwareGlDevice()) GTEST_SKIP() << "a hardware GL device: Auto trials here";
+    ShapeStore shapes;
+    TestWorld off(PipelineKind::Cullide), byDefault(PipelineKind::Cullide);
+    for (const CulledKind k : kKinds) off.cullideBroadphase()->setCulling(k, Culling::Off);
+    populate(off, shapes);
+    populate(byDefault, shapes);
+    EXPECT_EQ(firstDifferingStep(off, byDefault, 90), -1) << "Auto must cull nothing here";
+    const CullideBroadphase& bp = *byDefault.cullideBroadphase();
+    EXPECT_EQ(bp.getCullingMargin(), 0.0) << "no culler made";
+    EXPECT_EQ(bp.getLastFrameStats().culledPairs, 0u);
+    for (const CulledKind k : kKinds) EXPECT_EQ(bp.getCullingDecision(k).state, "not trialled");
+}
+
+TEST(CullingSwitches, AutoTrialledDecidesLosesNoContactAndKeepsItsStepsBounded) {
+    ShapeStore shapes;
+    TestWorld reference(PipelineKind::Default), automatic(PipelineKind::Cullide, referenceFactory());
+    automatic.cullideBroadphase()->setAutoCullingOnAnyDevice(true);
+    populate(reference, shapes);
+    populate(automatic, shapes);
+    std::vector<double> stepMs;
+    MirrorOptions options;
+    options.steps = 60;
+    options.tolerance = [](const std::pair<int, int>&) { return 1e30; };  // culled steps place points otherwise
+    std::size_t culledSteps = 0;
+    options.each = [&](int, TestWorld&, TestWorld& w) {
+        stepMs.push_back(w.lastBroadphaseMs() + w.lastNarrowPhaseMs());
+        culledSteps += w.cullideBroadphase()->getLastFrameStats().culledPairs > 0 ? 1 : 0;
+    };
+    const MirrorRun run = runMirrored(reference, automatic, options);
+    EXPECT_EQ(run.agreement.missingPairs, 0u) << run.agreement.firstMissing;  // no contact lost, trial or not
+    EXPECT_GT(run.agreement.referencePairs, 100u);
+    EXPECT_GT(culledSteps, 0u) << "the trials cull";
+    const CullideBroadphase& bp = *automatic.cullideBroadphase();
+    for (const CulledKind k : {CulledKind::GImpactPair, CulledKind::GImpactConvex}) {
+        const CullingDecision d = bp.getCullingDecision(k);
+        EXPECT_TRUE(d.state == "on" || d.state == "off") << int(k) << ": " << d.state;
+        EXPECT_GT(d.unculledMs, 0.0) << int(k);
+        EXPECT_GT(d.culledMs, 0.0) << int(k);
+        EXPECT_EQ(d.culled, d.state == "on") << int(k);
+    }
+    // No kind of pair without pairs is trialled.
+    EXPECT_EQ(bp.getCullingDecision(CulledKind::GImpactMesh).state, "waiting");
+    EXPECT_EQ(bp.getCullingDecision(CulledKind::ConvexMesh).state, "waiting");
+    // The trial's bound (AutoCulling.h: about twice an untrialled step plus 1 ms; the reference culler and a shared
+    // 2-core machine leave room: 3x + 5 ms), against the median step.
+    std::vector<double> sorted = stepMs;
+    std::sort(sorted.begin(), sorted.end());
+    const double median = sorted[sorted.size() / 2];
+    EXPECT_LT(sorted.back(), 3.0 * median + 5.0) << "median " << median;
+}
+
+}  // namespace
+}  // namespace cullide::test
