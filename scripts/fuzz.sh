@@ -10,14 +10,14 @@ seconds="${1:-60}"
 [[ "$seconds" =~ ^[0-9]+$ ]] || { echo "usage: scripts/fuzz.sh [seconds]" >&2; exit 2; }
 scripts/deps.sh
 dir=build-fuzz
-launcher=()
-command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache)
-generator=()
-command -v ninja >/dev/null && generator=(-G Ninja)
+source scripts/build_env.sh  # ccache (outside the clone) and Ninja
 # Only the fuzz target and the cullide and cullide_io libraries (instrumented, see tests/fuzz/CMakeLists.txt) are
-# built; warnings are not errors here: clang warns about things gcc (the warnings-as-errors builds) does not.
-CC=clang CXX=clang++ cmake -S . -B "$dir" "${generator[@]}" "${launcher[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
-  -DCULLIDE_BUILD_FUZZ=ON -DCULLIDE_BUILD_BENCHMARKS=OFF -DCULLIDE_BUILD_CGAL_ORACLE=OFF -DCULLIDE_WERROR=OFF >/dev/null
+# built: a clang build of its own (the gcc trees' objects cannot serve). Warnings are not errors here: clang warns
+# about things gcc (the warnings-as-errors builds) does not.
+# shellcheck disable=SC2046  # the generator option is two words
+CC=clang CXX=clang++ cmake -S . -B "$dir" $(cullide_generator_args "$dir") "${cullide_cmake_args[@]}" \
+  -DCMAKE_BUILD_TYPE=RelWithDebInfo -DCULLIDE_BUILD_FUZZ=ON -DCULLIDE_BUILD_BENCHMARKS=OFF \
+  -DCULLIDE_BUILD_CGAL_ORACLE=OFF -DCULLIDE_WERROR=OFF >/dev/null
 cmake --build "$dir" -j"$(nproc)" --target cullide_fuzz_readers
 run="$dir/fuzz-run"
 rm -rf "$run"

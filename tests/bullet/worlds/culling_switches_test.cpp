@@ -1,16 +1,13 @@
 // The broadphase's culling switches in worlds (CullideBroadphase.h: Culling, CulledKind). The default, Auto: on a
 // machine without a hardware GL device it culls nothing, makes no culler, and the world stays bit for bit Bullet's
-// default pipeline; trialled (setAutoCullingOnAnyDevice), it decides on the running scene, loses no contact while it
-// measures, and keeps its trial steps within their bound. On and Off, and the bool setters.
+// default pipeline; trialled (setAutoCullingOnAnyDevice), it decides on the running scene and loses no contact
+// while it measures. On and Off, and the bool setters.
 #include "SceneSupport.h"
 #include "cullide/Culler.h"
-#include "cullide/Timer.h"
 
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <gtest/gtest.h>
 
-#include <algorithm>
-#include <vector>
 
 namespace cullide::test {
 namespace {
@@ -70,19 +67,19 @@ TEST(CullingSwitches, AutoWithoutAHardwareDeviceMakesNoCullerAndStaysBulletsPipe
     for (const CulledKind k : kKinds) EXPECT_EQ(bp.getCullingDecision(k).state, "not trialled");
 }
 
-TEST(CullingSwitches, AutoTrialledDecidesLosesNoContactAndKeepsItsStepsBounded) {
+// (What a trial step costs against the steps around it is a figure, not an assertion: cullide-trial-bench; the
+// ramp and budget that bound it are AutoCulling's unit tests.)
+TEST(CullingSwitches, AutoTrialledDecidesAndLosesNoContact) {
     ShapeStore shapes;
     TestWorld reference(PipelineKind::Default), automatic(PipelineKind::Cullide, referenceFactory());
     automatic.cullideBroadphase()->setAutoCullingOnAnyDevice(true);
     populate(reference, shapes);
     populate(automatic, shapes);
-    std::vector<double> stepMs;
     MirrorOptions options;
     options.steps = 60;
     options.tolerance = [](const std::pair<int, int>&) { return 1e30; };  // culled steps place points otherwise
     std::size_t culledSteps = 0;
     options.each = [&](int, TestWorld&, TestWorld& w) {
-        stepMs.push_back(w.lastBroadphaseMs() + w.lastNarrowPhaseMs());
         culledSteps += w.cullideBroadphase()->getLastFrameStats().culledPairs > 0 ? 1 : 0;
     };
     const MirrorRun run = runMirrored(reference, automatic, options);
@@ -100,12 +97,6 @@ TEST(CullingSwitches, AutoTrialledDecidesLosesNoContactAndKeepsItsStepsBounded) 
     // No kind of pair without pairs is trialled.
     EXPECT_EQ(bp.getCullingDecision(CulledKind::GImpactMesh).state, "waiting");
     EXPECT_EQ(bp.getCullingDecision(CulledKind::ConvexMesh).state, "waiting");
-    // The trial's bound (AutoCulling.h: about twice an untrialled step plus 1 ms; the reference culler and a shared
-    // 2-core machine leave room: 3x + 5 ms), against the median step.
-    std::vector<double> sorted = stepMs;
-    std::sort(sorted.begin(), sorted.end());
-    const double median = sorted[sorted.size() / 2];
-    EXPECT_LT(sorted.back(), 3.0 * median + 5.0) << "median " << median;
 }
 
 }  // namespace
