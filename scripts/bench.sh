@@ -68,13 +68,15 @@ run_swap() {  # run_swap NAME "SWITCHES" [--scene S]...
 }
 run_swap defaults ""
 gimpact_scenes=""
-for s in tori-pile gimpact-landscape small-units tori-plane env1-world env2-world env3-world env3-deform-world \
-         breakable; do
+for s in tori-pile gimpact-landscape small-units tori-plane gimpact-demo env1-world env2-world env3-world \
+         env3-deform-world breakable; do
   gimpact_scenes="$gimpact_scenes --scene $s"
 done
+# Every switch On, every scene: the culled path's cost and its contact error against Bullet's (lost pairs must be 0).
+run_swap every-switch-on "--culling on"
+# Auto trialled on this machine too (it trials only with a hardware GL device by default): what it decides here.
 # shellcheck disable=SC2086
-run_swap gimpact-culling "--gimpact-pair-culling --gimpact-mesh-culling --gimpact-convex-culling" $gimpact_scenes
-run_swap convex-mesh-culling "--convex-mesh-culling" --scene landscape-hulls --scene landscape-compounds
+run_swap auto-anywhere "--auto-culling-anywhere" $gimpact_scenes --scene landscape-hulls
 
 # Machine, then the results files and the pages.
 load_after=$(cut -d' ' -f1-3 /proc/loadavg)
