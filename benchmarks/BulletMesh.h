@@ -12,6 +12,7 @@
 
 #include <Eigen/Geometry>
 
+#include <cmath>
 #include <memory>
 #include <vector>
 
@@ -31,6 +32,24 @@ inline void copyVertices(const TriangleMesh& mesh, std::vector<btScalar>& out) {
     out.resize(3 * mesh.vertices.size());
     for (std::size_t i = 0; i < mesh.vertices.size(); ++i)
         for (int k = 0; k < 3; ++k) out[3 * i + static_cast<std::size_t>(k)] = static_cast<btScalar>(mesh.vertices[i][k]);
+}
+
+/// A torus around the y axis (ring radius R, tube radius r) as btScalar xyz triples and triangle indices appended to
+/// `v` and `idx`: segments x sides quads, two triangles each.
+inline void torusArrays(double R, double r, int segments, int sides, std::vector<btScalar>& v, std::vector<int>& idx) {
+    const int first = static_cast<int>(v.size() / 3);
+    for (int i = 0; i < segments; ++i)
+        for (int j = 0; j < sides; ++j) {
+            const double u = 2 * M_PI * i / segments, w = 2 * M_PI * j / sides;
+            v.insert(v.end(), {btScalar((R + r * std::cos(w)) * std::cos(u)), btScalar(r * std::sin(w)),
+                               btScalar((R + r * std::cos(w)) * std::sin(u))});
+        }
+    for (int i = 0; i < segments; ++i)
+        for (int j = 0; j < sides; ++j) {
+            const int a = i * sides + j, b = ((i + 1) % segments) * sides + j;
+            const int c = ((i + 1) % segments) * sides + (j + 1) % sides, d = i * sides + (j + 1) % sides;
+            idx.insert(idx.end(), {first + a, first + b, first + c, first + a, first + c, first + d});
+        }
 }
 
 /// A btTriangleIndexVertexArray over `vertices` (see copyVertices) and the mesh's triangles (written to `indices`);

@@ -53,13 +53,16 @@ void CullideEngine::run(const BenchFrame& frame, FrameOutput& out) {
     out.bytesReadBack = s.bytesReadBack;
     out.gpuDeviceBytes = s.gpuDeviceBytes;
     out.draws = s.draws;
+    out.blockingReadBacks = s.blockingReadBacks;
     if (s.gpuTimingValid && !s.levels.empty()) out.gpuTimerMs = s.gpuMs;
     out.pool = std::array<std::size_t, 3>{s.poolCalls, s.poolWorkerWakes, s.poolCallerSleeps};
     out.levels = nlohmann::json::array();
     for (const LevelStats& l : s.levels) {
         nlohmann::json level = {{"name", l.name}, {"items", l.itemsPerIteration}, {"draws", l.draws},
                                 {"cpu_ms", l.cpuMs}, {"setup_ms", l.setupMs}, {"setup_send_ms", l.setupSendMs},
-                                {"records", l.records}, {"record_builds", l.recordBuilds}, {"wait_ms", l.waitMs}};
+                                {"iterations", l.iterations}, {"records", l.records},
+                                {"record_builds", l.recordBuilds}, {"short_builds", l.shortBuilds},
+                                {"blocking_read_backs", l.blockingReadBacks}, {"wait_ms", l.waitMs}};
         if (l.gpuTimingValid) level["gpu_ms"] = l.gpuMs;
         out.levels.push_back(level);
     }

@@ -32,6 +32,7 @@ struct FrameOutput {
     std::size_t bytesReadBack = 0;
     std::size_t gpuDeviceBytes = 0;  ///< culler's buffers and images on its GL device
     std::size_t draws = 0;           ///< GL draws and dispatches (CULLIDE)
+    std::size_t blockingReadBacks = 0;  ///< read-backs that waited for the device (CULLIDE)
     std::optional<double> gpuTimerMs;  ///< GPU time of the levels from timer queries, where valid (CULLIDE)
     nlohmann::json levels;           ///< per GPU level: items per iteration, draws, CPU and GPU ms (CULLIDE)
     long minorFaults = 0;  ///< the process's minor page faults during the frame (set by the harness, frame scenes)

@@ -601,12 +601,12 @@ void ReportWriter::gpuLevels(const Class& c) {
             "`Auto`: the decision after the last frame and the timed trial frames behind it (whole-frame ms). GPU "
             "levels forced: the levels' wall time (CPU side included: records, uploads, waiting for the flags), "
             "their GPU time from timer queries (– where the driver's timer is absent or implausible) and the "
-            "draws and dispatches per frame (medians); per level, the last frame's items per iteration and its "
+            "draws and dispatches and the read-backs that waited for the device per frame (medians); per level, the last frame's items per iteration and its "
             "CPU / GPU ms, and of the CPU ms the set-up (item data and records built and sent; of it, the GL calls "
             "that send them, and the records sent) and the time blocked in read-backs (waiting for the device); the "
             "rest is issuing commands.\n\n| scene | Auto decision | "
             "trial: CPU path ms | trial: GPU levels ms | engine | levels "
-            "wall ms | levels GPU ms | draws | per level (last frame): items per iteration, CPU / GPU ms |\n"
+            "wall ms | levels GPU ms | draws / read-backs | per level (last frame): items per iteration, CPU / GPU ms |\n"
             "|---|---|---|---|---|---|---|---|---|\n";
     std::ostringstream rows;
     for (const auto& scene : scenes(c, "side")) {
@@ -638,7 +638,8 @@ void ReportWriter::gpuLevels(const Class& c) {
                  << ms(a->value("auto_cpu_ms", 0.0)) << " | " << ms(a->value("auto_gpu_ms", 0.0)) << " | " << e
                  << " | " << ms(wall) << " | "
                  << (number(*r, "gpu_timer_ms_median") ? ms(*number(*r, "gpu_timer_ms_median")) : "–") << " | "
-                 << optCount(*r, "draws_median") << " | " << levels << " |\n";
+                 << optCount(*r, "draws_median") << " / " << optCount(*r, "blocking_read_backs_median") << " | "
+                 << levels << " |\n";
         }
     }
     m_md << (rows.str().empty() ? "| – | (these records predate the measured `Auto` decision) | | | | | | | |\n"

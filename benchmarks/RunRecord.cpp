@@ -32,6 +32,7 @@ void RunRecord::add(const FrameOutput& out, const PairSet* exact) {
     m_maxDevice = std::max(m_maxDevice, out.gpuDeviceBytes);
     m_sumUploaded += out.bytesUploaded;
     m_draws.push_back(static_cast<double>(out.draws));
+    m_readBacks.push_back(static_cast<double>(out.blockingReadBacks));
     if (out.gpuTimerMs) m_gpuTimerMs.push_back(*out.gpuTimerMs);
     if (out.pool)
         for (int i = 0; i < 3; ++i) m_pool[i].push_back(static_cast<double>((*out.pool)[static_cast<std::size_t>(i)]));
@@ -76,6 +77,7 @@ void RunRecord::write(nlohmann::json& r) const {
     r["bytes_uploaded_mean"] = m_total.empty() ? 0.0 : static_cast<double>(m_sumUploaded) / static_cast<double>(m_total.size());
     r["bytes_read_back_max"] = m_maxReadBack;
     r["draws_median"] = median(m_draws);
+    r["blocking_read_backs_median"] = median(m_readBacks);
     std::vector<double> faults(m_faults.begin(), m_faults.end());
     r["minor_faults_median"] = median(faults);  // per frame or step: memory freshly touched (see frame_minor_faults)
     if (!m_pool[0].empty()) {

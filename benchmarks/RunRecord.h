@@ -37,7 +37,7 @@ private:
     bool m_hasCandidates = false;
     std::size_t m_contacts = 0;
     std::size_t m_maxUploaded = 0, m_maxReadBack = 0, m_sumUploaded = 0, m_maxDevice = 0;
-    std::vector<double> m_draws, m_gpuTimerMs;
+    std::vector<double> m_draws, m_readBacks, m_gpuTimerMs;
     /// Per frame where the engine reports them: pool calls, worker wake-ups, caller sleeps.
     std::vector<double> m_pool[3];
     nlohmann::json m_lastLevels;  ///< the last timed frame's GPU levels

@@ -158,18 +158,7 @@ struct Shapes {
     btGImpactMeshShape* torus(double R, double r, int segments, int sides, double margin = 0.02) {
         std::vector<btScalar> v;
         std::vector<int> idx;
-        for (int i = 0; i < segments; ++i)
-            for (int j = 0; j < sides; ++j) {
-                const double u = 2 * M_PI * i / segments, w = 2 * M_PI * j / sides;
-                v.insert(v.end(), {btScalar((R + r * std::cos(w)) * std::cos(u)), btScalar(r * std::sin(w)),
-                                   btScalar((R + r * std::cos(w)) * std::sin(u))});
-            }
-        for (int i = 0; i < segments; ++i)
-            for (int j = 0; j < sides; ++j) {
-                const int a = i * sides + j, b = ((i + 1) % segments) * sides + j;
-                const int c = ((i + 1) % segments) * sides + (j + 1) % sides, d = i * sides + (j + 1) % sides;
-                idx.insert(idx.end(), {a, b, c, a, c, d});
-            }
+        cullide::bench::torusArrays(R, r, segments, sides, v, idx);
         auto* shape = own(new btGImpactMeshShape(mesh(std::move(v), std::move(idx))));
         shape->setMargin(btScalar(margin));
         shape->updateBound();

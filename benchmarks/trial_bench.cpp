@@ -9,6 +9,7 @@
 // the same with Auto trialled anywhere (setAutoCullingOnAnyDevice), each in lockstep with a world whose switches are
 // Off (the same states every step), so that a step's extra cost is the trial's. Each row: the median and worst frame
 // or step, and whether the worst stays within 2x the median + 1 ms.
+#include "BulletMesh.h"
 #include "cullide/Culler.h"
 #include "cullide/Timer.h"
 #include "cullide/scenes/Environments.h"
@@ -76,18 +77,7 @@ struct TorusMesh {
     std::unique_ptr<btTriangleIndexVertexArray> array;
     std::unique_ptr<btGImpactMeshShape> shape;
     TorusMesh(double R, double r, int segments, int sides, double margin) {
-        for (int i = 0; i < segments; ++i)
-            for (int j = 0; j < sides; ++j) {
-                const double u = 2 * M_PI * i / segments, w = 2 * M_PI * j / sides;
-                v.insert(v.end(), {btScalar((R + r * std::cos(w)) * std::cos(u)), btScalar(r * std::sin(w)),
-                                   btScalar((R + r * std::cos(w)) * std::sin(u))});
-            }
-        for (int i = 0; i < segments; ++i)
-            for (int j = 0; j < sides; ++j) {
-                const int a = i * sides + j, b = ((i + 1) % segments) * sides + j;
-                const int c = ((i + 1) % segments) * sides + (j + 1) % sides, d = i * sides + (j + 1) % sides;
-                idx.insert(idx.end(), {a, b, c, a, c, d});
-            }
+        cullide::bench::torusArrays(R, r, segments, sides, v, idx);
         array = std::make_unique<btTriangleIndexVertexArray>(int(idx.size() / 3), idx.data(), int(3 * sizeof(int)),
                                                              int(v.size() / 3), v.data(), int(3 * sizeof(btScalar)));
         shape = std::make_unique<btGImpactMeshShape>(array.get());

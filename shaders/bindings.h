@@ -11,7 +11,8 @@
 #define CULLIDE_SSBO_ITEM_OWNER 4  /* uint[itemCount]: owner (compact object id within the level) */
 #define CULLIDE_SSBO_FLAGS 5       /* uint[itemCount]: per-view "not fully visible" bits, atomicOr */
 #define CULLIDE_SSBO_RECORDS 6     /* PrimRecord[3 * primCount]: per (view axis, primitive) setup, raster back-end */
-#define CULLIDE_SSBO_COUNTERS 7    /* uint[CULLIDE_COUNTER_COUNT]: per iteration, see CULLIDE_COUNTER_* */
+#define CULLIDE_SSBO_COUNTERS 7    /* uint[CULLIDE_COUNTERS_SIZE]: per iteration, see CULLIDE_COUNTER_*; then the
+                                      * record-sized passes' count and indirect arguments, see CULLIDE_DISPATCH_* */
 #define CULLIDE_SSBO_ALIVE 8       /* uint[itemCount]: 1 = the item is still in the level's set (kept on the device) */
 #define CULLIDE_SSBO_ITEM_BOUNDS 9 /* uint[6 * itemCount]: item boxes (build.comp), order-preserving float bits: min xyz
                                       * of every item (3 per item), then max xyz of every item */
@@ -30,13 +31,26 @@
 #define CULLIDE_COUNTER_LO 4        /* 3 entries: min xyz of their boxes, as order-preserving float bits */
 #define CULLIDE_COUNTER_HI 7        /* 3 entries: max xyz of their boxes, likewise */
 #define CULLIDE_COUNTER_RECORDS 10  /* records compact.comp kept */
-#define CULLIDE_COUNTER_COUNT 11
+#define CULLIDE_COUNTER_COUNT 11   /* the counters the C++ side resets before every iteration */
+
+/* After the counters, in the same buffer (one read-back returns both): what the record-sized passes of the next
+ * iteration (cull.comp or cull_setup.comp and the draws, compact.comp) run over, dispatched indirectly. Written by
+ * build.comp's OFFSETS pass after a record build (the C++ side never waits for the count), otherwise by the C++ side
+ * from the counters it read back. */
+#define CULLIDE_DISPATCH_RECORDS 16 /* records the passes run over */
+#define CULLIDE_DISPATCH_NEEDED 17  /* records the last build needed (its total, written even when they did not fit) */
+#define CULLIDE_DISPATCH_NEEDED_APPROX 18 /* the same as a float (bits): no wrap-around, for the C++ side's limit */
+#define CULLIDE_DISPATCH_SHORT 19   /* 1: the last build needed more records than the buffers hold; none were written,
+                                     * nothing runs over them and the iteration prunes nothing (the C++ side grows the
+                                     * buffers and runs it again) */
+#define CULLIDE_DISPATCH_CULL 20    /* 3 uints: glDispatchComputeIndirect arguments (x, 3 views, z) */
+#define CULLIDE_DISPATCH_COMPACT 24 /* 3 uints: (x, 1, z) */
+#define CULLIDE_DISPATCH_DRAW 28    /* 4 uints: glDrawArraysIndirect's (9 vertices per record, 1, 0, 0) */
+#define CULLIDE_COUNTERS_SIZE 32
 
 /* The record build's buffer. Per work group g of the per-primitive passes, CULLIDE_BUILD_GROUPS + g holds its
  * footprint sum (float bits, FOOTPRINTS), then its record count (COUNT), then its first record (OFFSETS). */
-#define CULLIDE_BUILD_TOTAL 0      /* records of the alive items (OFFSETS) */
-#define CULLIDE_BUILD_APPROX 1     /* the same as a float (bits): no wrap-around, for the C++ side's size limit */
-#define CULLIDE_BUILD_PER_BAND 2   /* pixels per band (float bits, SCALE) */
+#define CULLIDE_BUILD_PER_BAND 0   /* pixels per band (float bits, SCALE) */
 #define CULLIDE_BUILD_GROUPS 4
 
 /* Passes of build.comp (CULLIDE_LOC_PASS). FOOTPRINTS and SCALE run on the compute back-end only. */
@@ -70,6 +84,8 @@
 #define CULLIDE_LOC_BANDS 13        /* int: build.comp: CULLIDE_BANDS_* */
 #define CULLIDE_LOC_GROUPS 14       /* uint: build.comp: work groups of its per-primitive passes */
 #define CULLIDE_LOC_ITEM_COUNT 15   /* uint: build.comp: the level's items */
+#define CULLIDE_LOC_CAPACITY 16     /* uint: build.comp: records the record buffers hold */
+#define CULLIDE_LOC_MAX_GROUPS 17   /* uint: build.comp: GL_MAX_COMPUTE_WORK_GROUP_COUNT[0] (indirect arguments) */
 
 #define CULLIDE_BANDS_NONE 0        /* one record per primitive (raster back-end) */
 #define CULLIDE_BANDS_LONG 1        /* bands of CULLIDE_PIXELS_PER_INVOCATION pixels (software renderers) */

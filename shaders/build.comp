@@ -7,8 +7,12 @@
 //   FOOTPRINTS  each primitive's footprint; each work group's sum            (compute back-end only)
 //   SCALE       one work group: pixels per band from the sum over all items  (compute back-end only)
 //   COUNT       each primitive's bands (none for a pruned item's); each work group's records
-//   OFFSETS     one work group: each work group's first record; the total, which the C++ side reads back
+//   OFFSETS     one work group: each work group's first record; the total, and from it the count and the indirect
+//               arguments of the iteration's record-sized passes (CULLIDE_DISPATCH_*): the C++ side never waits for it
 //   WRITE       each primitive's records at its work group's first record plus those of the group's before it
+// Records beyond the buffers' capacity are never written: OFFSETS then marks the build short, the iteration runs over
+// no record and prunes nothing, and the C++ side, which reads the needed total with the iteration's counters, grows the
+// buffers and builds again.
 // and, once per level before them, BOUNDS: each primitive's box into its item's, for survive.comp.
 // The records come out in item order, primitive order, band order: the same for the same set and view.
 layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
@@ -22,6 +26,7 @@ layout(std430, binding = CULLIDE_SSBO_BANDS) buffer Bands { uint bands[]; };
 layout(std430, binding = CULLIDE_SSBO_BUILD) buffer Build { uint build[]; };
 layout(std430, binding = CULLIDE_SSBO_PRIMS) writeonly buffer Prims { uvec4 prims[]; };
 layout(std430, binding = CULLIDE_SSBO_ITEM_BOUNDS) buffer Bounds { uint bounds[]; };
+layout(std430, binding = CULLIDE_SSBO_COUNTERS) buffer Counters { uint counters[]; };
 
 layout(location = CULLIDE_LOC_PASS) uniform int u_pass;
 layout(location = CULLIDE_LOC_PIXEL_SCALE) uniform vec3 u_pixelScale;
@@ -31,6 +36,8 @@ layout(location = CULLIDE_LOC_PRIM_BASE) uniform uint u_primBase;
 layout(location = CULLIDE_LOC_ITEM_COUNT) uniform uint u_itemCount;
 layout(location = CULLIDE_LOC_BANDS) uniform int u_bands;
 layout(location = CULLIDE_LOC_GROUPS) uniform uint u_groups;
+layout(location = CULLIDE_LOC_CAPACITY) uniform uint u_capacity;
+layout(location = CULLIDE_LOC_MAX_GROUPS) uniform uint u_maxGroups;
 
 const uint kLanes = uint(CULLIDE_COMPUTE_GROUP_SIZE);
 shared uint s_scan[CULLIDE_COMPUTE_GROUP_SIZE];
@@ -110,6 +117,29 @@ uint bandsOf(float footprint, float perBand) {
     return uint(clamp(ceil(footprint / perBand), 1.0, float(CULLIDE_MAX_LOOP_ITERATIONS / 2)));
 }
 
+// The count and indirect arguments of the record-sized passes over `total` records (none when they do not fit).
+void writeDispatch(uint total, float approx) {
+    bool fits = total <= u_capacity && approx <= float(u_capacity) + 1.0;
+    uint records = fits ? total : 0u;
+    uint groups = (records + kLanes - 1u) / kLanes;
+    uint x = min(groups, u_maxGroups);
+    uint z = x == 0u ? 0u : (groups + x - 1u) / x;
+    counters[CULLIDE_DISPATCH_RECORDS] = records;
+    counters[CULLIDE_DISPATCH_NEEDED] = total;
+    counters[CULLIDE_DISPATCH_NEEDED_APPROX] = floatBitsToUint(approx);
+    counters[CULLIDE_DISPATCH_SHORT] = fits ? 0u : 1u;
+    counters[CULLIDE_DISPATCH_CULL] = x;
+    counters[CULLIDE_DISPATCH_CULL + 1] = 3u;
+    counters[CULLIDE_DISPATCH_CULL + 2] = z;
+    counters[CULLIDE_DISPATCH_COMPACT] = x;
+    counters[CULLIDE_DISPATCH_COMPACT + 1] = 1u;
+    counters[CULLIDE_DISPATCH_COMPACT + 2] = z;
+    counters[CULLIDE_DISPATCH_DRAW] = 9u * records;
+    counters[CULLIDE_DISPATCH_DRAW + 1] = 1u;
+    counters[CULLIDE_DISPATCH_DRAW + 2] = 0u;
+    counters[CULLIDE_DISPATCH_DRAW + 3] = 0u;
+}
+
 // The item primitive p belongs to: the last i with primBegin[i] <= p (binary search over the items).
 uint itemOf(uint p) {
     uint lo = 0u;
@@ -162,10 +192,7 @@ void main() {
             carry += s_scan[kLanes - 1u];  // the chunk's total: inclusiveScan leaves it in the last lane
             barrier();
         }
-        if (lane == 0u) {
-            build[CULLIDE_BUILD_TOTAL] = carry;
-            build[CULLIDE_BUILD_APPROX] = floatBitsToUint(approx);
-        }
+        if (lane == 0u) writeDispatch(carry, approx);
     } else if (u_pass == CULLIDE_BUILD_PASS_BOUNDS) {
         // Into the item's box, cleared by the C++ side. The axes are written out: NVIDIA's compiler (driver 580.159)
         // crashed on a loop of atomics indexed by the loop variable (survive.comp).
@@ -183,7 +210,7 @@ void main() {
             atomicMax(bounds[top + 2u], orderedBits(hi.z));
         }
     } else if (u_pass == CULLIDE_BUILD_PASS_WRITE) {
-        uint n = p < u_primCount ? bands[p] : 0u;
+        uint n = p < u_primCount && counters[CULLIDE_DISPATCH_SHORT] == 0u ? bands[p] : 0u;
         uint record = build[CULLIDE_BUILD_GROUPS + group] + inclusiveScan(n) - n;
         for (uint band = 0u; band < n; ++band) prims[record + band] = uvec4(itemPrims[p], item, band, n);
     }

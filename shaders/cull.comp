@@ -1,14 +1,16 @@
 // Compute back-end: one invocation per (primitive band, view axis) scans its share of the primitive's conservative
 // footprint (every `bands`-th pixel, starting at `band`) and runs the same coverage test and per-pixel bookkeeping as
 // the fragment stage. On llvmpipe this runs on every core (the raster back-end's vertex stage is single-threaded);
-// on a GPU it avoids the fixed-function path.
+// on a GPU it avoids the fixed-function path. Dispatched indirectly (CULLIDE_DISPATCH_CULL): work groups along x and
+// z, the view along y.
 
 layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
 layout(std430, binding = CULLIDE_SSBO_COUNTERS) coherent buffer Counters { uint counters[]; };
 
 void main() {
-    uint index = u_primBase + gl_GlobalInvocationID.x;
-    if (index >= u_primCount) return;
+    uint index = (gl_WorkGroupID.z * gl_NumWorkGroups.x + gl_WorkGroupID.x) * gl_WorkGroupSize.x +
+                 gl_LocalInvocationID.x;
+    if (index >= counters[CULLIDE_DISPATCH_RECORDS]) return;
     int axis = int(gl_GlobalInvocationID.y);
     if (!axisEnabled(axis) || !primAlive(index)) return;
     uint band = prims[index].z;

@@ -6,7 +6,7 @@ flat out uint v_record;
 
 void main() {
     uint record = uint(gl_VertexID) / 3u;
-    int axis = int(record / u_primCount);
+    int axis = int(record / recordCount());
     v_record = record;
     vec4 rect = records[record].rect;
     vec2 grow = u_conservative != 0 ? halfSizeFor(axis) + vec2(1.0) : vec2(0.0);

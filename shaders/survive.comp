@@ -1,5 +1,5 @@
 // After an iteration's flag pass: an alive item that is not hidden in every enabled view leaves the set (nothing
-// leaves when an invocation overflowed). The items still alive are counted and their owner range and bounds
+// leaves when an invocation overflowed or the records did not fit their buffers). The items still alive are counted and their owner range and bounds
 // gathered, so that the C++ side reads a few counters, not the set, to fit the next iteration's view.
 layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
 layout(std430, binding = CULLIDE_SSBO_FLAGS) readonly buffer Flags { uint flags[]; };
@@ -27,7 +27,8 @@ void main() {
     uint i = u_itemBase + gl_GlobalInvocationID.x;
     if (i < u_itemCount && alive[i] != 0u) {
         bool hidden = (flags[i] & u_required) == u_required;
-        if (!hidden && counters[CULLIDE_COUNTER_OVERFLOWS] == 0u) {
+        bool prunes = counters[CULLIDE_COUNTER_OVERFLOWS] == 0u && counters[CULLIDE_DISPATCH_SHORT] == 0u;
+        if (!hidden && prunes) {
             alive[i] = 0u;
         } else {
             atomicAdd(s_counters[CULLIDE_COUNTER_ALIVE], 1u);

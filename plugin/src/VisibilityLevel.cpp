@@ -110,6 +110,7 @@ void pruneLevel(PruningBackend& backend, const LevelItems& items, const Settings
     bool allPruned = false;
     for (int iteration = 0; iteration < settings.maxIterations; ++iteration) {
         const IterationResult r = backend.iterate(view, idBitsFor(maxOwner), level, stats);
+        ++level.iterations;
         if (r.overflows != 0) break;  // some footprint was not scanned: the iteration pruned nothing
         if (r.alive == alive) break;  // the set only shrinks: the same size is the same set
         alive = r.alive;

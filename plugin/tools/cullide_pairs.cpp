@@ -182,6 +182,9 @@ nlohmann::ordered_json statsToJson(const cullide::Stats& s) {
         lj["setup_send_ms"] = l.setupSendMs;
         lj["records"] = l.records;
         lj["record_builds"] = l.recordBuilds;
+        lj["iterations"] = l.iterations;
+        lj["short_builds"] = l.shortBuilds;
+        lj["blocking_read_backs"] = l.blockingReadBacks;
         lj["wait_ms"] = l.waitMs;
         lj["gpu_ms"] = gpuTime(l.gpuMs, l.gpuTimingValid);
         levels.push_back(std::move(lj));
@@ -200,6 +203,7 @@ nlohmann::ordered_json statsToJson(const cullide::Stats& s) {
     j["draws"] = s.draws;
     j["bytes_uploaded"] = s.bytesUploaded;
     j["bytes_read_back"] = s.bytesReadBack;
+    j["blocking_read_backs"] = s.blockingReadBacks;
     j["prepass_ms"] = s.prepassMs;
     j["upload_ms"] = s.uploadMs;
     j["gpu_levels_ms"] = s.gpuLevelsMs;

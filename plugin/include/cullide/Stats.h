@@ -12,12 +12,13 @@ namespace cullide {
 struct LevelStats {
     std::string name;                       ///< "objects-box", "objects", "groups", "triangles"
     std::vector<std::size_t> itemsPerIteration;  ///< items entering each iteration; last entry = survivors
-    std::size_t primitivesDrawn = 0;        ///< primitives submitted (all passes, all axes)
+    std::size_t iterations = 0;             ///< visibility iterations run (the last may have changed nothing)
+    std::size_t primitivesDrawn = 0;        ///< records the visibility passes ran over (all passes, all views)
     std::size_t draws = 0;
     double cpuMs = 0.0;                     ///< wall time spent on the CPU side of the level (incl. waiting)
-    /// Of cpuMs, GL back-end: sending the level's items and building their boxes and records on the device (at its
-    /// start, and again where the view shrank enough to refit the bands), less the wait for the record count's
-    /// read-back, which waitMs counts: setupMs + waitMs <= cpuMs.
+    /// Of cpuMs, GL back-end: sending the level's items and issuing the build of their boxes and records on the
+    /// device (at its start, and again where the view shrank enough to refit the bands); nothing in it waits for the
+    /// device: setupMs + waitMs <= cpuMs.
     double setupMs = 0.0;
     /// Of setupMs, the GL calls that send the items (primitives, owners) and clear their device state.
     double setupSendMs = 0.0;
@@ -25,10 +26,15 @@ struct LevelStats {
     /// of a primitive's footprint), over all builds, and the builds: one at the start, one per refit of the bands.
     std::size_t records = 0;
     std::size_t recordBuilds = 0;
-    /// Of cpuMs, GL back-end: blocked in read-backs (each iteration's counters, each record build's count, the
-    /// level's alive set), i.e. waiting for the device to finish the work submitted before. The rest of cpuMs is
-    /// issuing commands and the level loop.
+    /// Of recordBuilds, those that needed more records than the device's record buffers held: they wrote none, their
+    /// iteration pruned nothing, and they were built again after the buffers grew (kept between frames).
+    std::size_t shortBuilds = 0;
+    /// Of cpuMs, GL back-end: blocked in read-backs (each iteration's counters, the level's alive set), i.e.
+    /// waiting for the device to finish the work submitted before. The rest of cpuMs is issuing commands and the
+    /// level loop.
     double waitMs = 0.0;
+    /// GL back-end: read-backs that blocked on the device (each iteration's counters, the level's alive set).
+    std::size_t blockingReadBacks = 0;
     /// GPU time of the level's iterations and record builds from timer queries. Only meaningful with
     /// gpuTimingValid; 0 otherwise.
     double gpuMs = 0.0;
@@ -107,6 +113,9 @@ struct Stats {
     /// What the culler holds on its GL device after the frame: buffer capacities plus the view images.
     std::size_t gpuDeviceBytes = 0;
     std::size_t bytesReadBack = 0;
+    /// Read-backs this frame that waited for the device to finish the work submitted before (the sum over levels):
+    /// each is a round trip that leaves the device idle until the CPU submits again.
+    std::size_t blockingReadBacks = 0;
     double prepassMs = 0.0;
     double uploadMs = 0.0;
     double gpuLevelsMs = 0.0;  ///< wall time of all GPU levels (0 when none ran: that CPU work is in prepassMs)

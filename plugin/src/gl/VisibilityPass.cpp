@@ -3,6 +3,8 @@
 #include "bindings.h"
 #include "gl/EglContext.h"
 #include "gl/GlApi.h"
+#include "gl/GlBuffers.h"
+#include "gl/GpuTimes.h"
 #include "gl/GlProgram.h"
 #include "CullerBackends.h"
 #include "VisibilityLevel.h"
@@ -10,6 +12,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <stdexcept>
 #include <initializer_list>
@@ -23,42 +26,6 @@ using Clock = std::chrono::steady_clock;
 double msSince(Clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
-
-/// Grows a buffer to hold at least `bytes`.
-void reserveBuffer(GLuint buffer, std::size_t& capacity, std::size_t bytes) {
-    if (bytes > capacity || capacity == 0) {
-        capacity = std::max<std::size_t>({bytes, capacity + capacity / 2, 256});
-        glNamedBufferData(buffer, static_cast<GLsizeiptr>(capacity), nullptr, GL_DYNAMIC_DRAW);
-    }
-}
-
-/// Grows a buffer to at least `bytes` and uploads `data`.
-void uploadBuffer(GLuint buffer, std::size_t& capacity, const void* data, std::size_t bytes) {
-    reserveBuffer(buffer, capacity, bytes);
-    if (bytes > 0) glNamedBufferSubData(buffer, 0, static_cast<GLsizeiptr>(bytes), data);
-}
-
-/// Uploads `data` except its first `keepBytes`, which the buffer already holds (`valid` bytes of it are from the
-/// previous upload); a buffer that has to grow loses its contents and is filled whole. Returns the bytes sent.
-std::size_t uploadAfterPrefix(GLuint buffer, std::size_t& capacity, std::size_t& valid, const void* data,
-                              std::size_t bytes, std::size_t keepBytes) {
-    if (bytes > capacity || capacity == 0) {
-        reserveBuffer(buffer, capacity, bytes);
-        keepBytes = 0;
-    }
-    keepBytes = std::min({keepBytes, valid, bytes});
-    if (bytes > keepBytes)
-        glNamedBufferSubData(buffer, static_cast<GLintptr>(keepBytes), static_cast<GLsizeiptr>(bytes - keepBytes),
-                             static_cast<const unsigned char*>(data) + keepBytes);
-    valid = bytes;
-    return bytes - keepBytes;
-}
-
-
-/// A timer-query result is plausible when at most this factor times the CPU wall time of the same span plus this
-/// slack (clock-rate differences, timer granularity).
-constexpr double kTimerFactor = 1.02;
-constexpr double kTimerSlackMs = 0.25;
 
 /// Records of one build beyond which the level gives up (BackendError: that frame prunes nothing): 64 Mi records,
 /// 1 GiB of device memory. A build makes about (primitives + max(CULLIDE_TARGET_INVOCATIONS, footprint pixels /
@@ -122,8 +89,15 @@ struct VisibilityPass::Impl {
     const GpuGeometry* geometry = nullptr;
     // The level being pruned (beginLevel .. its last iterate).
     const LevelItems* levelItems = nullptr;
-    std::size_t recordCount = 0;  ///< records of the alive items, in kPrims
+    std::size_t recordCount = 0;  ///< records of the alive items, in kPrims (after an iteration that followed no build)
     bool recordsPending = false;  ///< counted (countRecords), not yet written: the next iteration writes them first
+    /// Records the record buffers (kPrims, kPrimsNext; kRecords on the raster back-end) hold: kept between levels and
+    /// frames, grown when a build needs more (the iteration then runs again).
+    std::size_t recordCapacity = 0;
+    /// The open timer query's span: from the first pass after the last read-back (a record build's, or an
+    /// iteration's) to the iteration's read-back.
+    bool timing = false;
+    Clock::time_point timedSpan;
     Aabb recordedView;            ///< the view the records' bands were fitted to
     double readBackDelayMs = 0.0;  ///< GlBackendOptions::readBackDelayMs (tests: a slow device's round trip)
 
@@ -165,7 +139,7 @@ struct VisibilityPass::Impl {
         GLint limit = 65535;
         glGetIntegeri_v(GL_MAX_COMPUTE_WORK_GROUP_COUNT, 0, &limit);
         maxGroups = static_cast<std::size_t>(std::max(1, limit));
-        reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * CULLIDE_COUNTER_COUNT);
+        reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * CULLIDE_COUNTERS_SIZE);
         checkGlError("creating the visibility pass");
         // Every call makes the context current on its own thread: the culler may be used from another thread than
         // the one that made it (the Bullet adapter makes Culling::Auto's culler off the step's thread).
@@ -197,21 +171,22 @@ struct VisibilityPass::Impl {
         glUniform1ui(CULLIDE_LOC_PRIM_BASE, 0);
     }
 
-    void draw(int pass, std::size_t primCount, LevelStats& level, Stats& stats) {
+    /// One pass over the iteration's records (their count and the arguments are on the device).
+    void draw(int pass, LevelStats& level, Stats& stats) const {
         glUniform1i(CULLIDE_LOC_PASS, pass);
         if (settings.backend == Backend::Compute) {
-            dispatchAll(primCount, 3);
+            glDispatchComputeIndirect(4 * CULLIDE_DISPATCH_CULL);
         } else {
             const ThirdPartyLeakScope ignoreMesaDrawLeak;
-            glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(3 * 3 * primCount));  // 3 views x primCount records
+            // 3 views x the records, a triangle each
+            glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(std::uintptr_t{4 * CULLIDE_DISPATCH_DRAW}));
         }
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
         level.draws += 1;
-        level.primitivesDrawn += 3 * primCount;
         stats.draws += 1;
     }
 
-    void setUniforms(std::size_t primCount, std::uint32_t idBits, const View& view) const {
+    void setUniforms(std::uint32_t idBits, const View& view) const {
         glUniform1i(CULLIDE_LOC_RESOLUTION, settings.resolution);
         glUniform3fv(CULLIDE_LOC_VIEW_LO, 1, view.lo);
         glUniform3fv(CULLIDE_LOC_PIXEL_SCALE, 1, view.pixelScale);
@@ -220,7 +195,6 @@ struct VisibilityPass::Impl {
         glUniform3fv(CULLIDE_LOC_DEPTH_PAD, 1, view.depthPad);
         glUniform1ui(CULLIDE_LOC_ID_BITS, idBits);
         glUniform1i(CULLIDE_LOC_CONSERVATIVE, settings.mode == Mode::Reliable ? 1 : 0);
-        glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(primCount));
         glUniform1ui(CULLIDE_LOC_AXES, settings.axes);
     }
 
@@ -264,22 +238,23 @@ struct VisibilityPass::Impl {
     void buildPass(int pass, std::size_t invocations, LevelStats& level, Stats& stats) const {
         glUniform1i(CULLIDE_LOC_PASS, pass);
         dispatchAll(invocations, 1);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
         level.draws += 1;
         stats.draws += 1;
     }
 
-    /// Counts the records of the level's alive items for `view` on the device (build.comp up to its OFFSETS pass; first
-    /// its BOUNDS pass where `withBounds`: at a level's start) and reads back their number, to size the record
-    /// buffers and the passes; writeRecords writes them. On the compute back-end each primitive is split into
-    /// bands of its largest footprint over the three views. The passes' GPU time counts as the level's, the
-    /// read-back as its waiting.
+    /// Counts the records of the level's alive items for `view` on the device (build.comp up to its OFFSETS pass, which
+    /// also writes the count and the indirect arguments of the next iteration's record-sized passes; first the items'
+    /// boxes when `withBounds`: at a level's start); writeRecords writes them. On the compute back-end each primitive
+    /// is split into bands of its largest footprint over the three views. Nothing is read back: the iteration's
+    /// counters bring the count, and a build that needed more records than the buffers hold is run again.
     void countRecords(const View& view, bool withBounds, LevelStats& level, Stats& stats) {
         const std::size_t primCount = levelItems->prims.size();
         const std::size_t groups = (primCount + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
         if (groups > kMaxBuildGroups)
             throw BackendError("a level of " + std::to_string(primCount) + " primitives is over the limit of " +
                                std::to_string(kMaxBuildGroups * CULLIDE_COMPUTE_GROUP_SIZE));
+        reserveRecords(primCount);
         reserveBuffer(buffers[kBands], capacity[kBands], primCount * 4);
         reserveBuffer(buffers[kBuild], capacity[kBuild], (CULLIDE_BUILD_GROUPS + groups) * 4);
         bindBuffers();
@@ -288,8 +263,9 @@ struct VisibilityPass::Impl {
         glUniform3fv(CULLIDE_LOC_HALF_SIZE, 1, view.halfSize);
         setBuildUniforms();
         glUniform1ui(CULLIDE_LOC_GROUPS, static_cast<GLuint>(groups));
-        const auto timedSpan = Clock::now();
-        if (timer) glBeginQuery(GL_TIME_ELAPSED, timer);
+        glUniform1ui(CULLIDE_LOC_CAPACITY, static_cast<GLuint>(recordCapacity));
+        glUniform1ui(CULLIDE_LOC_MAX_GROUPS, static_cast<GLuint>(maxGroups));
+        startTiming();
         if (withBounds) buildPass(CULLIDE_BUILD_PASS_BOUNDS, primCount, level, stats);
         if (bands != CULLIDE_BANDS_NONE) {
             buildPass(CULLIDE_BUILD_PASS_FOOTPRINTS, primCount, level, stats);
@@ -297,21 +273,58 @@ struct VisibilityPass::Impl {
         }
         buildPass(CULLIDE_BUILD_PASS_COUNT, primCount, level, stats);
         buildPass(CULLIDE_BUILD_PASS_OFFSETS, 1, level, stats);
-        if (timer) glEndQuery(GL_TIME_ELAPSED);
-        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-        GLuint total[2] = {};
-        readBack(buffers[kBuild], 4 * CULLIDE_BUILD_TOTAL, sizeof total, total, level, stats);
-        recordGpuTime(timer ? timerResultMs(timer, msSince(timedSpan)) : -1.0, level, stats);
         checkGlError("counting a level's records");
-        float approx = 0.0f;
-        std::memcpy(&approx, &total[1], sizeof approx);
+        recordsPending = true;
+        level.recordBuilds += 1;
+    }
+
+    /// Grows the record buffers to hold at least `records` records (and recordCapacity).
+    void reserveRecords(std::size_t records) {
+        recordCapacity = std::max<std::size_t>({recordCapacity, records, 64});
+        reserveBuffer(buffers[kPrims], capacity[kPrims], recordCapacity * 16);
+        reserveBuffer(buffers[kPrimsNext], capacity[kPrimsNext], recordCapacity * 16);
+        if (settings.backend == Backend::Raster)
+            reserveBuffer(buffers[kRecords], capacity[kRecords], 3 * recordCapacity * kRecordBytes);
+    }
+
+    /// After an iteration whose build needed `needed` records (`approx`: the same summed in float) and found the
+    /// buffers short: room for them and a quarter more, within the limit of one build.
+    void growRecords(std::uint32_t needed, float approx) {
         if (!(approx <= kMaxRecords))  // also NaN
             throw BackendError("a level needs about " + std::to_string(approx) + " records, over the limit of " +
                                std::to_string(static_cast<std::size_t>(kMaxRecords)));
-        recordCount = total[0];
-        recordsPending = true;
-        level.records += recordCount;
-        level.recordBuilds += 1;
+        const double want = std::max<double>(needed, approx) * 1.25 + 64.0;
+        recordCapacity = static_cast<std::size_t>(std::min(want, kMaxRecords));
+    }
+
+    /// The count and indirect arguments of the record-sized passes over `records` records, written by the CPU where
+    /// it knows the count (an iteration after no build); as build.comp's writeDispatch writes them.
+    void writeDispatch(std::size_t records) const {
+        GLuint block[CULLIDE_COUNTERS_SIZE - CULLIDE_DISPATCH_RECORDS] = {};
+        const auto at = [&](int slot) -> GLuint& { return block[slot - CULLIDE_DISPATCH_RECORDS]; };
+        const std::size_t groups = (records + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
+        const std::size_t x = std::min(groups, maxGroups);
+        const std::size_t z = x == 0 ? 0 : (groups + x - 1) / x;
+        at(CULLIDE_DISPATCH_RECORDS) = static_cast<GLuint>(records);
+        at(CULLIDE_DISPATCH_NEEDED) = static_cast<GLuint>(records);
+        const float approx = static_cast<float>(records);
+        std::memcpy(&at(CULLIDE_DISPATCH_NEEDED_APPROX), &approx, sizeof approx);
+        at(CULLIDE_DISPATCH_CULL) = static_cast<GLuint>(x);
+        at(CULLIDE_DISPATCH_CULL + 1) = 3;
+        at(CULLIDE_DISPATCH_CULL + 2) = static_cast<GLuint>(z);
+        at(CULLIDE_DISPATCH_COMPACT) = static_cast<GLuint>(x);
+        at(CULLIDE_DISPATCH_COMPACT + 1) = 1;
+        at(CULLIDE_DISPATCH_COMPACT + 2) = static_cast<GLuint>(z);
+        at(CULLIDE_DISPATCH_DRAW) = static_cast<GLuint>(9 * records);
+        at(CULLIDE_DISPATCH_DRAW + 1) = 1;
+        glNamedBufferSubData(buffers[kCounters], 4 * CULLIDE_DISPATCH_RECORDS, sizeof block, block);
+    }
+
+    void startTiming() {
+        if (timing) return;
+        timing = true;
+        timedSpan = Clock::now();
+        if (timer) glBeginQuery(GL_TIME_ELAPSED, timer);
     }
 
     /// build.comp's WRITE pass: the counted records into kPrims (bound by prepareIteration).
@@ -344,8 +357,9 @@ struct VisibilityPass::Impl {
         glNamedBufferSubData(buffers[kCounters], 0, sizeof counters, counters);
         for (GLuint unit = 0; unit < 4; ++unit)
             glBindImageTexture(unit, images[unit], 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32UI);
-        reserveBuffer(buffers[kPrims], capacity[kPrims], recordCount * 16);
         bindBuffers();
+        glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, buffers[kCounters]);
+        glBindBuffer(GL_DRAW_INDIRECT_BUFFER, buffers[kCounters]);
         glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
         glViewport(0, 0, 3 * settings.resolution, settings.resolution);
         glDisable(GL_DEPTH_TEST);
@@ -355,60 +369,84 @@ struct VisibilityPass::Impl {
 
     /// One iteration on the device: the records first where they were just counted, the three passes over the
     /// alive items' records, the survivor pass, and the compaction of the records to those of the items still
-    /// alive. Reads back only the counters (44 bytes).
-    IterationResult runIteration(const View& view, std::uint32_t idBits, std::size_t itemCount, LevelStats& level,
-                                 Stats& stats) {
+    /// alive; the record-sized passes dispatched indirectly. Reads back only the counters and the dispatch block
+    /// (128 bytes). Where the build before it found the record buffers short, the iteration pruned nothing: the
+    /// buffers grow and the build and the iteration run again.
+    IterationResult runIteration(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) {
+        for (int attempt = 0;; ++attempt) {
+            const bool afterBuild = recordsPending;
+            GLuint counters[CULLIDE_COUNTERS_SIZE] = {};
+            issueIteration(view, idBits, level, stats);
+            readBack(buffers[kCounters], 0, sizeof counters, counters, level, stats);
+            recordGpuTime(timer ? timerResultMs(timer, msSince(timedSpan)) : -1.0, level, stats);
+            checkGlError("a visibility iteration");
+            const std::size_t ranOver = counters[CULLIDE_DISPATCH_RECORDS];
+            level.primitivesDrawn += 3 * 3 * ranOver;  // three passes over three views
+            if (counters[CULLIDE_DISPATCH_SHORT] != 0) {
+                if (attempt == 2) throw BackendError("the record buffers were short after growing twice");
+                level.shortBuilds += 1;
+                float approx = 0.0f;
+                std::memcpy(&approx, &counters[CULLIDE_DISPATCH_NEEDED_APPROX], sizeof approx);
+                growRecords(counters[CULLIDE_DISPATCH_NEEDED], approx);
+                countRecords(view, false, level, stats);  // the items' boxes are built already
+                continue;
+            }
+            if (afterBuild) level.records += counters[CULLIDE_DISPATCH_NEEDED];
+            recordCount = counters[CULLIDE_COUNTER_RECORDS];
+            std::swap(buffers[kPrims], buffers[kPrimsNext]);
+            std::swap(capacity[kPrims], capacity[kPrimsNext]);
+            IterationResult r;
+            r.overflows = counters[CULLIDE_COUNTER_OVERFLOWS];
+            r.alive = counters[CULLIDE_COUNTER_ALIVE];
+            r.ownerMin = counters[CULLIDE_COUNTER_OWNER_MIN];
+            r.ownerMax = counters[CULLIDE_COUNTER_OWNER_MAX];
+            for (int a = 0; a < 3; ++a) {
+                r.bounds.min[a] = fromOrderedBits(counters[CULLIDE_COUNTER_LO + a]);
+                r.bounds.max[a] = fromOrderedBits(counters[CULLIDE_COUNTER_HI + a]);
+            }
+            return r;
+        }
+    }
+
+    /// Issues one iteration's passes (nothing waits for them) and ends the timed span.
+    void issueIteration(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) {
+        const std::size_t itemCount = levelItems->size();
+        startTiming();
         prepareIteration(itemCount);
-        const auto timedSpan = Clock::now();
-        if (timer) glBeginQuery(GL_TIME_ELAPSED, timer);
-        if (recordsPending) writeRecords(level, stats);
+        if (recordsPending) {
+            writeRecords(level, stats);
+        } else {
+            writeDispatch(recordCount);
+            stats.bytesUploaded += 4 * (CULLIDE_COUNTERS_SIZE - CULLIDE_DISPATCH_RECORDS);
+        }
         if (settings.backend == Backend::Raster) {
-            reserveBuffer(buffers[kRecords], capacity[kRecords], 3 * recordCount * kRecordBytes);
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_RECORDS, buffers[kRecords]);
             glUseProgram(setupProgram);
-            setUniforms(recordCount, idBits, view);
-            dispatchAll(recordCount, 3);
+            setUniforms(idBits, view);
+            glDispatchComputeIndirect(4 * CULLIDE_DISPATCH_CULL);
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
             level.draws += 1;
             stats.draws += 1;
         }
         glUseProgram(program);
-        setUniforms(recordCount, idBits, view);
-        draw(CULLIDE_PASS_NEAREST, recordCount, level, stats);
-        draw(CULLIDE_PASS_SECOND, recordCount, level, stats);
-        draw(CULLIDE_PASS_FLAG, recordCount, level, stats);
+        setUniforms(idBits, view);
+        draw(CULLIDE_PASS_NEAREST, level, stats);
+        draw(CULLIDE_PASS_SECOND, level, stats);
+        draw(CULLIDE_PASS_FLAG, level, stats);
         glUseProgram(surviveProgram);
         glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(itemCount));
         glUniform1ui(CULLIDE_LOC_REQUIRED, requiredFlags(settings.axes));
         dispatchAll(itemCount, 1);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        reserveBuffer(buffers[kPrimsNext], capacity[kPrimsNext], recordCount * 16);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_PRIMS_OUT, buffers[kPrimsNext]);
         glUseProgram(compactProgram);
-        glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(recordCount));
-        dispatchAll(recordCount, 1);
+        glDispatchComputeIndirect(4 * CULLIDE_DISPATCH_COMPACT);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         level.draws += 2;
         stats.draws += 2;
         if (timer) glEndQuery(GL_TIME_ELAPSED);
+        timing = false;
         glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-        GLuint counters[CULLIDE_COUNTER_COUNT] = {};
-        readBack(buffers[kCounters], 0, sizeof counters, counters, level, stats);
-        recordGpuTime(timer ? timerResultMs(timer, msSince(timedSpan)) : -1.0, level, stats);
-        checkGlError("a visibility iteration");
-        IterationResult r;
-        r.overflows = counters[CULLIDE_COUNTER_OVERFLOWS];
-        r.alive = counters[CULLIDE_COUNTER_ALIVE];
-        r.ownerMin = counters[CULLIDE_COUNTER_OWNER_MIN];
-        r.ownerMax = counters[CULLIDE_COUNTER_OWNER_MAX];
-        recordCount = counters[CULLIDE_COUNTER_RECORDS];
-        std::swap(buffers[kPrims], buffers[kPrimsNext]);
-        std::swap(capacity[kPrims], capacity[kPrimsNext]);
-        for (int a = 0; a < 3; ++a) {
-            r.bounds.min[a] = fromOrderedBits(counters[CULLIDE_COUNTER_LO + a]);
-            r.bounds.max[a] = fromOrderedBits(counters[CULLIDE_COUNTER_HI + a]);
-        }
-        return r;
     }
 
     /// Reads `bytes` at `offset` of `buffer` back into `to`: blocks until the device has finished the work submitted
@@ -419,6 +457,8 @@ struct VisibilityPass::Impl {
         if (readBackDelayMs > 0.0)
             std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(readBackDelayMs));
         level.waitMs += msSince(waitStart);
+        level.blockingReadBacks += 1;
+        stats.blockingReadBacks += 1;
         stats.bytesReadBack += bytes;
     }
 
@@ -429,37 +469,6 @@ struct VisibilityPass::Impl {
         readBack(buffers[kAlive], 0, itemCount * 4, aliveScratch.data(), level, stats);
         alive.resize(itemCount);
         for (std::size_t i = 0; i < itemCount; ++i) alive[i] = aliveScratch[i] != 0 ? 1 : 0;
-    }
-
-    /// The GPU time of the span just timed by `query`, in ms, or -1 when it is not available or not plausible:
-    /// the GPU cannot have spent longer between glBeginQuery and glEndQuery than the CPU waited from issuing the
-    /// first to holding the result (`wallMs`). llvmpipe (Mesa 22.3) fails this once per context: its first
-    /// TIME_ELAPSED result, with either back-end, is the end time stamp less a start that was never stamped (0),
-    /// i.e. CLOCK_MONOTONIC — the machine's uptime; its later results are plausible.
-    static double timerResultMs(GLuint query, double wallMs) {
-        // The counters were just read back, so waiting for the result costs next to nothing; a driver that still
-        // says it is not available has no trustworthy result.
-        GLuint64 ns = 0;
-        glGetQueryObjectui64v(query, GL_QUERY_RESULT, &ns);
-        GLint available = GL_FALSE;
-        glGetQueryObjectiv(query, GL_QUERY_RESULT_AVAILABLE, &available);
-        const double ms = static_cast<double>(ns) * 1e-6;
-        if (available != GL_TRUE || !std::isfinite(ms) || ms > kTimerFactor * wallMs + kTimerSlackMs) return -1.0;
-        return ms;
-    }
-
-    /// Adds one iteration's GPU time (`ms` < 0: absent) to the level and the frame. One absent iteration makes
-    /// the level's and the frame's timings absent: a partial sum would read as a time.
-    static void recordGpuTime(double ms, LevelStats& level, Stats& stats) {
-        if (ms < 0.0) {
-            level.gpuTimingValid = false;
-            level.gpuMs = 0.0;
-            stats.gpuTimingValid = false;
-            stats.gpuMs = 0.0;
-            return;
-        }
-        if (level.gpuTimingValid) level.gpuMs += ms;
-        if (stats.gpuTimingValid) stats.gpuMs += ms;
     }
 };
 
@@ -508,40 +517,33 @@ bool recordsStale(const Aabb& view, const Aabb& recordedView) {
     return false;
 }
 
-/// Runs a level's set-up and adds its time to setupMs, less what it spent blocked in read-backs (the record count's),
-/// which waitMs counts: set-up and waits are disjoint parts of cpuMs (on a hardware device the read-back is most of
-/// the set-up).
-template <class SetUp>
-void timeSetUp(LevelStats& level, SetUp&& setUp) {
-    const auto t0 = Clock::now();
-    const double waitedBefore = level.waitMs;
-    setUp();
-    level.setupMs += msSince(t0) - (level.waitMs - waitedBefore);
-}
-
 }  // namespace
 
 void VisibilityPass::beginLevel(const LevelItems& items, const View& view, LevelStats& level, Stats& stats) {
     Impl& s = *m_impl;
     s.context.makeCurrent();
-    timeSetUp(level, [&] {
-        s.levelItems = &items;
-        s.uploadItems(items, level, stats);
-        s.countRecords(view, true, level, stats);
-        s.recordedView = view.box;
-    });
+    if (s.timing) {  // a level abandoned between its build and its first iteration
+        if (s.timer) glEndQuery(GL_TIME_ELAPSED);
+        s.timing = false;
+    }
+    const auto setUp = Clock::now();
+    s.levelItems = &items;
+    s.uploadItems(items, level, stats);
+    s.countRecords(view, true, level, stats);
+    s.recordedView = view.box;
+    level.setupMs += msSince(setUp);
 }
 
 IterationResult VisibilityPass::iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) {
     Impl& s = *m_impl;
     s.context.makeCurrent();
     if (recordsStale(view.box, s.recordedView)) {
-        timeSetUp(level, [&] {
-            s.countRecords(view, false, level, stats);
-            s.recordedView = view.box;
-        });
+        const auto setUp = Clock::now();
+        s.countRecords(view, false, level, stats);
+        s.recordedView = view.box;
+        level.setupMs += msSince(setUp);
     }
-    return s.runIteration(view, idBits, s.levelItems->size(), level, stats);
+    return s.runIteration(view, idBits, level, stats);
 }
 
 void VisibilityPass::readAlive(std::vector<std::uint8_t>& alive, LevelStats& level, Stats& stats) {

@@ -1,6 +1,7 @@
 // The image-space visibility test of CULLIDE on the GPU (OpenGL 4.5 through headless EGL): the PruningBackend that
 // production runs. The iterations' alive set, records and counters stay on the device; the records are built there
-// (build.comp); an iteration reads back 44 bytes of counters, a record build 8 bytes, a level its alive set once.
+// (build.comp) and the passes over them are dispatched indirectly, so a build is never waited for; an iteration reads
+// back 128 bytes of counters, a level its alive set once.
 #pragma once
 
 #include "CullerBackends.h"

@@ -1,0 +1,21 @@
+// Growing and filling GL buffers whose capacity the caller keeps (the visibility pass's storage buffers).
+#pragma once
+
+#include "gl/GlApi.h"
+
+#include <cstddef>
+
+namespace cullide::gl {
+
+/// Grows `buffer` to hold at least `bytes` (by half again at least; its contents are lost when it grows).
+void reserveBuffer(GLuint buffer, std::size_t& capacity, std::size_t bytes);
+
+/// Grows `buffer` to at least `bytes` and uploads `data`.
+void uploadBuffer(GLuint buffer, std::size_t& capacity, const void* data, std::size_t bytes);
+
+/// Uploads `data` except its first `keepBytes`, which the buffer already holds (`valid` bytes of it are from the
+/// previous upload); a buffer that has to grow loses its contents and is filled whole. Returns the bytes sent.
+std::size_t uploadAfterPrefix(GLuint buffer, std::size_t& capacity, std::size_t& valid, const void* data,
+                              std::size_t bytes, std::size_t keepBytes);
+
+}  // namespace cullide::gl

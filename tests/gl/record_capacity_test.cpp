@@ -1,0 +1,57 @@
+// The device's record buffers: a record build is never waited for, so a build that needs more records than the
+// buffers hold finds out on the device (it writes none and its iteration prunes nothing); the culler grows the buffers,
+// builds again and keeps them for the next frames. Held to the visibility reference (VisibilityLockstep) and to the
+// exact reference culler.
+#include "Compare.h"
+#include "GlTestSupport.h"
+#include "VisibilityLockstep.h"
+
+#include <gtest/gtest.h>
+
+#include <memory>
+
+namespace cullide::test {
+namespace {
+
+std::size_t shortBuilds(const Result& r) {
+    std::size_t n = 0;
+    for (const LevelStats& level : r.stats.levels) n += level.shortBuilds;
+    return n;
+}
+
+/// Short bands (a hardware GPU's: many records per primitive) on a fresh culler: its first build needs more records
+/// than the buffers it starts with. The frame still keeps what the reference keeps, iteration by iteration, and
+/// finds every exact pair; the next frames fit in the grown buffers.
+TEST(RecordCapacity, AShortBuildIsBuiltAgainAndTheBuffersAreKept) {
+    for (const Backend backend : {Backend::Compute, Backend::Raster}) {
+        const Settings settings = lockstepSettings({Pipeline::Auto, Mode::Reliable, backend, 256});
+        CULLIDE_GPU_CULLER_OR_SKIP(probe, settings);
+        auto log = std::make_shared<LockstepLog>();
+        GlBackendOptions options;
+        options.shortBands = true;
+        std::unique_ptr<Culler> culler = createGpuCuller(settings, lockstepFactory(log, options));
+        std::unique_ptr<Culler> reference = createReferenceCuller(settings);
+        const std::vector<TriangleMesh> meshes = randomSoups(3, 12, 60, 0.2);
+        const std::vector<Object> objects = asObjects(meshes);  // points into meshes
+        std::size_t firstFrameShort = 0;
+        for (int frame = 0; frame < 3; ++frame) {
+            Result r, expected;
+            culler->run(objects, r);
+            reference->run(objects, expected);
+            EXPECT_EQ(r.stats.gpuFallbacks, 0u) << r.stats.gpuError;
+            const Comparison c = compare(expected, r);
+            EXPECT_EQ(c.missed, 0u) << "frame " << frame << ": " << c.firstMissed;
+            EXPECT_GT(c.expected, 0u);
+            if (frame == 0) firstFrameShort = shortBuilds(r);
+            else EXPECT_EQ(shortBuilds(r), 0u) << "frame " << frame << ": the grown buffers were not kept";
+        }
+        // The raster back-end makes one record per primitive, which the first buffers always hold.
+        if (backend == Backend::Compute) EXPECT_GE(firstFrameShort, 1u) << "the scene must outgrow the first buffers";
+        else EXPECT_EQ(firstFrameShort, 0u);
+        EXPECT_EQ(log->mismatches, 0u) << log->summary();
+        EXPECT_GT(log->itemsPruned, 0u) << log->summary();
+    }
+}
+
+}  // namespace
+}  // namespace cullide::test
