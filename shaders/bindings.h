@@ -11,8 +11,9 @@
 #define CULLIDE_SSBO_ITEM_OWNER 4  /* uint[itemCount]: owner (compact object id within the level) */
 #define CULLIDE_SSBO_FLAGS 5       /* uint[itemCount]: per-view "not fully visible" bits, atomicOr */
 #define CULLIDE_SSBO_RECORDS 6     /* PrimRecord[3 * primCount]: per (view axis, primitive) setup, raster back-end */
-#define CULLIDE_SSBO_COUNTERS 7    /* uint[CULLIDE_COUNTERS_SIZE]: per iteration, see CULLIDE_COUNTER_*; then the
-                                      * record-sized passes' count and indirect arguments, see CULLIDE_DISPATCH_* */
+#define CULLIDE_SSBO_COUNTERS 7    /* uint[CULLIDE_ALIVE_BITS + (itemCount + 31) / 32]: per iteration, see
+                                      * CULLIDE_COUNTER_*; then the record-sized passes' count and indirect arguments,
+                                      * see CULLIDE_DISPATCH_*; then the alive set's bits, see CULLIDE_ALIVE_BITS */
 #define CULLIDE_SSBO_ALIVE 8       /* uint[itemCount]: 1 = the item is still in the level's set (kept on the device) */
 #define CULLIDE_SSBO_ITEM_BOUNDS 9 /* uint[6 * itemCount]: item boxes (build.comp), order-preserving float bits: min xyz
                                       * of every item (3 per item), then max xyz of every item */
@@ -47,6 +48,10 @@
 #define CULLIDE_DISPATCH_COMPACT 24 /* 3 uints: (x, 1, z) */
 #define CULLIDE_DISPATCH_DRAW 28    /* 4 uints: glDrawArraysIndirect's (9 vertices per record, 1, 0, 0) */
 #define CULLIDE_COUNTERS_SIZE 32
+/* Then the alive set after the iteration, one bit per item (item i: bit i % 32 of word CULLIDE_ALIVE_BITS + i / 32),
+ * cleared by the C++ side before every iteration and set by survive.comp: each iteration's read-back carries the set,
+ * so the level's end waits for nothing more. */
+#define CULLIDE_ALIVE_BITS 32
 
 /* The record build's buffer. Per work group g of the per-primitive passes, CULLIDE_BUILD_GROUPS + g holds its
  * footprint sum (float bits, FOOTPRINTS), then its record count (COUNT), then its first record (OFFSETS). */

@@ -1,6 +1,7 @@
 // After an iteration's flag pass: an alive item that is not hidden in every enabled view leaves the set (nothing
-// leaves when an invocation overflowed or the records did not fit their buffers). The items still alive are counted and their owner range and bounds
-// gathered, so that the C++ side reads a few counters, not the set, to fit the next iteration's view.
+// leaves when an invocation overflowed or the records did not fit their buffers). The items still alive are counted,
+// their owner range and bounds gathered (to fit the next iteration's view) and their bits set in the alive bit set
+// that follows the counters: the C++ side reads it all back at once.
 layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
 layout(std430, binding = CULLIDE_SSBO_FLAGS) readonly buffer Flags { uint flags[]; };
 layout(std430, binding = CULLIDE_SSBO_ALIVE) buffer Alive { uint alive[]; };
@@ -32,6 +33,7 @@ void main() {
             alive[i] = 0u;
         } else {
             atomicAdd(s_counters[CULLIDE_COUNTER_ALIVE], 1u);
+            atomicOr(counters[CULLIDE_ALIVE_BITS + i / 32u], 1u << (i % 32u));
             atomicMin(s_counters[CULLIDE_COUNTER_OWNER_MIN], owners[i]);
             atomicMax(s_counters[CULLIDE_COUNTER_OWNER_MAX], owners[i]);
             atomicMin(s_counters[CULLIDE_COUNTER_LO + 0], bounds[3u * i + 0u]);

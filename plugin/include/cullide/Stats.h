@@ -29,11 +29,11 @@ struct LevelStats {
     /// Of recordBuilds, those that needed more records than the device's record buffers held: they wrote none, their
     /// iteration pruned nothing, and they were built again after the buffers grew (kept between frames).
     std::size_t shortBuilds = 0;
-    /// Of cpuMs, GL back-end: blocked in read-backs (each iteration's counters, the level's alive set), i.e.
+    /// Of cpuMs, GL back-end: blocked in read-backs (one per iteration: its counters and the alive set), i.e.
     /// waiting for the device to finish the work submitted before. The rest of cpuMs is issuing commands and the
     /// level loop.
     double waitMs = 0.0;
-    /// GL back-end: read-backs that blocked on the device (each iteration's counters, the level's alive set).
+    /// GL back-end: read-backs that blocked on the device: one per iteration (its counters and the alive set).
     std::size_t blockingReadBacks = 0;
     /// GPU time of the level's iterations and record builds from timer queries. Only meaningful with
     /// gpuTimingValid; 0 otherwise.

@@ -57,6 +57,9 @@ enum Buffer {
 };
 constexpr std::size_t kRecordBytes = 7 * 16;  // PrimRecord in common.glsl
 
+/// Words of the counter buffer for a level of `items` items: counters, dispatch block and a bit per item.
+std::size_t counterWords(std::size_t items) { return CULLIDE_ALIVE_BITS + (items + 31) / 32; }
+
 /// Inverse of survive.comp's orderedBits.
 float fromOrderedBits(std::uint32_t key) {
     const std::uint32_t bits = (key & 0x80000000u) != 0 ? (key & 0x7FFFFFFFu) : ~key;
@@ -85,7 +88,8 @@ struct VisibilityPass::Impl {
     std::size_t valid[kBufferCount] = {};  ///< bytes of the buffer that hold the last upload (positions, indices)
     GLuint timer = 0;
     std::size_t maxGroups = 65535;  ///< GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]
-    std::vector<std::uint32_t> aliveScratch;
+    std::vector<std::uint32_t> readScratch;  ///< an iteration's read-back: counters, dispatch block, alive bits
+    std::vector<std::uint32_t> aliveBits;    ///< the alive set after the level's last iteration, a bit per item
     const GpuGeometry* geometry = nullptr;
     // The level being pruned (beginLevel .. its last iterate).
     const LevelItems* levelItems = nullptr;
@@ -207,6 +211,7 @@ struct VisibilityPass::Impl {
         uploadBuffer(buffers[kPrimBegin], capacity[kPrimBegin], items.primBegin.data(), items.primBegin.size() * 4);
         uploadBuffer(buffers[kItemPrims], capacity[kItemPrims], items.prims.data(), items.prims.size() * 4);
         stats.bytesUploaded += (n + items.primBegin.size() + items.prims.size()) * 4;
+        reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * counterWords(n));
         reserveBuffer(buffers[kFlags], capacity[kFlags], n * 4);
         reserveBuffer(buffers[kAlive], capacity[kAlive], n * 4);
         reserveBuffer(buffers[kItemBounds], capacity[kItemBounds], n * 24);
@@ -355,6 +360,9 @@ struct VisibilityPass::Impl {
         counters[CULLIDE_COUNTER_OWNER_MIN] = 0xFFFFFFFFu;
         for (int a = 0; a < 3; ++a) counters[CULLIDE_COUNTER_LO + a] = 0xFFFFFFFFu;
         glNamedBufferSubData(buffers[kCounters], 0, sizeof counters, counters);
+        glClearNamedBufferSubData(buffers[kCounters], GL_R32UI, 4 * CULLIDE_ALIVE_BITS,
+                                  static_cast<GLsizeiptr>(4 * (counterWords(itemCount) - CULLIDE_ALIVE_BITS)),
+                                  GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
         for (GLuint unit = 0; unit < 4; ++unit)
             glBindImageTexture(unit, images[unit], 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32UI);
         bindBuffers();
@@ -369,15 +377,17 @@ struct VisibilityPass::Impl {
 
     /// One iteration on the device: the records first where they were just counted, the three passes over the
     /// alive items' records, the survivor pass, and the compaction of the records to those of the items still
-    /// alive; the record-sized passes dispatched indirectly. Reads back only the counters and the dispatch block
-    /// (128 bytes). Where the build before it found the record buffers short, the iteration pruned nothing: the
-    /// buffers grow and the build and the iteration run again.
+    /// alive; the record-sized passes dispatched indirectly. Reads back the counters, the dispatch block and the
+    /// alive set as bits (128 bytes + a bit per item) in one read-back. Where the build before it found the record
+    /// buffers short, the iteration pruned nothing: the buffers grow and the build and the iteration run again.
     IterationResult runIteration(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) {
+        const std::size_t words = counterWords(levelItems->size());
         for (int attempt = 0;; ++attempt) {
             const bool afterBuild = recordsPending;
-            GLuint counters[CULLIDE_COUNTERS_SIZE] = {};
             issueIteration(view, idBits, level, stats);
-            readBack(buffers[kCounters], 0, sizeof counters, counters, level, stats);
+            readScratch.resize(words);
+            readBack(buffers[kCounters], 0, 4 * words, readScratch.data(), level, stats);
+            const std::uint32_t* counters = readScratch.data();
             recordGpuTime(timer ? timerResultMs(timer, msSince(timedSpan)) : -1.0, level, stats);
             checkGlError("a visibility iteration");
             const std::size_t ranOver = counters[CULLIDE_DISPATCH_RECORDS];
@@ -392,6 +402,7 @@ struct VisibilityPass::Impl {
                 continue;
             }
             if (afterBuild) level.records += counters[CULLIDE_DISPATCH_NEEDED];
+            aliveBits.assign(counters + CULLIDE_ALIVE_BITS, counters + words);
             recordCount = counters[CULLIDE_COUNTER_RECORDS];
             std::swap(buffers[kPrims], buffers[kPrimsNext]);
             std::swap(capacity[kPrims], capacity[kPrimsNext]);
@@ -462,13 +473,10 @@ struct VisibilityPass::Impl {
         stats.bytesReadBack += bytes;
     }
 
-    /// The device's alive set, as 0/1 per item.
-    void readAlive(std::size_t itemCount, std::vector<std::uint8_t>& alive, LevelStats& level, Stats& stats) {
-        aliveScratch.resize(itemCount);
-        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-        readBack(buffers[kAlive], 0, itemCount * 4, aliveScratch.data(), level, stats);
+    /// The alive set as 0/1 per item, from the last iteration's read-back (nothing is waited for).
+    void readAlive(std::size_t itemCount, std::vector<std::uint8_t>& alive) const {
         alive.resize(itemCount);
-        for (std::size_t i = 0; i < itemCount; ++i) alive[i] = aliveScratch[i] != 0 ? 1 : 0;
+        for (std::size_t i = 0; i < itemCount; ++i) alive[i] = (aliveBits[i / 32] >> (i % 32)) & 1u;
     }
 };
 
@@ -546,10 +554,8 @@ IterationResult VisibilityPass::iterate(const View& view, std::uint32_t idBits, 
     return s.runIteration(view, idBits, level, stats);
 }
 
-void VisibilityPass::readAlive(std::vector<std::uint8_t>& alive, LevelStats& level, Stats& stats) {
-    Impl& s = *m_impl;
-    s.context.makeCurrent();
-    s.readAlive(s.levelItems->size(), alive, level, stats);
+void VisibilityPass::readAlive(std::vector<std::uint8_t>& alive, LevelStats& /*level*/, Stats& /*stats*/) {
+    m_impl->readAlive(m_impl->levelItems->size(), alive);
 }
 
 }  // namespace cullide::gl

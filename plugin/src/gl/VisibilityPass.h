@@ -1,7 +1,7 @@
 // The image-space visibility test of CULLIDE on the GPU (OpenGL 4.5 through headless EGL): the PruningBackend that
 // production runs. The iterations' alive set, records and counters stay on the device; the records are built there
-// (build.comp) and the passes over them are dispatched indirectly, so a build is never waited for; an iteration reads
-// back 128 bytes of counters, a level its alive set once.
+// (build.comp) and the passes over them are dispatched indirectly, so a build is never waited for. The one read-back
+// of an iteration brings its counters and the alive set as bits: nothing else is waited for.
 #pragma once
 
 #include "CullerBackends.h"
