@@ -17,7 +17,7 @@
 #define CULLIDE_SSBO_ALIVE 8       /* uint[itemCount]: 1 = the item is still in the level's set (kept on the device) */
 #define CULLIDE_SSBO_ITEM_BOUNDS 9 /* uint[6 * itemCount]: item boxes (build.comp), order-preserving float bits: min xyz
                                       * of every item (3 per item), then max xyz of every item */
-#define CULLIDE_SSBO_PRIMS_OUT 10  /* uvec4[primCount]: compact.comp: the records of the items still alive */
+#define CULLIDE_SSBO_PRIMS_OUT 10  /* uvec4[primCount]: survive.comp: the records of the items still alive */
 /* The record build (build.comp): */
 #define CULLIDE_SSBO_PRIM_BEGIN 11 /* uint[itemCount + 1]: item i's primitives: ITEM_PRIMS[begin[i] .. begin[i + 1]) */
 #define CULLIDE_SSBO_ITEM_PRIMS 12 /* uint[itemPrimCount]: primitive references (triangle, or box | PRIM_BOX_BIT) */
@@ -31,11 +31,11 @@
 #define CULLIDE_COUNTER_OWNER_MAX 3
 #define CULLIDE_COUNTER_LO 4        /* 3 entries: min xyz of their boxes, as order-preserving float bits */
 #define CULLIDE_COUNTER_HI 7        /* 3 entries: max xyz of their boxes, likewise */
-#define CULLIDE_COUNTER_RECORDS 10  /* records compact.comp kept */
+#define CULLIDE_COUNTER_RECORDS 10  /* records survive.comp kept */
 #define CULLIDE_COUNTER_COUNT 11   /* the counters the C++ side resets before every iteration */
 
 /* After the counters, in the same buffer (one read-back returns both): what the record-sized passes of the next
- * iteration (cull.comp or cull_setup.comp and the draws, compact.comp) run over, dispatched indirectly. Written by
+ * iteration (cull.comp or cull_setup.comp and the draws, survive.comp) run over, dispatched indirectly. Written by
  * build.comp's OFFSETS pass after a record build (the C++ side never waits for the count), otherwise by the C++ side
  * from the counters it read back. */
 #define CULLIDE_DISPATCH_RECORDS 16 /* records the passes run over */
@@ -45,7 +45,7 @@
                                      * nothing runs over them and the iteration prunes nothing (the C++ side grows the
                                      * buffers and runs it again) */
 #define CULLIDE_DISPATCH_CULL 20    /* 3 uints: glDispatchComputeIndirect arguments (x, 3 views, z) */
-#define CULLIDE_DISPATCH_COMPACT 24 /* 3 uints: (x, 1, z) */
+#define CULLIDE_DISPATCH_SURVIVE 24 /* 3 uints: (x, 1, z) over the larger of the items and the records */
 #define CULLIDE_DISPATCH_DRAW 28    /* 4 uints: glDrawArraysIndirect's (9 vertices per record, 1, 0, 0) */
 #define CULLIDE_COUNTERS_SIZE 32
 /* Then the alive set after the iteration, one bit per item (item i: bit i % 32 of word CULLIDE_ALIVE_BITS + i / 32),
@@ -64,7 +64,8 @@
 #define CULLIDE_BUILD_PASS_COUNT 2      /* per primitive: its bands; the work group's records */
 #define CULLIDE_BUILD_PASS_OFFSETS 3    /* one work group: each work group's first record, the total */
 #define CULLIDE_BUILD_PASS_WRITE 4      /* per primitive: its records, in item order */
-#define CULLIDE_BUILD_PASS_BOUNDS 5     /* per primitive: its box into its item's (at the level's start) */
+#define CULLIDE_BUILD_PASS_BOUNDS 5     /* per primitive: its box into its item's (at the level's start, where there is
+                                         * no FOOTPRINTS pass to do it) */
 
 /* Per-pixel images (r32ui), three views side by side: width 3 * resolution, height resolution. */
 #define CULLIDE_IMAGE_NEAR1 0  /* min over items of (quantized nearest depth << idBits | owner) */
@@ -91,6 +92,7 @@
 #define CULLIDE_LOC_ITEM_COUNT 15   /* uint: build.comp: the level's items */
 #define CULLIDE_LOC_CAPACITY 16     /* uint: build.comp: records the record buffers hold */
 #define CULLIDE_LOC_MAX_GROUPS 17   /* uint: build.comp: GL_MAX_COMPUTE_WORK_GROUP_COUNT[0] (indirect arguments) */
+#define CULLIDE_LOC_WITH_BOUNDS 18  /* int: build.comp: 1 = the FOOTPRINTS pass also builds the items' boxes */
 
 #define CULLIDE_BANDS_NONE 0        /* one record per primitive (raster back-end) */
 #define CULLIDE_BANDS_LONG 1        /* bands of CULLIDE_PIXELS_PER_INVOCATION pixels (software renderers) */

@@ -13,7 +13,8 @@
 // Records beyond the buffers' capacity are never written: OFFSETS then marks the build short, the iteration runs over
 // no record and prunes nothing, and the C++ side, which reads the needed total with the iteration's counters, grows the
 // buffers and builds again.
-// and, once per level before them, BOUNDS: each primitive's box into its item's, for survive.comp.
+// and, once per level, each primitive's box into its item's, for survive.comp: in the FOOTPRINTS pass at the level's
+// start (CULLIDE_LOC_WITH_BOUNDS), or, where there is none (the raster back-end), in a BOUNDS pass before COUNT.
 // The records come out in item order, primitive order, band order: the same for the same set and view.
 layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
 layout(std430, binding = CULLIDE_SSBO_POSITIONS) readonly buffer Positions { float positions[]; };
@@ -38,6 +39,7 @@ layout(location = CULLIDE_LOC_BANDS) uniform int u_bands;
 layout(location = CULLIDE_LOC_GROUPS) uniform uint u_groups;
 layout(location = CULLIDE_LOC_CAPACITY) uniform uint u_capacity;
 layout(location = CULLIDE_LOC_MAX_GROUPS) uniform uint u_maxGroups;
+layout(location = CULLIDE_LOC_WITH_BOUNDS) uniform int u_withBounds;
 
 const uint kLanes = uint(CULLIDE_COMPUTE_GROUP_SIZE);
 shared uint s_scan[CULLIDE_COMPUTE_GROUP_SIZE];
@@ -124,6 +126,9 @@ void writeDispatch(uint total, float approx) {
     uint groups = (records + kLanes - 1u) / kLanes;
     uint x = min(groups, u_maxGroups);
     uint z = x == 0u ? 0u : (groups + x - 1u) / x;
+    uint surviveGroups = (max(records, u_itemCount) + kLanes - 1u) / kLanes;
+    uint sx = min(surviveGroups, u_maxGroups);
+    uint sz = sx == 0u ? 0u : (surviveGroups + sx - 1u) / sx;
     counters[CULLIDE_DISPATCH_RECORDS] = records;
     counters[CULLIDE_DISPATCH_NEEDED] = total;
     counters[CULLIDE_DISPATCH_NEEDED_APPROX] = floatBitsToUint(approx);
@@ -131,13 +136,29 @@ void writeDispatch(uint total, float approx) {
     counters[CULLIDE_DISPATCH_CULL] = x;
     counters[CULLIDE_DISPATCH_CULL + 1] = 3u;
     counters[CULLIDE_DISPATCH_CULL + 2] = z;
-    counters[CULLIDE_DISPATCH_COMPACT] = x;
-    counters[CULLIDE_DISPATCH_COMPACT + 1] = 1u;
-    counters[CULLIDE_DISPATCH_COMPACT + 2] = z;
+    counters[CULLIDE_DISPATCH_SURVIVE] = sx;
+    counters[CULLIDE_DISPATCH_SURVIVE + 1] = 1u;
+    counters[CULLIDE_DISPATCH_SURVIVE + 2] = sz;
     counters[CULLIDE_DISPATCH_DRAW] = 9u * records;
     counters[CULLIDE_DISPATCH_DRAW + 1] = 1u;
     counters[CULLIDE_DISPATCH_DRAW + 2] = 0u;
     counters[CULLIDE_DISPATCH_DRAW + 3] = 0u;
+}
+
+// Primitive p's box into its item's, cleared by the C++ side (at the level's start). The axes are written out:
+// NVIDIA's compiler (driver 580.159) crashed on a loop of atomics indexed by the loop variable (survive.comp).
+void addToItemBounds(uint p, uint item) {
+    vec3 lo;
+    vec3 hi;
+    primBox(itemPrims[p], lo, hi);
+    uint at = 3u * item;
+    uint top = 3u * (u_itemCount + item);
+    atomicMin(bounds[at], orderedBits(lo.x));
+    atomicMin(bounds[at + 1u], orderedBits(lo.y));
+    atomicMin(bounds[at + 2u], orderedBits(lo.z));
+    atomicMax(bounds[top], orderedBits(hi.x));
+    atomicMax(bounds[top + 1u], orderedBits(hi.y));
+    atomicMax(bounds[top + 2u], orderedBits(hi.z));
 }
 
 // The item primitive p belongs to: the last i with primBegin[i] <= p (binary search over the items).
@@ -158,6 +179,7 @@ void main() {
     uint item = p < u_primCount ? itemOf(p) : 0u;
     bool live = p < u_primCount && alive[item] != 0u;
     if (u_pass == CULLIDE_BUILD_PASS_FOOTPRINTS) {
+        if (u_withBounds != 0 && p < u_primCount) addToItemBounds(p, item);
         float pixels = live ? footprintOf(primExtent(itemPrims[p])) : 0.0;
         if (p < u_primCount) bands[p] = floatBitsToUint(pixels);
         float sum = groupSum(pixels);
@@ -194,21 +216,7 @@ void main() {
         }
         if (lane == 0u) writeDispatch(carry, approx);
     } else if (u_pass == CULLIDE_BUILD_PASS_BOUNDS) {
-        // Into the item's box, cleared by the C++ side. The axes are written out: NVIDIA's compiler (driver 580.159)
-        // crashed on a loop of atomics indexed by the loop variable (survive.comp).
-        if (p < u_primCount) {
-            vec3 lo;
-            vec3 hi;
-            primBox(itemPrims[p], lo, hi);
-            uint at = 3u * item;
-            uint top = 3u * (u_itemCount + item);
-            atomicMin(bounds[at], orderedBits(lo.x));
-            atomicMin(bounds[at + 1u], orderedBits(lo.y));
-            atomicMin(bounds[at + 2u], orderedBits(lo.z));
-            atomicMax(bounds[top], orderedBits(hi.x));
-            atomicMax(bounds[top + 1u], orderedBits(hi.y));
-            atomicMax(bounds[top + 2u], orderedBits(hi.z));
-        }
+        if (p < u_primCount) addToItemBounds(p, item);
     } else if (u_pass == CULLIDE_BUILD_PASS_WRITE) {
         uint n = p < u_primCount && counters[CULLIDE_DISPATCH_SHORT] == 0u ? bands[p] : 0u;
         uint record = build[CULLIDE_BUILD_GROUPS + group] + inclusiveScan(n) - n;

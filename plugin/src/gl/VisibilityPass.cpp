@@ -42,7 +42,7 @@ enum Buffer {
     kIndices,
     kBoxes,
     kPrims,
-    kPrimsNext,  ///< compact.comp's output; swapped with kPrims after every iteration
+    kPrimsNext,  ///< survive.comp's packed records; swapped with kPrims after every iteration
     kOwners,
     kFlags,
     kRecords,
@@ -77,7 +77,6 @@ struct VisibilityPass::Impl {
     GLuint program = 0;
     GLuint setupProgram = 0;  // raster back-end only
     GLuint surviveProgram = 0;
-    GLuint compactProgram = 0;
     GLuint buildProgram = 0;
     int bands = CULLIDE_BANDS_NONE;  ///< build.comp's CULLIDE_BANDS_* for this back-end and device
     GLuint vao = 0;
@@ -126,7 +125,6 @@ struct VisibilityPass::Impl {
             program = linkProgram({vs, fs}, "the visibility raster program");
         }
         surviveProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"survive.comp"})}, "the survivor program");
-        compactProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"compact.comp"})}, "the compaction program");
         buildProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"build.comp"})}, "the record build program");
         if (settings.backend == Backend::Compute)
             bands = context.isSoftware() && !options.shortBands ? CULLIDE_BANDS_LONG : CULLIDE_BANDS_SHORT;
@@ -160,7 +158,6 @@ struct VisibilityPass::Impl {
         glDeleteProgram(program);
         if (setupProgram) glDeleteProgram(setupProgram);
         glDeleteProgram(surviveProgram);
-        glDeleteProgram(compactProgram);
         glDeleteProgram(buildProgram);
     }
 
@@ -270,8 +267,9 @@ struct VisibilityPass::Impl {
         glUniform1ui(CULLIDE_LOC_GROUPS, static_cast<GLuint>(groups));
         glUniform1ui(CULLIDE_LOC_CAPACITY, static_cast<GLuint>(recordCapacity));
         glUniform1ui(CULLIDE_LOC_MAX_GROUPS, static_cast<GLuint>(maxGroups));
+        glUniform1i(CULLIDE_LOC_WITH_BOUNDS, withBounds ? 1 : 0);
         startTiming();
-        if (withBounds) buildPass(CULLIDE_BUILD_PASS_BOUNDS, primCount, level, stats);
+        if (withBounds && bands == CULLIDE_BANDS_NONE) buildPass(CULLIDE_BUILD_PASS_BOUNDS, primCount, level, stats);
         if (bands != CULLIDE_BANDS_NONE) {
             buildPass(CULLIDE_BUILD_PASS_FOOTPRINTS, primCount, level, stats);
             buildPass(CULLIDE_BUILD_PASS_SCALE, 1, level, stats);
@@ -307,19 +305,20 @@ struct VisibilityPass::Impl {
     void writeDispatch(std::size_t records) const {
         GLuint block[CULLIDE_COUNTERS_SIZE - CULLIDE_DISPATCH_RECORDS] = {};
         const auto at = [&](int slot) -> GLuint& { return block[slot - CULLIDE_DISPATCH_RECORDS]; };
-        const std::size_t groups = (records + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
-        const std::size_t x = std::min(groups, maxGroups);
-        const std::size_t z = x == 0 ? 0 : (groups + x - 1) / x;
+        // A grid of at least `count` invocations: work groups along x, as many rows of them along z as needed.
+        const auto grid = [&](int slot, std::size_t count, GLuint layers) {
+            const std::size_t groups = (count + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
+            const std::size_t x = std::min(groups, maxGroups);
+            at(slot) = static_cast<GLuint>(x);
+            at(slot + 1) = layers;
+            at(slot + 2) = static_cast<GLuint>(x == 0 ? 0 : (groups + x - 1) / x);
+        };
+        grid(CULLIDE_DISPATCH_CULL, records, 3);
+        grid(CULLIDE_DISPATCH_SURVIVE, std::max(records, levelItems->size()), 1);
         at(CULLIDE_DISPATCH_RECORDS) = static_cast<GLuint>(records);
         at(CULLIDE_DISPATCH_NEEDED) = static_cast<GLuint>(records);
         const float approx = static_cast<float>(records);
         std::memcpy(&at(CULLIDE_DISPATCH_NEEDED_APPROX), &approx, sizeof approx);
-        at(CULLIDE_DISPATCH_CULL) = static_cast<GLuint>(x);
-        at(CULLIDE_DISPATCH_CULL + 1) = 3;
-        at(CULLIDE_DISPATCH_CULL + 2) = static_cast<GLuint>(z);
-        at(CULLIDE_DISPATCH_COMPACT) = static_cast<GLuint>(x);
-        at(CULLIDE_DISPATCH_COMPACT + 1) = 1;
-        at(CULLIDE_DISPATCH_COMPACT + 2) = static_cast<GLuint>(z);
         at(CULLIDE_DISPATCH_DRAW) = static_cast<GLuint>(9 * records);
         at(CULLIDE_DISPATCH_DRAW + 1) = 1;
         glNamedBufferSubData(buffers[kCounters], 4 * CULLIDE_DISPATCH_RECORDS, sizeof block, block);
@@ -376,8 +375,7 @@ struct VisibilityPass::Impl {
     }
 
     /// One iteration on the device: the records first where they were just counted, the three passes over the
-    /// alive items' records, the survivor pass, and the compaction of the records to those of the items still
-    /// alive; the record-sized passes dispatched indirectly. Reads back the counters, the dispatch block and the
+    /// alive items' records, and the survivor pass, which also packs the records of the items still alive; the record-sized passes dispatched indirectly. Reads back the counters, the dispatch block and the
     /// alive set as bits (128 bytes + a bit per item) in one read-back. Where the build before it found the record
     /// buffers short, the iteration pruned nothing: the buffers grow and the build and the iteration run again.
     IterationResult runIteration(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) {
@@ -444,17 +442,14 @@ struct VisibilityPass::Impl {
         draw(CULLIDE_PASS_NEAREST, level, stats);
         draw(CULLIDE_PASS_SECOND, level, stats);
         draw(CULLIDE_PASS_FLAG, level, stats);
-        glUseProgram(surviveProgram);
-        glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(itemCount));
-        glUniform1ui(CULLIDE_LOC_REQUIRED, requiredFlags(settings.axes));
-        dispatchAll(itemCount, 1);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_PRIMS_OUT, buffers[kPrimsNext]);
-        glUseProgram(compactProgram);
-        glDispatchComputeIndirect(4 * CULLIDE_DISPATCH_COMPACT);
+        glUseProgram(surviveProgram);
+        glUniform1ui(CULLIDE_LOC_ITEM_COUNT, static_cast<GLuint>(itemCount));
+        glUniform1ui(CULLIDE_LOC_REQUIRED, requiredFlags(settings.axes));
+        glDispatchComputeIndirect(4 * CULLIDE_DISPATCH_SURVIVE);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        level.draws += 2;
-        stats.draws += 2;
+        level.draws += 1;
+        stats.draws += 1;
         if (timer) glEndQuery(GL_TIME_ELAPSED);
         timing = false;
         glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
