@@ -598,11 +598,11 @@ void ReportWriter::memory(const Class& c) {
 
 void ReportWriter::gpuLevels(const Class& c) {
     m_md << "### 5. GPU levels and the Auto decision (" << c.name << ")\n\n"
-            "`Auto`: the decision after the last frame and the timed trial frames behind it (whole-frame ms). GPU "
-            "levels forced: the levels' wall time (CPU side included: records, uploads, waiting for the flags), "
+            "`Auto`: the decision after the last frame and the timed trial frames behind it (whole-frame ms; on a "
+            "software renderer `Auto` does not trial and runs the CPU path). GPU levels forced: the levels' wall time (CPU side included: records, uploads, waiting for the flags), "
             "their GPU time from timer queries (– where the driver's timer is absent or implausible) and the "
-            "draws and dispatches and the read-backs that waited for the device per frame (medians); per level, the last frame's items per iteration and its "
-            "CPU / GPU ms, and of the CPU ms the set-up (item data and records built and sent; of it, the GL calls "
+            "draws and dispatches and the read-backs that waited for the device per frame (medians); per level, the "
+            "last frame's items per iteration and its CPU / GPU ms, and of the CPU ms the set-up (item data and records built and sent; of it, the GL calls "
             "that send them, and the records sent) and the time blocked in read-backs (waiting for the device); the "
             "rest is issuing commands.\n\n| scene | Auto decision | "
             "trial: CPU path ms | trial: GPU levels ms | engine | levels "
@@ -611,7 +611,10 @@ void ReportWriter::gpuLevels(const Class& c) {
     std::ostringstream rows;
     for (const auto& scene : scenes(c, "side")) {
         const json* a = find(c, "side", scene, "cullide");
-        if (a == nullptr || !a->contains("auto_decision")) continue;
+        const bool decided = a != nullptr && !a->value("auto_decision", std::string()).empty();
+        const std::string decision = decided ? a->value("auto_decision", std::string()) : "not trialled";
+        const std::string cpuTrial = decided ? ms(a->value("auto_cpu_ms", 0.0)) : "–";
+        const std::string gpuTrial = decided ? ms(a->value("auto_gpu_ms", 0.0)) : "–";
         for (const std::string e : {"cullide-gpu", "cullide-raster"}) {
             const json* r = find(c, "side", scene, e);
             if (r == nullptr) continue;
@@ -634,8 +637,7 @@ void ReportWriter::gpuLevels(const Class& c) {
                                                            : std::string()) +
                               ", waiting " + ms(l.value("wait_ms", 0.0)) + ")";
             }
-            rows << "| " << scene << " | " << a->value("auto_decision", std::string()) << " | "
-                 << ms(a->value("auto_cpu_ms", 0.0)) << " | " << ms(a->value("auto_gpu_ms", 0.0)) << " | " << e
+            rows << "| " << scene << " | " << decision << " | " << cpuTrial << " | " << gpuTrial << " | " << e
                  << " | " << ms(wall) << " | "
                  << (number(*r, "gpu_timer_ms_median") ? ms(*number(*r, "gpu_timer_ms_median")) : "–") << " | "
                  << optCount(*r, "draws_median") << " / " << optCount(*r, "blocking_read_backs_median") << " | "

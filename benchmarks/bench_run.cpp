@@ -6,7 +6,7 @@
 //                     [--iterations N] [--threads N]
 //                     [--truth FILE] [--tag TAG] [--out FILE] [--sample-every N]
 //   cullide-bench-run --list-engines | --list-scenes   what this build can run
-//   cullide-bench-run --probe          prints the GL renderer and device CULLIDE picks, as JSON
+//   cullide-bench-run --probe          prints the GL renderer and device CULLIDE's GPU levels run on, as JSON
 //
 // Frame scenes: the first --warmup frames run untimed, the next --frames are timed. With --engine exact the exact
 // answer (the brute-force reference) of the timed frames is written to --truth; other engines read it from there
@@ -38,6 +38,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <utility>
@@ -95,8 +96,17 @@ void emit(const RunArgs& args, const nlohmann::json& record) {
     out << line << '\n';
 }
 
+/// The GL device the GPU-level engines run on (GpuLevels::Always: Auto opens no context on a software renderer).
 int probe() {
-    auto culler = cullide::createGpuCuller(cullide::Settings{});
+    cullide::Settings settings;
+    settings.gpuLevels = cullide::GpuLevels::Always;
+    std::unique_ptr<cullide::Culler> culler;
+    try {
+        culler = cullide::createGpuCuller(settings);
+    } catch (const cullide::GlUnavailableError&) {
+        std::cout << nlohmann::json{{"renderer", ""}, {"device", "none"}}.dump() << std::endl;
+        return 0;
+    }
     cullide::TriangleMesh a = cullide::scenes::makeBox(cullide::Vec3::Constant(0.5));
     cullide::TriangleMesh b = a;
     for (auto& p : b.vertices) p.x() += 0.5;

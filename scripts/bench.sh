@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Builds and runs the benchmarks and writes the pages generated from their results.
-#   scripts/bench.sh            full run (~25 min on 2 cores + llvmpipe): docs/benchmarks.md (from
+#   scripts/bench.sh            full run (~8 min on 2 cores + llvmpipe): docs/benchmarks.md (from
 #                               docs/bench/results-<cpu|gpu>.json, plots docs/bench/*.png), docs/swap.md (from
 #                               docs/bench/swap-<cpu|gpu>.json) and the README's headline table
 #   scripts/bench.sh --swap     the two-line swap's runs only: docs/swap.md and the README's headline table

@@ -10,7 +10,7 @@
 #define CULLIDE_SSBO_PRIMS 3       /* uvec4[primCount]: (primitive reference | kind bit, item, band, bands) */
 #define CULLIDE_SSBO_ITEM_OWNER 4  /* uint[itemCount]: owner (compact object id within the level) */
 #define CULLIDE_SSBO_FLAGS 5       /* uint[itemCount]: per-view "not fully visible" bits, atomicOr */
-#define CULLIDE_SSBO_RECORDS 6     /* PrimRecord[3 * primCount]: per (view axis, primitive) setup, raster back-end */
+#define CULLIDE_SSBO_RECORDS 6     /* PrimRecord[3 * records]: per (view axis, primitive) setup, raster back-end */
 #define CULLIDE_SSBO_COUNTERS 7    /* uint[CULLIDE_ALIVE_BITS + (itemCount + 31) / 32]: per iteration, see
                                       * CULLIDE_COUNTER_*; then the record-sized passes' count and indirect arguments,
                                       * see CULLIDE_DISPATCH_*; then the alive set's bits, see CULLIDE_ALIVE_BITS */

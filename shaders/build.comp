@@ -1,7 +1,7 @@
 // The level's records, built on the device: at the level's start, and again where the view shrank enough to refit
 // the bands (VisibilityPass.cpp). A record is (primitive reference, item, band, bands); on the compute back-end each
 // primitive of an alive item is split into bands of its largest footprint over the three views, so that no
-// invocation of cull.comp scans more than CULLIDE_PIXELS_PER_INVOCATION pixels. Five passes of this program
+// invocation of cull.comp scans more than CULLIDE_PIXELS_PER_INVOCATION pixels. The passes of this program
 // (CULLIDE_LOC_PASS), the others one invocation per primitive of the level's items (alive or not; a primitive
 // finds its item by binary search: an item of a whole mesh has too many primitives for one invocation's loops):
 //   FOOTPRINTS  each primitive's footprint; each work group's sum            (compute back-end only)
@@ -121,7 +121,8 @@ uint bandsOf(float footprint, float perBand) {
 
 // The count and indirect arguments of the record-sized passes over `total` records (none when they do not fit).
 void writeDispatch(uint total, float approx) {
-    bool fits = total <= u_capacity && approx <= float(u_capacity) + 1.0;
+    // approx (the float sum) only rules out a total that wrapped around 2^32; total decides.
+    bool fits = approx <= 2147483648.0 && total <= u_capacity;
     uint records = fits ? total : 0u;
     uint groups = (records + kLanes - 1u) / kLanes;
     uint x = min(groups, u_maxGroups);

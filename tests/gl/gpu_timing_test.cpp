@@ -84,8 +84,8 @@ TEST(GpuTiming, ReportedTimesAreValidOrAbsent) {
 
 /// A level's set-up never waits for the device, also where the device is slow to answer: its record builds (at the
 /// level's start, and at a refit of its bands) are dispatched indirectly and never read back; the level blocks only on
-/// its iterations' read-backs, each of which brings the alive set too. Every read-back here waits 60 ms more, inside the timed wait: a set-up
-/// that waited for one read-back would reach 60 ms, against ~1 ms of its own work on llvmpipe once the shaders are
+/// its iterations' read-backs, each of which brings the alive set too. Every read-back here waits 60 ms more, inside
+/// the timed wait: a set-up that waited for one read-back would reach 60 ms, against ~1 ms of its own work on llvmpipe once the shaders are
 /// compiled (the first frame, untimed here, compiles them).
 TEST(GpuTiming, OnlyIterationsAndTheAliveSetAreWaitedFor) {
     constexpr double kDelayMs = 60.0;

@@ -33,7 +33,8 @@ struct LevelStats {
     /// waiting for the device to finish the work submitted before. The rest of cpuMs is issuing commands and the
     /// level loop.
     double waitMs = 0.0;
-    /// GL back-end: read-backs that blocked on the device: one per iteration (its counters and the alive set).
+    /// GL back-end: read-backs that blocked on the device: one per iteration (its counters and the alive set; two
+    /// where the iteration's record build was short and ran again, LevelStats::shortBuilds).
     std::size_t blockingReadBacks = 0;
     /// GPU time of the level's iterations and record builds from timer queries. Only meaningful with
     /// gpuTimingValid; 0 otherwise.

@@ -180,7 +180,8 @@ struct VisibilityPass::Impl {
         } else {
             const ThirdPartyLeakScope ignoreMesaDrawLeak;
             // 3 views x the records, a triangle each
-            glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(std::uintptr_t{4 * CULLIDE_DISPATCH_DRAW}));
+            const std::uintptr_t offset = 4 * CULLIDE_DISPATCH_DRAW;
+            glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(offset));
         }
         glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
         level.draws += 1;
@@ -375,8 +376,9 @@ struct VisibilityPass::Impl {
     }
 
     /// One iteration on the device: the records first where they were just counted, the three passes over the
-    /// alive items' records, and the survivor pass, which also packs the records of the items still alive; the record-sized passes dispatched indirectly. Reads back the counters, the dispatch block and the
-    /// alive set as bits (128 bytes + a bit per item) in one read-back. Where the build before it found the record
+    /// alive items' records, and the survivor pass, which also packs the records of the items still alive; the
+    /// record-sized passes dispatched indirectly. Reads back the counters, the dispatch block and the alive set as
+    /// bits (128 bytes + a bit per item) in one read-back. Where the build before it found the record
     /// buffers short, the iteration pruned nothing: the buffers grow and the build and the iteration run again.
     IterationResult runIteration(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) {
         const std::size_t words = counterWords(levelItems->size());
@@ -396,7 +398,9 @@ struct VisibilityPass::Impl {
                 float approx = 0.0f;
                 std::memcpy(&approx, &counters[CULLIDE_DISPATCH_NEEDED_APPROX], sizeof approx);
                 growRecords(counters[CULLIDE_DISPATCH_NEEDED], approx);
+                const auto setUp = Clock::now();
                 countRecords(view, false, level, stats);  // the items' boxes are built already
+                level.setupMs += msSince(setUp);
                 continue;
             }
             if (afterBuild) level.records += counters[CULLIDE_DISPATCH_NEEDED];
@@ -506,7 +510,12 @@ std::size_t VisibilityPass::deviceBytes() const {
 }
 
 void VisibilityPass::forgetUploads() {
-    for (std::size_t& v : m_impl->valid) v = 0;
+    // After a GL error (out of memory among them) no buffer is trusted to hold what was sent or the size it was
+    // asked for: the next frame allocates and sends everything again.
+    Impl& s = *m_impl;
+    for (std::size_t& v : s.valid) v = 0;
+    for (std::size_t& c : s.capacity) c = 0;
+    s.recordCapacity = 0;
 }
 
 namespace {
