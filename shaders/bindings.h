@@ -36,16 +36,19 @@
 
 /* After the counters, in the same buffer (one read-back returns both): what the record-sized passes of the next
  * iteration (cull.comp or cull_setup.comp and the draws, survive.comp) run over, dispatched indirectly. Written by
- * build.comp's OFFSETS pass after a record build (the C++ side never waits for the count), otherwise by the C++ side
+ * build.comp's APPEND pass after a record build (the C++ side never waits for the count), otherwise by the C++ side
  * from the counters it read back. */
 #define CULLIDE_DISPATCH_RECORDS 16 /* records the passes run over */
-#define CULLIDE_DISPATCH_NEEDED 17  /* records the last build needed (its total, written even when they did not fit) */
-#define CULLIDE_DISPATCH_NEEDED_APPROX 18 /* the same as a float (bits): no wrap-around, for the C++ side's limit */
+#define CULLIDE_DISPATCH_NEEDED 17  /* records the last build needed (its total, written even when they did not fit);
+                                     * APPEND's work groups reserve their room from it (reset before a build) */
+#define CULLIDE_DISPATCH_NEEDED_APPROX 18 /* float bits: an upper bound of the total that cannot wrap around */
 #define CULLIDE_DISPATCH_SHORT 19   /* 1: the last build needed more records than the buffers hold; none were written,
                                      * nothing runs over them and the iteration prunes nothing (the C++ side grows the
                                      * buffers and runs it again) */
 #define CULLIDE_DISPATCH_CULL 20    /* 3 uints: glDispatchComputeIndirect arguments (x, 3 views, z) */
+#define CULLIDE_DISPATCH_BUILD_DONE 23 /* APPEND's work groups that have finished (reset before a build) */
 #define CULLIDE_DISPATCH_SURVIVE 24 /* 3 uints: (x, 1, z) over the larger of the items and the records */
+#define CULLIDE_DISPATCH_NEEDED_HI 27 /* the total in units of 256, rounded up per work group (reset before a build) */
 #define CULLIDE_DISPATCH_DRAW 28    /* 4 uints: glDrawArraysIndirect's (9 vertices per record, 1, 0, 0) */
 #define CULLIDE_COUNTERS_SIZE 32
 /* Then the alive set after the iteration, one bit per item (item i: bit i % 32 of word CULLIDE_ALIVE_BITS + i / 32),
@@ -53,18 +56,17 @@
  * so the level's end waits for nothing more. */
 #define CULLIDE_ALIVE_BITS 32
 
-/* The record build's buffer. Per work group g of the per-primitive passes, CULLIDE_BUILD_GROUPS + g holds its
- * footprint sum (float bits, FOOTPRINTS), then its record count (COUNT), then its first record (OFFSETS). */
-#define CULLIDE_BUILD_PER_BAND 0   /* pixels per band (float bits, SCALE) */
+/* The record build's buffer. Per work group g of the FOOTPRINTS pass, CULLIDE_BUILD_GROUPS + g holds its footprint
+ * sum (float bits). */
+#define CULLIDE_BUILD_PER_BAND 0   /* pixels per band (float bits, FOOTPRINTS' last work group) */
+#define CULLIDE_BUILD_FOOTPRINTS_DONE 1 /* FOOTPRINTS' work groups that have finished (reset before a build) */
 #define CULLIDE_BUILD_GROUPS 4
 
-/* Passes of build.comp (CULLIDE_LOC_PASS). FOOTPRINTS and SCALE run on the compute back-end only. */
-#define CULLIDE_BUILD_PASS_FOOTPRINTS 0 /* per primitive: its largest footprint; the work group's sum */
-#define CULLIDE_BUILD_PASS_SCALE 1      /* one work group: pixels per band from the sum over all primitives */
-#define CULLIDE_BUILD_PASS_COUNT 2      /* per primitive: its bands; the work group's records */
-#define CULLIDE_BUILD_PASS_OFFSETS 3    /* one work group: each work group's first record, the total */
-#define CULLIDE_BUILD_PASS_WRITE 4      /* per primitive: its records, in item order */
-#define CULLIDE_BUILD_PASS_BOUNDS 5     /* per primitive: its box into its item's (at the level's start, where there is
+/* Passes of build.comp (CULLIDE_LOC_PASS). */
+#define CULLIDE_BUILD_PASS_FOOTPRINTS 0 /* per primitive: its largest footprint (compute back-end only); the last work
+                                         * group: pixels per band */
+#define CULLIDE_BUILD_PASS_APPEND 1     /* per primitive: its records, appended; the last work group: the dispatch */
+#define CULLIDE_BUILD_PASS_BOUNDS 2     /* per primitive: its box into its item's (at the level's start, where there is
                                          * no FOOTPRINTS pass to do it) */
 
 /* Per-pixel images (r32ui), three views side by side: width 3 * resolution, height resolution. */

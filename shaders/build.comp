@@ -2,20 +2,19 @@
 // the bands (VisibilityPass.cpp). A record is (primitive reference, item, band, bands); on the compute back-end each
 // primitive of an alive item is split into bands of its largest footprint over the three views, so that no
 // invocation of cull.comp scans more than CULLIDE_PIXELS_PER_INVOCATION pixels. The passes of this program
-// (CULLIDE_LOC_PASS), the others one invocation per primitive of the level's items (alive or not; a primitive
-// finds its item by binary search: an item of a whole mesh has too many primitives for one invocation's loops):
-//   FOOTPRINTS  each primitive's footprint; each work group's sum            (compute back-end only)
-//   SCALE       one work group: pixels per band from the sum over all items  (compute back-end only)
-//   COUNT       each primitive's bands (none for a pruned item's); each work group's records
-//   OFFSETS     one work group: each work group's first record; the total, and from it the count and the indirect
-//               arguments of the iteration's record-sized passes (CULLIDE_DISPATCH_*): the C++ side never waits for it
-//   WRITE       each primitive's records at its work group's first record plus those of the group's before it
-// Records beyond the buffers' capacity are never written: OFFSETS then marks the build short, the iteration runs over
-// no record and prunes nothing, and the C++ side, which reads the needed total with the iteration's counters, grows the
-// buffers and builds again.
-// and, once per level, each primitive's box into its item's, for survive.comp: in the FOOTPRINTS pass at the level's
-// start (CULLIDE_LOC_WITH_BOUNDS), or, where there is none (the raster back-end), in a BOUNDS pass before COUNT.
-// The records come out in item order, primitive order, band order: the same for the same set and view.
+// (CULLIDE_LOC_PASS), one invocation per primitive of the level's items (alive or not; a primitive finds its item by
+// binary search: an item of a whole mesh has too many primitives for one invocation's loops):
+//   FOOTPRINTS  each primitive's footprint and each work group's sum; the last work group to finish turns the sum
+//               over all of them into the pixels per band (compute back-end only). At the level's start
+//               (CULLIDE_LOC_WITH_BOUNDS) also each primitive's box into its item's, for survive.comp.
+//   BOUNDS      each primitive's box into its item's, where there is no FOOTPRINTS pass (the raster back-end)
+//   APPEND      each primitive's records (none for a pruned item's), appended where its work group reserved room
+//               with one atomic add; the last work group to finish turns the total into the count and the indirect
+//               arguments of the iteration's record-sized passes (CULLIDE_DISPATCH_*): the C++ side never waits.
+// A work group whose records would not fit the buffers' capacity writes none: the build is then short, the iteration
+// runs over no record and prunes nothing, and the C++ side, which reads the needed total with the iteration's
+// counters, grows the buffers and builds again. The records come out in no particular order: every pass over them is
+// order-independent (atomic min, max and or).
 layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
 layout(std430, binding = CULLIDE_SSBO_POSITIONS) readonly buffer Positions { float positions[]; };
 layout(std430, binding = CULLIDE_SSBO_INDICES) readonly buffer Indices { uint indices[]; };
@@ -24,10 +23,10 @@ layout(std430, binding = CULLIDE_SSBO_ALIVE) readonly buffer Alive { uint alive[
 layout(std430, binding = CULLIDE_SSBO_PRIM_BEGIN) readonly buffer PrimBegin { uint primBegin[]; };
 layout(std430, binding = CULLIDE_SSBO_ITEM_PRIMS) readonly buffer ItemPrims { uint itemPrims[]; };
 layout(std430, binding = CULLIDE_SSBO_BANDS) buffer Bands { uint bands[]; };
-layout(std430, binding = CULLIDE_SSBO_BUILD) buffer Build { uint build[]; };
+layout(std430, binding = CULLIDE_SSBO_BUILD) coherent buffer Build { uint build[]; };
 layout(std430, binding = CULLIDE_SSBO_PRIMS) writeonly buffer Prims { uvec4 prims[]; };
 layout(std430, binding = CULLIDE_SSBO_ITEM_BOUNDS) buffer Bounds { uint bounds[]; };
-layout(std430, binding = CULLIDE_SSBO_COUNTERS) buffer Counters { uint counters[]; };
+layout(std430, binding = CULLIDE_SSBO_COUNTERS) coherent buffer Counters { uint counters[]; };
 
 layout(location = CULLIDE_LOC_PASS) uniform int u_pass;
 layout(location = CULLIDE_LOC_PIXEL_SCALE) uniform vec3 u_pixelScale;
@@ -44,6 +43,9 @@ layout(location = CULLIDE_LOC_WITH_BOUNDS) uniform int u_withBounds;
 const uint kLanes = uint(CULLIDE_COMPUTE_GROUP_SIZE);
 shared uint s_scan[CULLIDE_COMPUTE_GROUP_SIZE];
 shared float s_sum[CULLIDE_COMPUTE_GROUP_SIZE];
+shared uint s_base;   // APPEND: where the work group's records start
+shared uint s_total;  // APPEND: the work group's records
+shared bool s_last;
 
 // Inclusive prefix sum over the work group's lanes (every lane must call it).
 uint inclusiveScan(uint value) {
@@ -73,6 +75,20 @@ float groupSum(float value) {
     float sum = s_sum[0];
     barrier();
     return sum;
+}
+
+// Whether this work group is the last of the pass's u_groups to finish (every lane must call it): each group's writes
+// before the call are visible to the last one.
+bool lastToFinish(uint doneCounter, bool inBuild) {
+    memoryBarrierBuffer();
+    barrier();
+    if (gl_LocalInvocationID.x == 0u) {
+        uint done = inBuild ? atomicAdd(build[doneCounter], 1u) : atomicAdd(counters[doneCounter], 1u);
+        s_last = done == u_groups - 1u;
+    }
+    barrier();
+    memoryBarrierBuffer();
+    return s_last;
 }
 
 vec3 vertexAt(uint i) { return vec3(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]); }
@@ -113,15 +129,15 @@ float footprintOf(vec3 size) {
     return max(max(side.y * side.z, side.z * side.x), side.x * side.y);
 }
 
-// At most half of CULLIDE_MAX_LOOP_ITERATIONS bands, so that the WRITE pass's loop stays within llvmpipe's limit; a
+// At most half of CULLIDE_MAX_LOOP_ITERATIONS bands, so that the APPEND pass's loop stays within llvmpipe's limit; a
 // primitive that would need more gets longer bands, and cull.comp counts an invocation over the limit as an overflow.
 uint bandsOf(float footprint, float perBand) {
     return uint(clamp(ceil(footprint / perBand), 1.0, float(CULLIDE_MAX_LOOP_ITERATIONS / 2)));
 }
 
 // The count and indirect arguments of the record-sized passes over `total` records (none when they do not fit).
+// `approx` (an upper bound that cannot wrap around) only rules out a total that wrapped around 2^32; total decides.
 void writeDispatch(uint total, float approx) {
-    // approx (the float sum) only rules out a total that wrapped around 2^32; total decides.
     bool fits = approx <= 2147483648.0 && total <= u_capacity;
     uint records = fits ? total : 0u;
     uint groups = (records + kLanes - 1u) / kLanes;
@@ -185,42 +201,41 @@ void main() {
         if (p < u_primCount) bands[p] = floatBitsToUint(pixels);
         float sum = groupSum(pixels);
         if (lane == 0u) build[CULLIDE_BUILD_GROUPS + group] = floatBitsToUint(sum);
-    } else if (u_pass == CULLIDE_BUILD_PASS_SCALE) {
-        float sum = 0.0;
-        for (uint g = lane; g < u_groups; g += kLanes) sum += uintBitsToFloat(build[CULLIDE_BUILD_GROUPS + g]);
-        sum = groupSum(sum);
+        if (!lastToFinish(CULLIDE_BUILD_FOOTPRINTS_DONE, true)) return;
+        float total = 0.0;
+        for (uint g = lane; g < u_groups; g += kLanes) total += uintBitsToFloat(build[CULLIDE_BUILD_GROUPS + g]);
+        total = groupSum(total);
         float perBand = float(CULLIDE_PIXELS_PER_INVOCATION);
         if (u_bands == CULLIDE_BANDS_SHORT)
-            perBand = clamp(ceil(sum / CULLIDE_TARGET_INVOCATIONS), CULLIDE_MIN_PIXELS_PER_INVOCATION, perBand);
+            perBand = clamp(ceil(total / CULLIDE_TARGET_INVOCATIONS), CULLIDE_MIN_PIXELS_PER_INVOCATION, perBand);
         if (lane == 0u) build[CULLIDE_BUILD_PER_BAND] = floatBitsToUint(perBand);
-    } else if (u_pass == CULLIDE_BUILD_PASS_COUNT) {
+    } else if (u_pass == CULLIDE_BUILD_PASS_BOUNDS) {
+        if (p < u_primCount) addToItemBounds(p, item);
+    } else if (u_pass == CULLIDE_BUILD_PASS_APPEND) {
         uint n = 0u;
         if (live) {
             n = u_bands == CULLIDE_BANDS_NONE ? 1u
                                               : bandsOf(uintBitsToFloat(bands[p]),
                                                         uintBitsToFloat(build[CULLIDE_BUILD_PER_BAND]));
         }
-        if (p < u_primCount) bands[p] = n;
-        uint sum = inclusiveScan(n);
-        if (lane == kLanes - 1u) build[CULLIDE_BUILD_GROUPS + group] = sum;
-    } else if (u_pass == CULLIDE_BUILD_PASS_OFFSETS) {
-        uint carry = 0u;
-        float approx = 0.0;
-        for (uint base = 0u; base < u_groups; base += kLanes) {
-            uint g = base + lane;
-            uint count = g < u_groups ? build[CULLIDE_BUILD_GROUPS + g] : 0u;
-            uint sum = inclusiveScan(count);
-            if (g < u_groups) build[CULLIDE_BUILD_GROUPS + g] = carry + sum - count;
-            approx += groupSum(float(count));
-            carry += s_scan[kLanes - 1u];  // the chunk's total: inclusiveScan leaves it in the last lane
-            barrier();
+        uint inclusive = inclusiveScan(n);
+        if (lane == kLanes - 1u) {  // the group's total: room for it, and an upper bound in units of 256
+            s_base = atomicAdd(counters[CULLIDE_DISPATCH_NEEDED], inclusive);
+            atomicAdd(counters[CULLIDE_DISPATCH_NEEDED_HI], (inclusive + 255u) / 256u);
+            s_total = inclusive;
         }
-        if (lane == 0u) writeDispatch(carry, approx);
-    } else if (u_pass == CULLIDE_BUILD_PASS_BOUNDS) {
-        if (p < u_primCount) addToItemBounds(p, item);
-    } else if (u_pass == CULLIDE_BUILD_PASS_WRITE) {
-        uint n = p < u_primCount && counters[CULLIDE_DISPATCH_SHORT] == 0u ? bands[p] : 0u;
-        uint record = build[CULLIDE_BUILD_GROUPS + group] + inclusiveScan(n) - n;
-        for (uint band = 0u; band < n; ++band) prims[record + band] = uvec4(itemPrims[p], item, band, n);
+        barrier();
+        uint base = s_base;
+        uint groupTotal = s_total;
+        bool fits = base + groupTotal >= base && base + groupTotal <= u_capacity;  // no wrap-around, within capacity
+        uint record = base + inclusive - n;
+        if (fits)
+            for (uint band = 0u; band < n; ++band) prims[record + band] = uvec4(itemPrims[p], item, band, n);
+        if (!lastToFinish(CULLIDE_DISPATCH_BUILD_DONE, false)) return;
+        if (lane == 0u) {
+            uint total = atomicAdd(counters[CULLIDE_DISPATCH_NEEDED], 0u);
+            float approx = float(atomicAdd(counters[CULLIDE_DISPATCH_NEEDED_HI], 0u)) * 256.0;
+            writeDispatch(total, approx);
+        }
     }
 }

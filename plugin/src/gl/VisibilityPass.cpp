@@ -93,7 +93,7 @@ struct VisibilityPass::Impl {
     // The level being pruned (beginLevel .. its last iterate).
     const LevelItems* levelItems = nullptr;
     std::size_t recordCount = 0;  ///< records of the alive items, in kPrims (after an iteration that followed no build)
-    bool recordsPending = false;  ///< counted (countRecords), not yet written: the next iteration writes them first
+    bool dispatchFromBuild = false;  ///< the dispatch block is the last build's (buildRecords), not yet run over
     /// Records the record buffers (kPrims, kPrimsNext; kRecords on the raster back-end) hold: kept between levels and
     /// frames, grown when a build needs more (the iteration then runs again).
     std::size_t recordCapacity = 0;
@@ -201,7 +201,7 @@ struct VisibilityPass::Impl {
     }
 
     /// Sends what the record build and the survivor pass need of the level's items (their primitives and owners)
-    /// and clears their boxes (built by countRecords) and the alive set (every item alive).
+    /// and clears their boxes (built by buildRecords) and the alive set (every item alive).
     void uploadItems(const LevelItems& items, LevelStats& level, Stats& stats) {
         const std::size_t n = items.size();
         const auto send = Clock::now();
@@ -246,12 +246,12 @@ struct VisibilityPass::Impl {
         stats.draws += 1;
     }
 
-    /// Counts the records of the level's alive items for `view` on the device (build.comp up to its OFFSETS pass, which
-    /// also writes the count and the indirect arguments of the next iteration's record-sized passes; first the items'
-    /// boxes when `withBounds`: at a level's start); writeRecords writes them. On the compute back-end each primitive
-    /// is split into bands of its largest footprint over the three views. Nothing is read back: the iteration's
-    /// counters bring the count, and a build that needed more records than the buffers hold is run again.
-    void countRecords(const View& view, bool withBounds, LevelStats& level, Stats& stats) {
+    /// Builds the records of the level's alive items for `view` on the device (build.comp; on the compute back-end
+    /// each primitive is split into bands of its largest footprint over the three views; first the items' boxes when
+    /// `withBounds`: at a level's start). Its last work group writes the count and the indirect arguments of the next
+    /// iteration's record-sized passes. Nothing is read back: the iteration's counters bring the count, and a build
+    /// that needed more records than the buffers hold is run again.
+    void buildRecords(const View& view, bool withBounds, LevelStats& level, Stats& stats) {
         const std::size_t primCount = levelItems->prims.size();
         const std::size_t groups = (primCount + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
         if (groups > kMaxBuildGroups)
@@ -260,25 +260,30 @@ struct VisibilityPass::Impl {
         reserveRecords(primCount);
         reserveBuffer(buffers[kBands], capacity[kBands], primCount * 4);
         reserveBuffer(buffers[kBuild], capacity[kBuild], (CULLIDE_BUILD_GROUPS + groups) * 4);
+        // The build's atomic counters start at 0 (the dispatch block is rewritten by the build's last work group).
+        const GLuint zero = 0;
+        glClearNamedBufferSubData(buffers[kCounters], GL_R32UI, 4 * CULLIDE_DISPATCH_NEEDED,
+                                  4 * (CULLIDE_COUNTERS_SIZE - CULLIDE_DISPATCH_NEEDED), GL_RED_INTEGER,
+                                  GL_UNSIGNED_INT, &zero);
+        glClearNamedBufferSubData(buffers[kBuild], GL_R32UI, 4 * CULLIDE_BUILD_FOOTPRINTS_DONE, 4, GL_RED_INTEGER,
+                                  GL_UNSIGNED_INT, &zero);
         bindBuffers();
         glUseProgram(buildProgram);
         glUniform3fv(CULLIDE_LOC_PIXEL_SCALE, 1, view.pixelScale);
         glUniform3fv(CULLIDE_LOC_HALF_SIZE, 1, view.halfSize);
-        setBuildUniforms();
+        glUniform1ui(CULLIDE_LOC_ITEM_COUNT, static_cast<GLuint>(levelItems->size()));
+        glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(primCount));
+        glUniform1i(CULLIDE_LOC_BANDS, bands);
         glUniform1ui(CULLIDE_LOC_GROUPS, static_cast<GLuint>(groups));
         glUniform1ui(CULLIDE_LOC_CAPACITY, static_cast<GLuint>(recordCapacity));
         glUniform1ui(CULLIDE_LOC_MAX_GROUPS, static_cast<GLuint>(maxGroups));
         glUniform1i(CULLIDE_LOC_WITH_BOUNDS, withBounds ? 1 : 0);
         startTiming();
         if (withBounds && bands == CULLIDE_BANDS_NONE) buildPass(CULLIDE_BUILD_PASS_BOUNDS, primCount, level, stats);
-        if (bands != CULLIDE_BANDS_NONE) {
-            buildPass(CULLIDE_BUILD_PASS_FOOTPRINTS, primCount, level, stats);
-            buildPass(CULLIDE_BUILD_PASS_SCALE, 1, level, stats);
-        }
-        buildPass(CULLIDE_BUILD_PASS_COUNT, primCount, level, stats);
-        buildPass(CULLIDE_BUILD_PASS_OFFSETS, 1, level, stats);
-        checkGlError("counting a level's records");
-        recordsPending = true;
+        if (bands != CULLIDE_BANDS_NONE) buildPass(CULLIDE_BUILD_PASS_FOOTPRINTS, primCount, level, stats);
+        buildPass(CULLIDE_BUILD_PASS_APPEND, primCount, level, stats);
+        checkGlError("building a level's records");
+        dispatchFromBuild = true;
         level.recordBuilds += 1;
     }
 
@@ -332,21 +337,6 @@ struct VisibilityPass::Impl {
         if (timer) glBeginQuery(GL_TIME_ELAPSED, timer);
     }
 
-    /// build.comp's WRITE pass: the counted records into kPrims (bound by prepareIteration).
-    void writeRecords(LevelStats& level, Stats& stats) {
-        glUseProgram(buildProgram);
-        setBuildUniforms();
-        buildPass(CULLIDE_BUILD_PASS_WRITE, levelItems->prims.size(), level, stats);
-        recordsPending = false;
-    }
-
-    /// The level's sizes and the band policy, for every pass of build.comp.
-    void setBuildUniforms() const {
-        glUniform1ui(CULLIDE_LOC_ITEM_COUNT, static_cast<GLuint>(levelItems->size()));
-        glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(levelItems->prims.size()));
-        glUniform1i(CULLIDE_LOC_BANDS, bands);
-    }
-
     /// Binds what every pass reads and writes and clears the images, the flags and the counters.
     void prepareIteration(std::size_t itemCount) {
         const GLuint empty[2] = {0xFFFFFFFFu, 0u};
@@ -383,7 +373,7 @@ struct VisibilityPass::Impl {
     IterationResult runIteration(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) {
         const std::size_t words = counterWords(levelItems->size());
         for (int attempt = 0;; ++attempt) {
-            const bool afterBuild = recordsPending;
+            const bool afterBuild = dispatchFromBuild;
             issueIteration(view, idBits, level, stats);
             readScratch.resize(words);
             readBack(buffers[kCounters], 0, 4 * words, readScratch.data(), level, stats);
@@ -399,7 +389,7 @@ struct VisibilityPass::Impl {
                 std::memcpy(&approx, &counters[CULLIDE_DISPATCH_NEEDED_APPROX], sizeof approx);
                 growRecords(counters[CULLIDE_DISPATCH_NEEDED], approx);
                 const auto setUp = Clock::now();
-                countRecords(view, false, level, stats);  // the items' boxes are built already
+                buildRecords(view, false, level, stats);  // the items' boxes are built already
                 level.setupMs += msSince(setUp);
                 continue;
             }
@@ -426,12 +416,11 @@ struct VisibilityPass::Impl {
         const std::size_t itemCount = levelItems->size();
         startTiming();
         prepareIteration(itemCount);
-        if (recordsPending) {
-            writeRecords(level, stats);
-        } else {
+        if (!dispatchFromBuild) {
             writeDispatch(recordCount);
             stats.bytesUploaded += 4 * (CULLIDE_COUNTERS_SIZE - CULLIDE_DISPATCH_RECORDS);
         }
+        dispatchFromBuild = false;
         if (settings.backend == Backend::Raster) {
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_RECORDS, buffers[kRecords]);
             glUseProgram(setupProgram);
@@ -541,7 +530,7 @@ void VisibilityPass::beginLevel(const LevelItems& items, const View& view, Level
     const auto setUp = Clock::now();
     s.levelItems = &items;
     s.uploadItems(items, level, stats);
-    s.countRecords(view, true, level, stats);
+    s.buildRecords(view, true, level, stats);
     s.recordedView = view.box;
     level.setupMs += msSince(setUp);
 }
@@ -551,7 +540,7 @@ IterationResult VisibilityPass::iterate(const View& view, std::uint32_t idBits, 
     s.context.makeCurrent();
     if (recordsStale(view.box, s.recordedView)) {
         const auto setUp = Clock::now();
-        s.countRecords(view, false, level, stats);
+        s.buildRecords(view, false, level, stats);
         s.recordedView = view.box;
         level.setupMs += msSince(setUp);
     }
