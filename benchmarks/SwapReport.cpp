@@ -105,7 +105,8 @@ void runTable(std::ostringstream& md, const json& run) {
     for (const auto& r : rows) states = states || !cullingStates(r).empty();
     md << "`" << commandFor(switches, rows) << "`\n\n"
           "| scene | bodies | steps | dbvt ms | SAP ms | swap ms | ratio | narrow phase ms: dbvt / swap | pairs a step: "
-          "threaded / apart | lost pairs | extra pairs | contact keys missing | deepest-point difference: max / mean |"
+          "threaded / apart | lost pairs | extra pairs | contact keys missing / extra | deepest-point difference: max / "
+          "mean |"
        << (states ? " culling switches at the end: GImpact pair / GImpact mesh / GImpact convex / convex mesh |" : "")
        << "\n|---|---|---|---|---|---|---|---|---|---|---|---|---|" << (states ? "---|" : "") << "\n";
     for (const auto& r : rows) {
@@ -116,7 +117,8 @@ void runTable(std::ostringstream& md, const json& run) {
            << "** | " << ms(num(r, "dbvt_narrow_ms")) << " / " << ms(num(r, "cullide_narrow_ms")) << " | "
            << fixed(num(r, "threaded_pairs"), 0) << " / " << fixed(num(r, "apart_pairs"), 0) << " | "
            << ofCount(whole(r, "lost"), whole(r, "contact_pair_steps")) << " | " << count(num(r, "extra")) << " | "
-           << ofCount(whole(r, "points_missing"), whole(r, "points")) << " | "
+           << ofCount(whole(r, "points_missing"), whole(r, "points")) << " / "
+           << (r.contains("points_extra") ? count(num(r, "points_extra")) : std::string("–")) << " | "
            << fixed(num(r, "deepest_diff_max"), 4) << " / " << fixed(num(r, "deepest_diff_mean"), 4) << " |";
         if (states) md << " " << (cullingStates(r).empty() ? "–" : cullingStates(r)) << " |";
         md << "\n";
@@ -125,7 +127,8 @@ void runTable(std::ostringstream& md, const json& run) {
     md << "\n" << s.scenes << " scenes: the swap's step over the faster of Bullet's two, median "
        << ratio(s.ratioMedian) << " (" << ratio(s.ratioMin) << " on " << s.fastestScene << " to "
        << ratio(s.ratioMax) << " on " << s.slowestScene << "); lost pairs " << ofCount(s.lost, s.contactPairSteps)
-       << "; contact keys missing " << ofCount(s.pointsMissing, s.points) << "; largest deepest-point difference "
+       << "; contact keys missing " << ofCount(s.pointsMissing, s.points) << ", extra " << count(double(s.pointsExtra))
+       << "; largest deepest-point difference "
        << fixed(s.deepestDiffMax, 4) << ".\n\n";
 }
 
@@ -187,6 +190,7 @@ SwapSummary summarizeSwapRun(const json& run) {
         s.lost += whole(r, "lost");
         s.contactPairSteps += whole(r, "contact_pair_steps");
         s.pointsMissing += whole(r, "points_missing");
+        s.pointsExtra += whole(r, "points_extra");
         s.points += whole(r, "points");
         s.deepestDiffMax = std::max(s.deepestDiffMax, num(r, "deepest_diff_max"));
     }

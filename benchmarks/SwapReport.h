@@ -30,6 +30,7 @@ struct SwapSummary {
     std::string fastestScene, slowestScene;                     ///< where ratioMin and ratioMax were measured
     std::size_t lost = 0, contactPairSteps = 0;                 ///< object pairs with points lost, of those with points
     std::size_t pointsMissing = 0, points = 0;                  ///< contact keys missing, of the points compared
+    std::size_t pointsExtra = 0;                                ///< contact keys the swap has and Bullet does not
     double deepestDiffMax = 0.0;                                ///< largest deepest-point difference of any scene
 };
 SwapSummary summarizeSwapRun(const nlohmann::json& run);

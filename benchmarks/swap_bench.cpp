@@ -739,7 +739,7 @@ struct Row {
     std::size_t lostChecked = 0, lostApart = 0;
     /// Contact error on pairs with contacts in both worlds: points of the default world whose triangle key the
     /// CULLIDE world's manifold lacks, and the difference of the deepest points.
-    std::size_t points = 0, pointsMissing = 0, comparedPairSteps = 0;
+    std::size_t points = 0, pointsMissing = 0, pointsExtra = 0, comparedPairSteps = 0;
     double deepestDiffMax = 0, deepestDiffSum = 0;
     /// GImpact-convex triangles per step: Bullet's query, run, run without the per-triangle reach test
     double convexCandidates = 0, convexTriangles = 0, convexUnchecked = 0;
@@ -796,7 +796,11 @@ void compareContacts(const ContactPoints& want, const ContactPoints& got, Row& r
                                            [&](const auto& p) { return p.first == key; });
             row.pointsMissing += found ? 0 : 1;
         }
-        for (const auto& p : it->second) deepestGot = std::min(deepestGot, p.second);
+        for (const auto& p : it->second) {
+            deepestGot = std::min(deepestGot, p.second);
+            const bool known = std::any_of(points.begin(), points.end(), [&](const auto& w) { return w.first == p.first; });
+            row.pointsExtra += known ? 0 : 1;
+        }
         ++row.comparedPairSteps;
         row.deepestDiffMax = std::max(row.deepestDiffMax, std::fabs(deepestWant - deepestGot));
         row.deepestDiffSum += std::fabs(deepestWant - deepestGot);
@@ -1205,14 +1209,14 @@ void printRow(const Row& r) {
     std::printf("%-16s %6zu %5d | %8.2f %8.2f %8.2f | %5.2fx | bp %6.2f/%6.2f/%6.2f nar %7.2f/%7.2f/%7.2f | pairs %8.0f/%8.0f/%8.0f | "
                 "lost %zu of %zu (checked %zu: %zu apart) extra %zu | dispatcher: culled %.1f, full %.1f "
                 "(penetrating %.1f), apart %.1f, threaded %.1f | culling frame %.2f ms, culler %.2f, records %.2f; last step: %zu object pairs, "
-                "%zu pruned | contact keys missing %zu of %zu, deepest point diff max %.3g mean %.3g (%zu pair-steps) | "
+                "%zu pruned | contact keys missing %zu of %zu, extra %zu, deepest point diff max %.3g mean %.3g (%zu pair-steps) | "
                 "GImpact-convex triangles %.0f of %.0f (%.0f unchecked) | GImpact-plane vertices %.0f of %.0f | kept: %zu shapes %zu B shared, %zu objects %zu B "
                 "(%zu world copies), %.0f B per object | culling: pair %s, mesh %s, convex %s, convex-mesh %s\n",
                 r.scene.c_str(), r.bodies, r.steps, r.ms[0], r.ms[1], r.ms[2], r.ms[2] / best, r.broadphaseMs[0],
                 r.broadphaseMs[1], r.broadphaseMs[2], r.narrowMs[0], r.narrowMs[1], r.narrowMs[2], r.pairs[0],
                 r.pairs[1], r.pairs[2], r.lost, r.contactPairSteps,
                 r.lostChecked, r.lostApart, r.extra, r.cullidePairs, r.fallbackPairs, r.penetrationPairs, r.apartPairs, r.threadedPairs, r.buildMs, r.cullMs, r.recordMs, r.last.objectPairs,
-                r.last.prunedPairs, r.pointsMissing, r.points, r.deepestDiffMax,
+                r.last.prunedPairs, r.pointsMissing, r.points, r.pointsExtra, r.deepestDiffMax,
                 r.comparedPairSteps ? r.deepestDiffSum / double(r.comparedPairSteps) : 0.0, r.comparedPairSteps,
                 r.convexTriangles, r.convexCandidates, r.convexUnchecked, r.planeVerticesTested, r.planeVertices, r.memory.shapes, r.memory.sharedGeometryBytes,
                 r.memory.objects, r.memory.objectBytes, r.memory.worldCopies,
@@ -1234,14 +1238,15 @@ void writeJson(const std::string& path, const std::vector<Row>& rows) {
                       "\"sap_narrow_ms\": %.4f, \"cullide_narrow_ms\": %.4f, \"dbvt_pairs\": %.1f, \"sap_pairs\": %.1f, "
                       "\"cullide_pairs\": %.1f, \"apart_pairs\": %.1f, \"threaded_pairs\": %.1f, \"contact_pair_steps\": %zu, \"lost\": %zu, "
                       "\"lost_checked\": %zu, \"lost_apart\": %zu, \"extra\": %zu, \"culled_pairs\": %zu, "
-                      "\"pruned_pairs\": %zu, \"points\": %zu, \"points_missing\": %zu, \"deepest_diff_max\": %.6g, "
+                      "\"pruned_pairs\": %zu, \"points\": %zu, \"points_missing\": %zu, \"points_extra\": %zu, \"deepest_diff_max\": %.6g, "
                       "\"deepest_diff_mean\": %.6g, \"penetration_fallback\": %s, \"compared_steps\": %d, "
                       "\"culling\": {\"gimpact_pair\": \"%s\", \"gimpact_mesh\": \"%s\", \"gimpact_convex\": \"%s\", "
                       "\"convex_mesh\": \"%s\"}}%s\n",
                       r.scene.c_str(), r.what.c_str(), r.bodies, r.steps, r.ms[0], r.ms[1], r.ms[2],
                       r.ms[2] / std::min(r.ms[0], r.ms[1]), r.broadphaseMs[0], r.broadphaseMs[1], r.broadphaseMs[2],
                       r.narrowMs[0], r.narrowMs[1], r.narrowMs[2], r.pairs[0], r.pairs[1], r.pairs[2], r.apartPairs, r.threadedPairs, r.contactPairSteps, r.lost, r.lostChecked, r.lostApart,
-                      r.extra, r.last.culledPairs, r.last.prunedPairs, r.points, r.pointsMissing, r.deepestDiffMax,
+                      r.extra, r.last.culledPairs, r.last.prunedPairs, r.points, r.pointsMissing, r.pointsExtra,
+                      r.deepestDiffMax,
                       r.comparedPairSteps ? r.deepestDiffSum / double(r.comparedPairSteps) : 0.0,
                       g_penetrationFallback ? "true" : "false", r.comparedSteps, r.autoState[0].c_str(),
                       r.autoState[1].c_str(), r.autoState[2].c_str(), r.autoState[3].c_str(),

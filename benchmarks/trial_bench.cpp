@@ -45,6 +45,12 @@ struct Row {
         return v.empty() ? 0.0 : v.size() % 2 ? v[v.size() / 2] : 0.5 * (v[v.size() / 2 - 1] + v[v.size() / 2]);
     }
     double worst() const { return ms.empty() ? 0.0 : *std::max_element(ms.begin(), ms.end()); }
+    /// The worst frame or step after the first (which also makes the culler and warms its kept state).
+    double worstAfterFirst() const { return ms.size() < 2 ? 0.0 : *std::max_element(ms.begin() + 1, ms.end()); }
+    /// Which frame or step was the worst (0: the first, which also makes the culler or the worlds).
+    std::size_t worstAt() const {
+        return ms.empty() ? 0 : static_cast<std::size_t>(std::max_element(ms.begin(), ms.end()) - ms.begin());
+    }
     bool bounded() const { return extraBound >= 0.0 ? worst() <= extraBound : worst() <= 2.0 * median() + 1.0; }
 };
 
@@ -178,16 +184,19 @@ int main(int argc, char** argv) {
     rows.push_back(cullerFrames("env3", 0, frames, false));
     for (const bool anywhere : {false, true})
         for (const Row& r : swapSteps(3 * frames, anywhere)) rows.push_back(r);
-    std::printf("%-66s %9s %9s %8s  %s\n", "", "median", "worst", "bounded", "");
+    std::printf("%-66s %9s %9s %6s %8s %12s  %s\n", "", "median", "worst", "at", "bounded", "worst of 2..",
+                "");
     for (const Row& r : rows)
-        std::printf("%-66s %9.3f %9.3f %8s  %s\n", r.what.c_str(), r.median(), r.worst(), r.bounded() ? "yes" : "NO",
-                    r.note.c_str());
+        std::printf("%-66s %9.3f %9.3f %6zu %8s %12.3f  %s\n", r.what.c_str(), r.median(), r.worst(), r.worstAt(),
+                    r.bounded() ? "yes" : "NO", r.worstAfterFirst(), r.note.c_str());
     if (!json.empty()) {
         std::ofstream out(json);
         out << "[\n";
         for (std::size_t i = 0; i < rows.size(); ++i)
             out << "  {\"what\": \"" << rows[i].what << "\", \"median_ms\": " << rows[i].median()
-                << ", \"worst_ms\": " << rows[i].worst() << ", \"bounded\": " << (rows[i].bounded() ? "true" : "false")
+                << ", \"worst_ms\": " << rows[i].worst() << ", \"worst_at\": " << rows[i].worstAt()
+                << ", \"worst_after_first_ms\": " << rows[i].worstAfterFirst()
+                << ", \"bounded\": " << (rows[i].bounded() ? "true" : "false")
                 << ", \"note\": \"" << rows[i].note << "\"}" << (i + 1 < rows.size() ? "," : "") << "\n";
         out << "]\n";
     }
