@@ -4,15 +4,27 @@
 #include "KeptCapacity.h"
 
 #include <algorithm>
+#include <cstring>
 
 namespace cullide {
 
 void ClusterGeometry::upload(const FrameState& frame, const Cluster& cluster, PruningBackend& backend, TaskPool& pool,
                              Stats& stats) {
     placeMeshes(frame, cluster);
+    // Whatever the arrays already hold is what the device holds (up to the last upload's size): only what changes
+    // from the first changed value on is sent again — a mesh whose topology stays the same keeps its indices there,
+    // a mesh at rest its positions.
+    m_changed.assign(m_written.size(), Changed{});
     pool.parallelFor(m_written.size(), 1, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i) writeMesh(frame.meshOf(m_written[i].object), m_written[i]);
+        for (std::size_t i = begin; i < end; ++i)
+            m_changed[i] = writeMesh(frame.meshOf(m_written[i].object), m_written[i]);
     });
+    m_geometry.keptPositions = m_geometry.positions.size();
+    m_geometry.keptIndices = m_geometry.indices.size();
+    for (const Changed& c : m_changed) {
+        m_geometry.keptPositions = std::min(m_geometry.keptPositions, c.firstPosition);
+        m_geometry.keptIndices = std::min(m_geometry.keptIndices, c.firstIndex);
+    }
     m_geometry.boxes.clear();
     m_geometry.coordinateBound = 0.0;
     m_objectBox.assign(frame.valid.size(), 0);
@@ -34,8 +46,6 @@ void ClusterGeometry::placeMeshes(const FrameState& frame, const Cluster& cluste
     const Vec3 centre = all.isEmpty() ? Vec3::Zero() : Vec3(0.5 * (all.min + all.max));
     const double extent = all.isEmpty() ? 0.0 : all.extent().maxCoeff();
     m_origin = m_region.fit(centre, extent, staticTriangles);
-    m_geometry.keptPositions = 3 * m_region.vertices();
-    m_geometry.keptIndices = 3 * m_region.triangles();
     m_baseTriangle.assign(frame.valid.size(), 0);
     m_written.clear();
     for (std::uint32_t o : cluster.objects) {
@@ -59,16 +69,33 @@ void ClusterGeometry::placeMeshes(const FrameState& frame, const Cluster& cluste
     resizeKeeping(m_geometry.indices, 3 * triangles);
 }
 
-/// A mesh's vertices (relative to the origin, as floats) and its triangles' global vertex indices.
-void ClusterGeometry::writeMesh(const TriangleMesh& mesh, const MeshSlot& slot) {
-    float* position = &m_geometry.positions[3 * std::size_t{slot.baseVertex}];
-    for (const Vec3& v : mesh.vertices) {
+/// A mesh's vertices (relative to the origin, as floats) and its triangles' global vertex indices, each compared
+/// with what the arrays held (bit for bit: -0 and +0 differ) before it is written.
+ClusterGeometry::Changed ClusterGeometry::writeMesh(const TriangleMesh& mesh, const MeshSlot& slot) {
+    Changed changed;
+    const std::size_t firstPosition = 3 * std::size_t{slot.baseVertex};
+    float* position = &m_geometry.positions[firstPosition];
+    for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
+        const Vec3& v = mesh.vertices[i];
         const Vec3 r = v.allFinite() ? Vec3(v - m_origin) : Vec3::Zero();  // unused vertices may be NaN
-        for (int a = 0; a < 3; ++a) *position++ = static_cast<float>(r[a]);
+        for (int a = 0; a < 3; ++a, ++position) {
+            const float f = static_cast<float>(r[a]);
+            if (changed.firstPosition == Changed::kNone && std::memcmp(position, &f, sizeof f) != 0)
+                changed.firstPosition = firstPosition + 3 * i + static_cast<std::size_t>(a);
+            *position = f;
+        }
     }
-    std::uint32_t* index = &m_geometry.indices[3 * std::size_t{slot.baseTriangle}];
-    for (const auto& t : mesh.triangles)
-        for (std::uint32_t k : t) *index++ = slot.baseVertex + k;
+    const std::size_t firstIndex = 3 * std::size_t{slot.baseTriangle};
+    std::uint32_t* index = &m_geometry.indices[firstIndex];
+    for (const auto& t : mesh.triangles) {
+        for (std::uint32_t k : t) {
+            const std::uint32_t global = slot.baseVertex + k;
+            if (changed.firstIndex == Changed::kNone && *index != global)
+                changed.firstIndex = firstIndex + static_cast<std::size_t>(index - &m_geometry.indices[firstIndex]);
+            *index++ = global;
+        }
+    }
+    return changed;
 }
 
 std::uint32_t ClusterGeometry::appendBox(const Aabb& worldBox) {

@@ -1,6 +1,7 @@
 // The device's copy of one cluster (FrameState.h): positions and indices of its meshes and the boxes of its objects
 // and groups, relative to an origin near the cluster's centre, in float. Static meshes sit in the resident region at
-// the front of the buffers and are sent once (MeshCache.h).
+// the front of the buffers and are sent once (MeshCache.h); of the other meshes, only what changed since the last
+// upload is sent again (a deforming mesh's positions, not its indices).
 #pragma once
 
 #include "FrameState.h"
@@ -36,8 +37,14 @@ private:
         std::uint32_t baseVertex;
         std::uint32_t baseTriangle;
     };
+    /// Where a written mesh first differs from what the arrays held (kNone: nowhere).
+    struct Changed {
+        static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+        std::size_t firstPosition = kNone;  ///< in floats
+        std::size_t firstIndex = kNone;
+    };
     void placeMeshes(const FrameState& frame, const Cluster& cluster);
-    void writeMesh(const TriangleMesh& mesh, const MeshSlot& slot);
+    Changed writeMesh(const TriangleMesh& mesh, const MeshSlot& slot);
     std::uint32_t appendBox(const Aabb& worldBox);
 
     ResidentRegion m_region;
@@ -47,6 +54,7 @@ private:
     std::vector<std::uint32_t> m_objectBox;
     std::vector<std::uint32_t> m_groupBox;
     std::vector<MeshSlot> m_written;  ///< the meshes written this upload
+    std::vector<Changed> m_changed;   ///< per written mesh
 };
 
 }  // namespace cullide

@@ -21,7 +21,8 @@ struct GpuGeometry {
     std::vector<float> positions;       ///< xyz per vertex
     std::vector<std::uint32_t> indices;  ///< 3 global vertex indices per triangle
     /// The first keptPositions floats of `positions` and keptIndices of `indices` are the same as in the previous
-    /// upload (static geometry): what the device already holds of them is not sent again.
+    /// upload (static geometry, and meshes that did not change: a deforming mesh's indices, a mesh at rest): what the
+    /// device already holds of them is not sent again.
     std::size_t keptPositions = 0;
     std::size_t keptIndices = 0;
     std::vector<float> boxes;           ///< min xyz, max xyz per box (rounded outwards)
