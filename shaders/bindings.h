@@ -85,9 +85,10 @@
 #define CULLIDE_LOC_DEPTH_PAD 6     /* vec3: per view axis, margin + slack added to depth ranges (normalized depth) */
 #define CULLIDE_LOC_ID_BITS 7       /* uint: low bits of the packed depth that hold the owner id */
 #define CULLIDE_LOC_CONSERVATIVE 8  /* int: 1 = reliable mode, 0 = sampled */
-#define CULLIDE_LOC_PRIM_COUNT 9    /* uint: primitives in the draw/dispatch (compute back-end) */
+#define CULLIDE_LOC_PRIM_COUNT 9    /* uint: build.comp: the level's primitives */
 #define CULLIDE_LOC_AXES 10         /* uint: bit mask of the view axes in use (x = 1, y = 2, z = 4) */
-#define CULLIDE_LOC_PRIM_BASE 11    /* uint: first primitive of this dispatch (dispatches are split at the group-count limit) */
+#define CULLIDE_LOC_PRIM_BASE 11    /* uint: build.comp: first primitive of this dispatch (split at the group-count
+                                     * limit) */
 #define CULLIDE_LOC_REQUIRED 12     /* uint: survive.comp: the flag bits an item needs to stay alive */
 #define CULLIDE_LOC_BANDS 13        /* int: build.comp: CULLIDE_BANDS_* */
 #define CULLIDE_LOC_GROUPS 14       /* uint: build.comp: work groups of its per-primitive passes */

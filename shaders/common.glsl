@@ -20,9 +20,7 @@ layout(location = CULLIDE_LOC_HALF_SIZE) uniform vec3 u_halfSize;
 layout(location = CULLIDE_LOC_DEPTH_PAD) uniform vec3 u_depthPad;
 layout(location = CULLIDE_LOC_ID_BITS) uniform uint u_idBits;
 layout(location = CULLIDE_LOC_CONSERVATIVE) uniform int u_conservative;
-layout(location = CULLIDE_LOC_PRIM_COUNT) uniform uint u_primCount;
 layout(location = CULLIDE_LOC_AXES) uniform uint u_axes;
-layout(location = CULLIDE_LOC_PRIM_BASE) uniform uint u_primBase;
 
 // Items pruned by an earlier iteration of the level are neither drawn nor occluders.
 bool primAlive(uint index) { return alive[prims[index].y] != 0u; }

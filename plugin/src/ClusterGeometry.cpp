@@ -73,26 +73,22 @@ void ClusterGeometry::placeMeshes(const FrameState& frame, const Cluster& cluste
 /// with what the arrays held (bit for bit: -0 and +0 differ) before it is written.
 ClusterGeometry::Changed ClusterGeometry::writeMesh(const TriangleMesh& mesh, const MeshSlot& slot) {
     Changed changed;
-    const std::size_t firstPosition = 3 * std::size_t{slot.baseVertex};
-    float* position = &m_geometry.positions[firstPosition];
-    for (std::size_t i = 0; i < mesh.vertices.size(); ++i) {
-        const Vec3& v = mesh.vertices[i];
+    std::size_t at = 3 * std::size_t{slot.baseVertex};
+    for (const Vec3& v : mesh.vertices) {
         const Vec3 r = v.allFinite() ? Vec3(v - m_origin) : Vec3::Zero();  // unused vertices may be NaN
-        for (int a = 0; a < 3; ++a, ++position) {
+        for (int a = 0; a < 3; ++a, ++at) {
             const float f = static_cast<float>(r[a]);
-            if (changed.firstPosition == Changed::kNone && std::memcmp(position, &f, sizeof f) != 0)
-                changed.firstPosition = firstPosition + 3 * i + static_cast<std::size_t>(a);
-            *position = f;
+            if (changed.firstPosition == Changed::kNone && std::memcmp(&m_geometry.positions[at], &f, sizeof f) != 0)
+                changed.firstPosition = at;
+            m_geometry.positions[at] = f;
         }
     }
-    const std::size_t firstIndex = 3 * std::size_t{slot.baseTriangle};
-    std::uint32_t* index = &m_geometry.indices[firstIndex];
+    at = 3 * std::size_t{slot.baseTriangle};
     for (const auto& t : mesh.triangles) {
         for (std::uint32_t k : t) {
             const std::uint32_t global = slot.baseVertex + k;
-            if (changed.firstIndex == Changed::kNone && *index != global)
-                changed.firstIndex = firstIndex + static_cast<std::size_t>(index - &m_geometry.indices[firstIndex]);
-            *index++ = global;
+            if (changed.firstIndex == Changed::kNone && m_geometry.indices[at] != global) changed.firstIndex = at;
+            m_geometry.indices[at++] = global;
         }
     }
     return changed;

@@ -161,13 +161,13 @@ struct VisibilityPass::Impl {
         glDeleteProgram(buildProgram);
     }
 
-    /// `count` invocations (times `layers` in y) in dispatches of at most GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]
-    /// groups each; the program reads its first index from CULLIDE_LOC_PRIM_BASE.
-    void dispatchAll(std::size_t count, GLuint layers) const {
+    /// `count` invocations in dispatches of at most GL_MAX_COMPUTE_WORK_GROUP_COUNT[0] groups each; the program
+    /// reads its first index from CULLIDE_LOC_PRIM_BASE (build.comp: the passes over records are indirect).
+    void dispatchAll(std::size_t count) const {
         const std::size_t groups = (count + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
         for (std::size_t first = 0; first < groups; first += maxGroups) {
             glUniform1ui(CULLIDE_LOC_PRIM_BASE, static_cast<GLuint>(first * CULLIDE_COMPUTE_GROUP_SIZE));
-            glDispatchCompute(static_cast<GLuint>(std::min<std::size_t>(maxGroups, groups - first)), layers, 1);
+            glDispatchCompute(static_cast<GLuint>(std::min<std::size_t>(maxGroups, groups - first)), 1, 1);
         }
         glUniform1ui(CULLIDE_LOC_PRIM_BASE, 0);
     }
@@ -240,7 +240,7 @@ struct VisibilityPass::Impl {
     /// One pass of build.comp over `invocations` invocations.
     void buildPass(int pass, std::size_t invocations, LevelStats& level, Stats& stats) const {
         glUniform1i(CULLIDE_LOC_PASS, pass);
-        dispatchAll(invocations, 1);
+        dispatchAll(invocations);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
         level.draws += 1;
         stats.draws += 1;

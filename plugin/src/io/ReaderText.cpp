@@ -67,12 +67,21 @@ std::string quote(std::string_view token) {
     return s;
 }
 
-bool parseDouble(std::string_view s, double& out) {
+namespace {
+
+/// Drops one leading '+' (from_chars takes none); false when nothing or another sign would be left.
+bool dropLeadingPlus(std::string_view& s) {
     if (!s.empty() && s.front() == '+') {
         s.remove_prefix(1);
         if (s.empty() || s.front() == '+' || s.front() == '-') return false;
     }
-    if (s.empty()) return false;
+    return !s.empty();
+}
+
+}  // namespace
+
+bool parseDouble(std::string_view s, double& out) {
+    if (!dropLeadingPlus(s)) return false;
     const char* end = s.data() + s.size();
     auto [ptr, ec] = std::from_chars(s.data(), end, out);
     if (ptr != end) return false;
@@ -92,11 +101,7 @@ bool parseDouble(std::string_view s, double& out) {
 
 bool parseInt(std::string_view s, std::int64_t& out, bool& overflow) {
     overflow = false;
-    if (!s.empty() && s.front() == '+') {
-        s.remove_prefix(1);
-        if (s.empty() || s.front() == '+' || s.front() == '-') return false;
-    }
-    if (s.empty()) return false;
+    if (!dropLeadingPlus(s)) return false;
     const char* end = s.data() + s.size();
     auto [ptr, ec] = std::from_chars(s.data(), end, out);
     if (ptr != end) return false;
