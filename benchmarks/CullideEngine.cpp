@@ -62,6 +62,7 @@ void CullideEngine::run(const BenchFrame& frame, FrameOutput& out) {
                                 {"cpu_ms", l.cpuMs}, {"setup_ms", l.setupMs}, {"setup_send_ms", l.setupSendMs},
                                 {"iterations", l.iterations}, {"records", l.records},
                                 {"record_builds", l.recordBuilds}, {"short_builds", l.shortBuilds},
+                                {"idle_iterations", l.idleIterations},
                                 {"blocking_read_backs", l.blockingReadBacks}, {"wait_ms", l.waitMs}};
         if (l.gpuTimingValid) level["gpu_ms"] = l.gpuMs;
         out.levels.push_back(level);
@@ -86,6 +87,7 @@ nlohmann::json CullideEngine::describe() const {
     j["gpu_levels"] = gpuLevelsName(m_settings.gpuLevels);
     j["group_size"] = m_settings.groupSize;
     j["max_iterations"] = m_settings.maxIterations;
+    j["min_prune_fraction"] = m_settings.minPruneFraction;
     j["threads"] = m_settings.threads;
     j["renderer"] = m_result.stats.renderer;
     j["device"] = m_result.stats.device;

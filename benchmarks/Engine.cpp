@@ -26,6 +26,7 @@ std::unique_ptr<Engine> makeEngine(const std::string& name, const EngineOptions&
     s.resolution = options.resolution;
     s.groupSize = options.groupSize;
     s.maxIterations = options.maxIterations;
+    s.minPruneFraction = options.minPruneFraction;
     if (options.threads >= 0) s.threads = static_cast<unsigned>(options.threads);
     if (name == "exact") return std::make_unique<CullideEngine>(s, CullideEngine::Kind::Exact);
     if (name == "cullide") return std::make_unique<CullideEngine>(s, CullideEngine::Kind::Gpu);

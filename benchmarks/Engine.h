@@ -46,6 +46,7 @@ struct EngineOptions {
     int resolution = 256;  ///< CULLIDE image resolution (GPU levels)
     int groupSize = 32;
     int maxIterations = 4;  ///< Settings::maxIterations
+    double minPruneFraction = 0.0625;  ///< Settings::minPruneFraction
     int threads = -1;  ///< Settings::threads of the CULLIDE engines (0: every core); -1: the engine's own
 };
 

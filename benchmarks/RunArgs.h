@@ -18,6 +18,7 @@ struct RunArgs {
     int resolution = 256;
     int groupSize = 32;
     int maxIterations = 4;      ///< CULLIDE engines: Settings::maxIterations
+    double minPruneFraction = 0.0625;  ///< CULLIDE engines: Settings::minPruneFraction
     int threads = -1;           ///< CULLIDE engines: Settings::threads (0: every core); -1: the engine's own
     int sampleEvery = 10;       ///< breakable: compare with the exact answer every n-th frame
 };

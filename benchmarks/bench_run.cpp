@@ -3,7 +3,7 @@
 //
 //   cullide-bench-run --scene env1|env2|env3|env3-deform|stack|landscape|breakable --engine NAME
 //                     [--objects N] [--tris N] [--frames N] [--warmup N] [--resolution N] [--group K]
-//                     [--iterations N] [--threads N]
+//                     [--iterations N] [--min-prune F] [--threads N]
 //                     [--truth FILE] [--tag TAG] [--out FILE] [--sample-every N]
 //   cullide-bench-run --list-engines | --list-scenes   what this build can run
 //   cullide-bench-run --probe          prints the GL renderer and device CULLIDE's GPU levels run on, as JSON
@@ -51,7 +51,7 @@ using namespace cullide::bench;
 int usage(const std::string& why) {
     std::fprintf(stderr,
                  "cullide-bench-run: %s\nusage: cullide-bench-run --scene SCENE --engine ENGINE [--objects N] "
-                 "[--tris N] [--frames N] [--warmup N] [--resolution N] [--group K] [--iterations N] [--threads N] "
+                 "[--tris N] [--frames N] [--warmup N] [--resolution N] [--group K] [--iterations N] [--min-prune F] [--threads N] "
                  "[--truth FILE] [--tag TAG] "
                  "[--out FILE] [--sample-every N] | --list-engines | --list-scenes | --probe\n",
                  why.c_str());
@@ -136,6 +136,7 @@ void runFrames(const RunArgs& args, nlohmann::json& record) {
     options.resolution = args.resolution;
     options.groupSize = args.groupSize;
     options.maxIterations = args.maxIterations;
+    options.minPruneFraction = args.minPruneFraction;
     options.threads = args.threads;
     auto engine = makeEngine(args.engine, options);
     const bool exactEngine = args.engine == "exact";
@@ -216,6 +217,7 @@ int main(int argc, char** argv) {
             else if (a == "--resolution") args.resolution = toInt(value(), a);
             else if (a == "--group") args.groupSize = toInt(value(), a);
             else if (a == "--iterations") args.maxIterations = toInt(value(), a);
+            else if (a == "--min-prune") args.minPruneFraction = std::stod(value());
             else if (a == "--threads") args.threads = toInt(value(), a);
             else if (a == "--sample-every") args.sampleEvery = toInt(value(), a);
             else if (a == "--truth") args.truthPath = value();

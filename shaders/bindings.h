@@ -23,6 +23,9 @@
 #define CULLIDE_SSBO_ITEM_PRIMS 12 /* uint[itemPrimCount]: primitive references (triangle, or box | PRIM_BOX_BIT) */
 #define CULLIDE_SSBO_BANDS 13      /* uint[itemPrimCount]: each primitive's footprint (float bits), then its bands */
 #define CULLIDE_SSBO_BUILD 14      /* uint[CULLIDE_BUILD_GROUPS + work groups]: see CULLIDE_BUILD_* */
+#define CULLIDE_SSBO_VIEWS 15      /* ViewRecord[CULLIDE_MAX_ITERATIONS + 1] (view.glsl): iteration i's view (the first
+                                      * written by the C++ side, each next one by survive.comp's last work group) and
+                                      * what the iteration left */
 
 /* Counters, reset before every iteration. */
 #define CULLIDE_COUNTER_OVERFLOWS 0 /* compute invocations that would exceed CULLIDE_MAX_LOOP_ITERATIONS */
@@ -51,10 +54,27 @@
 #define CULLIDE_DISPATCH_NEEDED_HI 27 /* the total in units of 256, rounded up per work group (reset before a build) */
 #define CULLIDE_DISPATCH_DRAW 28    /* 4 uints: glDrawArraysIndirect's (9 vertices per record, 1, 0, 0) */
 #define CULLIDE_COUNTERS_SIZE 32
-/* Then the alive set after the iteration, one bit per item (item i: bit i % 32 of word CULLIDE_ALIVE_BITS + i / 32),
- * cleared by the C++ side before every iteration and set by survive.comp: each iteration's read-back carries the set,
- * so the level's end waits for nothing more. */
-#define CULLIDE_ALIVE_BITS 32
+/* Then the level's chain of iterations, kept across them (the C++ side issues a level's iterations without waiting;
+ * survive.comp's last work group decides whether the next one runs and fits its view): */
+#define CULLIDE_CHAIN_RAN 32        /* iterations run (the last one's index + 1) */
+#define CULLIDE_CHAIN_STOP 33       /* CULLIDE_STOP_*: why the chain stopped after the last iteration run */
+#define CULLIDE_CHAIN_SURVIVE_DONE 34 /* survive.comp's work groups that have finished (its last one resets it) */
+#define CULLIDE_CHAIN_RECORDS_RUN 35  /* records the level's iterations ran over, summed */
+#define CULLIDE_CHAIN_RECORDED_VIEW 36 /* the view the records were built for (build.comp's APPEND pass) */
+#define CULLIDE_CHAIN_ALIVE 48      /* CULLIDE_MAX_ITERATIONS words: items alive after iteration i */
+#define CULLIDE_MAX_ITERATIONS 64   /* Settings::maxIterations at most */
+/* Then the level's alive set, one bit per item (item i: bit i % 32 of word CULLIDE_ALIVE_BITS + i / 32): set by the
+ * C++ side at the level's start, cleared by survive.comp as items leave. The level's one read-back brings it all. */
+#define CULLIDE_ALIVE_BITS 112
+
+/* Why a level's chain of iterations stopped (CULLIDE_CHAIN_STOP). */
+#define CULLIDE_STOP_NONE 0      /* it did not: the next iteration runs */
+#define CULLIDE_STOP_DONE 1      /* the set did not change (or the iteration pruned nothing: an overflow, short
+                                  * records), none is left, the iteration pruned too few (Settings::minPruneFraction)
+                                  * or the last iteration allowed ran */
+#define CULLIDE_STOP_ONE_OWNER 2 /* one owner is left: nothing to collide with, every item is pruned */
+#define CULLIDE_STOP_REFIT 3     /* the next view shrank to a quarter of the records' along some axis: the C++ side
+                                  * builds them again for it and goes on */
 
 /* The record build's buffer. Per work group g of the FOOTPRINTS pass, CULLIDE_BUILD_GROUPS + g holds its footprint
  * sum (float bits). */
@@ -78,12 +98,7 @@
 /* Uniform locations. */
 #define CULLIDE_LOC_PASS 0          /* int: CULLIDE_PASS_* */
 #define CULLIDE_LOC_RESOLUTION 1    /* int */
-#define CULLIDE_LOC_VIEW_LO 2       /* vec3: view box minimum (upload-origin relative) */
-#define CULLIDE_LOC_PIXEL_SCALE 3   /* vec3: pixels per unit along each world axis */
-#define CULLIDE_LOC_DEPTH_SCALE 4   /* vec3: normalized depth per unit along each world axis */
-#define CULLIDE_LOC_HALF_SIZE 5     /* vec3: per world axis, half pixel + margin + slack, in pixels (0 = sampled) */
-#define CULLIDE_LOC_DEPTH_PAD 6     /* vec3: per view axis, margin + slack added to depth ranges (normalized depth) */
-#define CULLIDE_LOC_ID_BITS 7       /* uint: low bits of the packed depth that hold the owner id */
+/* 2-7: unused (the view is in CULLIDE_SSBO_VIEWS) */
 #define CULLIDE_LOC_CONSERVATIVE 8  /* int: 1 = reliable mode, 0 = sampled */
 #define CULLIDE_LOC_PRIM_COUNT 9    /* uint: build.comp: the level's primitives */
 #define CULLIDE_LOC_AXES 10         /* uint: bit mask of the view axes in use (x = 1, y = 2, z = 4) */
@@ -96,6 +111,11 @@
 #define CULLIDE_LOC_CAPACITY 16     /* uint: build.comp: records the record buffers hold */
 #define CULLIDE_LOC_MAX_GROUPS 17   /* uint: build.comp: GL_MAX_COMPUTE_WORK_GROUP_COUNT[0] (indirect arguments) */
 #define CULLIDE_LOC_WITH_BOUNDS 18  /* int: build.comp: 1 = the FOOTPRINTS pass also builds the items' boxes */
+#define CULLIDE_LOC_ITERATION 19    /* uint: the iteration whose view the passes use (views[u_iteration]) */
+#define CULLIDE_LOC_MAX_ITERATIONS 20 /* uint: survive.comp: Settings::maxIterations */
+#define CULLIDE_LOC_MARGIN 21       /* double: survive.comp: Settings::margin (the next view's fit) */
+#define CULLIDE_LOC_COORDINATE_BOUND 22 /* double: survive.comp: GpuGeometry::coordinateBound */
+#define CULLIDE_LOC_MIN_PRUNE_FRACTION 23 /* double: survive.comp: Settings::minPruneFraction */
 
 #define CULLIDE_BANDS_NONE 0        /* one record per primitive (raster back-end) */
 #define CULLIDE_BANDS_LONG 1        /* bands of CULLIDE_PIXELS_PER_INVOCATION pixels (software renderers) */

@@ -29,8 +29,6 @@ layout(std430, binding = CULLIDE_SSBO_ITEM_BOUNDS) buffer Bounds { uint bounds[]
 layout(std430, binding = CULLIDE_SSBO_COUNTERS) coherent buffer Counters { uint counters[]; };
 
 layout(location = CULLIDE_LOC_PASS) uniform int u_pass;
-layout(location = CULLIDE_LOC_PIXEL_SCALE) uniform vec3 u_pixelScale;
-layout(location = CULLIDE_LOC_HALF_SIZE) uniform vec3 u_halfSize;
 layout(location = CULLIDE_LOC_PRIM_COUNT) uniform uint u_primCount;  // of the level's items, all of them
 layout(location = CULLIDE_LOC_PRIM_BASE) uniform uint u_primBase;
 layout(location = CULLIDE_LOC_ITEM_COUNT) uniform uint u_itemCount;
@@ -125,7 +123,10 @@ uint orderedBits(float f) {
 // Pixels of the largest of a primitive's three footprints: its bounding rectangle grown by the tested square and a
 // pixel of rounding on each side. The three views are written out (no loop over vector components).
 float footprintOf(vec3 size) {
-    vec3 side = size * u_pixelScale + 2.0 * u_halfSize + vec3(3.0);
+    ViewRecord v = views[u_iteration];
+    vec3 pixelScale = vec3(v.pixelScale[0], v.pixelScale[1], v.pixelScale[2]);
+    vec3 halfSize = vec3(v.halfSize[0], v.halfSize[1], v.halfSize[2]);
+    vec3 side = size * pixelScale + 2.0 * halfSize + vec3(3.0);
     return max(max(side.y * side.z, side.z * side.x), side.x * side.y);
 }
 
@@ -236,6 +237,7 @@ void main() {
             uint total = atomicAdd(counters[CULLIDE_DISPATCH_NEEDED], 0u);
             float approx = float(atomicAdd(counters[CULLIDE_DISPATCH_NEEDED_HI], 0u)) * 256.0;
             writeDispatch(total, approx);
+            counters[CULLIDE_CHAIN_RECORDED_VIEW] = u_iteration;
         }
     }
 }

@@ -13,12 +13,6 @@ layout(std430, binding = CULLIDE_SSBO_ALIVE) readonly buffer Alive { uint alive[
 
 layout(location = CULLIDE_LOC_PASS) uniform int u_pass;
 layout(location = CULLIDE_LOC_RESOLUTION) uniform int u_resolution;
-layout(location = CULLIDE_LOC_VIEW_LO) uniform vec3 u_viewLo;
-layout(location = CULLIDE_LOC_PIXEL_SCALE) uniform vec3 u_pixelScale;
-layout(location = CULLIDE_LOC_DEPTH_SCALE) uniform vec3 u_depthScale;
-layout(location = CULLIDE_LOC_HALF_SIZE) uniform vec3 u_halfSize;
-layout(location = CULLIDE_LOC_DEPTH_PAD) uniform vec3 u_depthPad;
-layout(location = CULLIDE_LOC_ID_BITS) uniform uint u_idBits;
 layout(location = CULLIDE_LOC_CONSERVATIVE) uniform int u_conservative;
 layout(location = CULLIDE_LOC_AXES) uniform uint u_axes;
 
@@ -57,8 +51,9 @@ vec3 vertexAt(uint i) { return vec3(positions[3u * i], positions[3u * i + 1u], p
 vec3 project(vec3 p, int axis) {
     int ua = (axis + 1) % 3;
     int va = (axis + 2) % 3;
-    precise vec3 r = vec3((p[ua] - u_viewLo[ua]) * u_pixelScale[ua], (p[va] - u_viewLo[va]) * u_pixelScale[va],
-                          (p[axis] - u_viewLo[axis]) * u_depthScale[axis]);
+    ViewRecord v = views[u_iteration];
+    precise vec3 r = vec3((p[ua] - v.lo[ua]) * v.pixelScale[ua], (p[va] - v.lo[va]) * v.pixelScale[va],
+                          (p[axis] - v.lo[axis]) * v.depthScale[axis]);
     return r;
 }
 
@@ -117,7 +112,9 @@ Prim makePrim(uint index, int axis) {
 
 // Half size of the tested square in pixels along the view's two image axes (0 in sampled mode: the centre only).
 vec2 halfSizeFor(int axis) {
-    return u_conservative != 0 ? vec2(u_halfSize[(axis + 1) % 3], u_halfSize[(axis + 2) % 3]) : vec2(0.0);
+    return u_conservative != 0 ? vec2(views[u_iteration].halfSize[(axis + 1) % 3],
+                                      views[u_iteration].halfSize[(axis + 2) % 3])
+                               : vec2(0.0);
 }
 
 bool edgeRejects(vec3 e, vec2 c, vec2 h) {
@@ -148,7 +145,7 @@ bool coverage(Prim p, vec2 c, vec2 h, out precise float zlo, out precise float z
         }
     }
     if (u_conservative != 0) {
-        precise float pad = u_depthPad[p.axis] + (p.zrange.y - p.zrange.x) * (1.0 / 4096.0);
+        precise float pad = views[u_iteration].depthPad[p.axis] + (p.zrange.y - p.zrange.x) * (1.0 / 4096.0);
         zlo -= pad;
         zhi += pad;
     }

@@ -20,21 +20,22 @@ uint quantizeUp(float z, float maxQ) {
 
 // Returns the flag bits this pixel earns the item in the flag pass (0 in the other passes).
 uint visit(ivec2 pixel, uint owner, int axis, float zlo, float zhi) {
-    uint depthBits = min(24u, 32u - u_idBits);
+    uint idBits = views[u_iteration].idBits;
+    uint depthBits = min(24u, 32u - idBits);
     float maxQ = float((1u << depthBits) - 2u);
     uint qlo = quantizeDown(zlo, maxQ);
     uint qhi = quantizeUp(zhi, maxQ);
-    uint idMask = (1u << u_idBits) - 1u;
+    uint idMask = (1u << idBits) - 1u;
     if (u_pass == CULLIDE_PASS_NEAREST) {
-        imageAtomicMin(u_near1, pixel, (qlo << u_idBits) | owner);
-        imageAtomicMax(u_far1, pixel, ((qhi + 1u) << u_idBits) | owner);
+        imageAtomicMin(u_near1, pixel, (qlo << idBits) | owner);
+        imageAtomicMax(u_far1, pixel, ((qhi + 1u) << idBits) | owner);
         return 0u;
     }
     uint n1 = imageLoad(u_near1, pixel).x;
     uint f1 = imageLoad(u_far1, pixel).x;
     if (u_pass == CULLIDE_PASS_SECOND) {
-        if ((n1 & idMask) != owner) imageAtomicMin(u_near2, pixel, (qlo << u_idBits) | owner);
-        if ((f1 & idMask) != owner) imageAtomicMax(u_far2, pixel, ((qhi + 1u) << u_idBits) | owner);
+        if ((n1 & idMask) != owner) imageAtomicMin(u_near2, pixel, (qlo << idBits) | owner);
+        if ((f1 & idMask) != owner) imageAtomicMax(u_far2, pixel, ((qhi + 1u) << idBits) | owner);
         return 0u;
     }
     uint nearOther = (n1 & idMask) == owner ? imageLoad(u_near2, pixel).x : n1;
@@ -42,8 +43,8 @@ uint visit(ivec2 pixel, uint owner, int axis, float zlo, float zhi) {
     uint bits = 0u;
     // Seen from the near side the item is hidden somewhere by another object: its far depth reaches the nearest
     // depth of another object at this pixel. Symmetrically from the far side.
-    if (nearOther != 0xFFFFFFFFu && qhi >= (nearOther >> u_idBits)) bits |= 1u << uint(2 * axis);
-    if (farOther != 0u && qlo + 1u <= (farOther >> u_idBits)) bits |= 1u << uint(2 * axis + 1);
+    if (nearOther != 0xFFFFFFFFu && qhi >= (nearOther >> idBits)) bits |= 1u << uint(2 * axis);
+    if (farOther != 0u && qlo + 1u <= (farOther >> idBits)) bits |= 1u << uint(2 * axis + 1);
     return bits;
 }
 

@@ -1,7 +1,8 @@
 // The seam between the frame pipeline (GpuCuller, LevelPipelines) and what runs CULLIDE's image-space visibility
 // test: the GL implementation (gl/VisibilityPass) and the CPU reference (ReferenceVisibility), which computes the
-// same pixels in the same float arithmetic and is the oracle of the GL one. The level's loop over iterations
-// (VisibilityLevel.h) drives either; a backend only answers "which items survive one iteration of this view".
+// same pixels in the same float arithmetic and is the oracle of the GL one. A backend runs a whole level: its
+// iterations, each view fitted to what the last one left and the stop rule (VisibilityLevel.h) — the GL one on the
+// device, without waiting between iterations.
 #pragma once
 
 #include "cullide/Stats.h"
@@ -66,6 +67,24 @@ struct IterationResult {
     Aabb bounds;  ///< of the alive items' boxes as uploaded (deviceBoundsOf, VisibilityLevel.h)
 };
 
+/// One iteration of a level as it ran: its view, its owner-id bits and what it left (a level's trace, for tests).
+struct IterationTrace {
+    View view;
+    std::uint32_t idBits = 0;
+    IterationResult result;
+};
+
+/// How a level starts: the first iteration's view and owner-id bits (fitted on the CPU to the items' bounds), and
+/// the coordinate bound every next view is fitted with (fitView).
+struct LevelStart {
+    View view;
+    std::uint32_t idBits = 1;
+    double coordinateBound = 0.0;
+    /// The level's place in the frame (0 for its first level): a level in the same place of the next frame most
+    /// often runs as many iterations (the GL back-end issues that many before it waits).
+    std::size_t place = 0;
+};
+
 /// A backend failure in the middle of a frame (a GL error). The culler finishes that frame without pruning: every
 /// triangle the CPU pre-pass keeps goes to the exact stage, so no contact is lost.
 class BackendError : public std::runtime_error {
@@ -90,14 +109,14 @@ public:
     virtual std::string renderer() const = 0;
     virtual std::string device() const = 0;
 
-    /// Starts a level: every item alive, the first iteration's view `view`. `items` stays alive (unchanged) until
-    /// the level ends.
-    virtual void beginLevel(const LevelItems& items, const View& view, LevelStats& level, Stats& stats) = 0;
-    /// One iteration: both views along every enabled axis over the alive items; an item stays alive when it is not
-    /// fully visible in any of them. Owner ids are packed into the low `idBits` bits of each pixel.
-    virtual IterationResult iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) = 0;
-    /// The alive set now, 0/1 per item.
-    virtual void readAlive(std::vector<std::uint8_t>& alive, LevelStats& level, Stats& stats) = 0;
+    /// Runs one level over `items` (at least two owners, owner ids below 2^16): every item alive, then at most
+    /// Settings::maxIterations iterations, the first with start.view, each next one with the view fitted to the
+    /// items the last one left (fitView, idBitsFor of their largest owner), until stepAfter (VisibilityLevel.h) says
+    /// stop. survivors[i]: 1 when item i is alive at the end (all 0 when one owner is left). Adds the iterations
+    /// and the items after each (LevelStats::itemsPerIteration, noteIteration) to `level`. `trace`, when given,
+    /// receives every iteration run, in order (tests: the GL back-end reads it back off the books).
+    virtual void pruneLevel(const LevelItems& items, const LevelStart& start, std::vector<std::uint8_t>& survivors,
+                            LevelStats& level, Stats& stats, std::vector<IterationTrace>* trace) = 0;
 };
 
 }  // namespace cullide

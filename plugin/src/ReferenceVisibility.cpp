@@ -183,9 +183,26 @@ ReferenceVisibility::ReferenceVisibility(const Settings& settings) : m_settings(
 
 void ReferenceVisibility::upload(const GpuGeometry& geometry, Stats&) { m_geometry = &geometry; }
 
-void ReferenceVisibility::beginLevel(const LevelItems& items, const View&, LevelStats&, Stats&) {
+void ReferenceVisibility::pruneLevel(const LevelItems& items, const LevelStart& start,
+                                     std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats,
+                                     std::vector<IterationTrace>* trace) {
     m_items = &items;
     m_alive.assign(items.size(), 1);
+    View view = start.view;
+    std::uint32_t idBits = start.idBits;
+    std::size_t alive = items.size();
+    for (int iteration = 0;; ++iteration) {
+        const IterationResult r = iterate(view, idBits, level, stats);
+        if (trace) trace->push_back({view, idBits, r});
+        const Step step = stepAfter(r, alive, iteration, m_settings);
+        noteIteration(level, alive, r.alive, step);
+        if (step == Step::AllPruned) std::fill(m_alive.begin(), m_alive.end(), 0);
+        if (step != Step::Next) break;
+        alive = r.alive;
+        view = fitView(r.bounds, m_settings, start.coordinateBound);
+        idBits = idBitsFor(r.ownerMax);
+    }
+    survivors = m_alive;
 }
 
 IterationResult ReferenceVisibility::iterate(const View& view, std::uint32_t idBits, LevelStats& level,
@@ -261,7 +278,6 @@ IterationResult ReferenceVisibility::iterate(const View& view, std::uint32_t idB
     return r;
 }
 
-void ReferenceVisibility::readAlive(std::vector<std::uint8_t>& alive, LevelStats&, Stats&) { alive = m_alive; }
 
 std::unique_ptr<PruningBackend> createReferencePruningBackend(const Settings& settings) {
     return std::make_unique<ReferenceVisibility>(settings);

@@ -26,15 +26,15 @@ public:
     std::string renderer() const override { return "cpu-visibility-reference"; }
     std::string device() const override { return "cpu"; }
 
-    void beginLevel(const LevelItems& items, const View& view, LevelStats& level, Stats& stats) override;
-    IterationResult iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) override;
-    void readAlive(std::vector<std::uint8_t>& alive, LevelStats& level, Stats& stats) override;
-
-    /// The flag bits each item earned in the last iteration (bit 2a: hidden from the -a side somewhere, bit 2a + 1:
-    /// from the +a side), for tests that look inside an iteration.
-    const std::vector<std::uint32_t>& lastFlags() const { return m_flags; }
+    /// The level's loop of iterations on the CPU: the reference of the GL back-end's chain on the device.
+    void pruneLevel(const LevelItems& items, const LevelStart& start, std::vector<std::uint8_t>& survivors,
+                    LevelStats& level, Stats& stats, std::vector<IterationTrace>* trace) override;
 
 private:
+    /// One iteration: both views along every enabled axis over the alive items; an item stays alive when it is not
+    /// fully visible in any of them.
+    IterationResult iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats);
+
     Settings m_settings;
     const GpuGeometry* m_geometry = nullptr;
     const LevelItems* m_items = nullptr;

@@ -22,6 +22,7 @@ std::string Settings::validate() const {
     if (groupSize < 1 || groupSize > 4096) return "groupSize must be in 1..4096";
     if (axes < 1 || axes > 7) return "axes must be a non-empty bit mask of x=1, y=2, z=4";
     if (maxIterations < 1 || maxIterations > 64) return "maxIterations must be in 1..64";
+    if (!(minPruneFraction >= 0.0 && minPruneFraction <= 1.0)) return "minPruneFraction must be in 0..1";
     if (!std::isfinite(margin) || margin < 0.0) return "margin must be finite and >= 0";
     if (threads > 256) return "threads must be <= 256";
     if (!deviceNameValid(device))

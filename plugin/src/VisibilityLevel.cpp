@@ -87,6 +87,21 @@ Aabb deviceBoundsOf(const GpuGeometry& geometry, const LevelItems& items, std::s
     return b;
 }
 
+Step stepAfter(const IterationResult& r, std::size_t aliveBefore, int iteration, const Settings& settings) {
+    if (r.overflows != 0 || r.alive == aliveBefore || r.alive == 0) return Step::Stop;
+    if (r.ownerMin == r.ownerMax) return Step::AllPruned;
+    const double pruned = static_cast<double>(aliveBefore - r.alive);
+    if (pruned < settings.minPruneFraction * static_cast<double>(aliveBefore)) return Step::Stop;
+    return iteration + 1 >= settings.maxIterations ? Step::Stop : Step::Next;
+}
+
+void noteIteration(LevelStats& level, std::size_t aliveBefore, std::size_t aliveAfter, Step step) {
+    ++level.iterations;
+    if (aliveAfter == aliveBefore) return;
+    level.itemsPerIteration.push_back(aliveAfter);
+    if (step == Step::AllPruned) level.itemsPerIteration.push_back(0);
+}
+
 void pruneLevel(PruningBackend& backend, const LevelItems& items, const Settings& settings, double coordinateBound,
                 std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats) {
     const Timer timer;
@@ -103,31 +118,12 @@ void pruneLevel(PruningBackend& backend, const LevelItems& items, const Settings
     }
     Aabb bounds;
     for (const Aabb& b : items.bounds) bounds.grow(b);
-    View view = fitView(bounds, settings, coordinateBound);
-    std::uint32_t maxOwner = *std::max_element(items.owner.begin(), items.owner.end());
-    backend.beginLevel(items, view, level, stats);
-    std::size_t alive = n;
-    bool allPruned = false;
-    for (int iteration = 0; iteration < settings.maxIterations; ++iteration) {
-        const IterationResult r = backend.iterate(view, idBitsFor(maxOwner), level, stats);
-        ++level.iterations;
-        if (r.overflows != 0) break;  // some footprint was not scanned: the iteration pruned nothing
-        if (r.alive == alive) break;  // the set only shrinks: the same size is the same set
-        alive = r.alive;
-        level.itemsPerIteration.push_back(alive);
-        if (alive == 0) break;
-        if (r.ownerMin == r.ownerMax) {  // one owner left: nothing to collide with
-            allPruned = true;
-            level.itemsPerIteration.push_back(0);
-            break;
-        }
-        view = fitView(r.bounds, settings, coordinateBound);
-        maxOwner = r.ownerMax;
-    }
-    if (allPruned)
-        std::fill(survivors.begin(), survivors.end(), 0);
-    else
-        backend.readAlive(survivors, level, stats);
+    LevelStart start;
+    start.view = fitView(bounds, settings, coordinateBound);
+    start.idBits = idBitsFor(*std::max_element(items.owner.begin(), items.owner.end()));
+    start.coordinateBound = coordinateBound;
+    start.place = stats.levels.empty() ? 0 : stats.levels.size() - 1;  // `level` is the frame's last
+    backend.pruneLevel(items, start, survivors, level, stats, nullptr);
     level.cpuMs += timer.ms();
 }
 

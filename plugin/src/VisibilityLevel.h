@@ -36,10 +36,27 @@ std::size_t distinctOwners(const LevelItems& items);
 /// boxes), so exact in float. The iterations after the first fit their views to these (IterationResult::bounds).
 Aabb deviceBoundsOf(const GpuGeometry& geometry, const LevelItems& items, std::size_t i);
 
+/// What follows an iteration of a level.
+enum class Step {
+    Next,       ///< the next iteration runs, with the view fitted to what this one left
+    Stop,       ///< the level ends with the items alive now
+    AllPruned,  ///< one owner is left: nothing to collide with, the level ends with every item pruned
+};
+
+/// The stop rule after iteration `iteration` (from 0) of a level, which left `r` of `aliveBefore` items alive: stop
+/// when it pruned nothing (an overflow; the set only shrinks, so the same size is the same set) or left none; all
+/// pruned when one owner is left; stop when it pruned less than Settings::minPruneFraction of them, and after
+/// Settings::maxIterations. survive.comp's finishIteration is its GLSL twin.
+Step stepAfter(const IterationResult& r, std::size_t aliveBefore, int iteration, const Settings& settings);
+
+/// Adds an iteration to the level's stats: the iteration itself, and the items after it in itemsPerIteration where
+/// it changed the set (and a 0 after them when the level ends all pruned).
+void noteIteration(LevelStats& level, std::size_t aliveBefore, std::size_t aliveAfter, Step step);
+
 /// Runs one level on `backend`: survivors[i] is 1 when item i may intersect an item of another owner. At most
-/// Settings::maxIterations iterations, each fitted to the items still alive; the loop stops when the set stops
-/// changing, when one owner is left (nothing to collide with: all pruned) or when an iteration overflowed (it pruned
-/// nothing). `coordinateBound`: GpuGeometry::coordinateBound of the upload the items refer to.
+/// Settings::maxIterations iterations, each fitted to the items still alive, until stepAfter says stop
+/// (PruningBackend::pruneLevel); a level without two owners ends at once. `coordinateBound`:
+/// GpuGeometry::coordinateBound of the upload the items refer to.
 void pruneLevel(PruningBackend& backend, const LevelItems& items, const Settings& settings, double coordinateBound,
                 std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats);
 

@@ -184,6 +184,7 @@ nlohmann::ordered_json statsToJson(const cullide::Stats& s) {
         lj["record_builds"] = l.recordBuilds;
         lj["iterations"] = l.iterations;
         lj["short_builds"] = l.shortBuilds;
+        lj["idle_iterations"] = l.idleIterations;
         lj["blocking_read_backs"] = l.blockingReadBacks;
         lj["wait_ms"] = l.waitMs;
         lj["gpu_ms"] = gpuTime(l.gpuMs, l.gpuTimingValid);

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstring>
 #include <sstream>
 #include <utility>
 
@@ -28,60 +30,90 @@ public:
     std::string renderer() const override { return m_tested->renderer(); }
     std::string device() const override { return m_tested->device(); }
 
-    void beginLevel(const LevelItems& items, const View& view, LevelStats& level, Stats& stats) override {
-        m_tested->beginLevel(items, view, level, stats);
-        m_reference->beginLevel(items, view, m_scratchLevel, m_scratch);
+    void pruneLevel(const LevelItems& items, const LevelStart& start, std::vector<std::uint8_t>& survivors,
+                    LevelStats& level, Stats& stats, std::vector<IterationTrace>* trace) override {
+        m_got.clear();
+        m_expected.clear();
+        m_tested->pruneLevel(items, start, survivors, level, stats, &m_got);
+        m_reference->pruneLevel(items, start, m_expectedAlive, m_scratchLevel, m_scratch, &m_expected);
         ++m_log->levels;
-        m_iteration = 0;
-        m_aliveBefore = items.size();
-    }
-
-    IterationResult iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) override {
-        const IterationResult got = m_tested->iterate(view, idBits, level, stats);
-        const IterationResult expected = m_reference->iterate(view, idBits, m_scratchLevel, m_scratch);
-        m_tested->readAlive(m_gotAlive, m_scratchLevel, m_scratch);
-        m_reference->readAlive(m_expectedAlive, m_scratchLevel, m_scratch);
-        compare(got, expected);
-        ++m_iteration;
-        return got;
-    }
-
-    void readAlive(std::vector<std::uint8_t>& alive, LevelStats& level, Stats& stats) override {
-        m_tested->readAlive(alive, level, stats);
+        compare(items.size(), survivors);
+        if (trace) trace->insert(trace->end(), m_got.begin(), m_got.end());
     }
 
 private:
-    void compare(const IterationResult& got, const IterationResult& expected) {
+    /// Iteration by iteration: the view the tested backend used (fitted on the device after the first) and what it
+    /// left, against the reference's; then the alive sets at the level's end, item by item.
+    void compare(std::size_t itemCount, const std::vector<std::uint8_t>& gotAlive) {
         LockstepLog& log = *m_log;
-        ++log.iterations;
-        log.itemsIn += m_aliveBefore;
-        log.itemsPruned += m_aliveBefore - got.alive;
+        std::size_t aliveBefore = itemCount;
+        const std::size_t iterations = std::max(m_got.size(), m_expected.size());
+        for (std::size_t i = 0; i < iterations; ++i) {
+            ++log.iterations;
+            if (i >= m_got.size() || i >= m_expected.size()) {
+                note(i, "GL ran " + std::to_string(m_got.size()) + " iterations, the reference " +
+                            std::to_string(m_expected.size()));
+                break;
+            }
+            const IterationTrace& got = m_got[i];
+            const IterationTrace& expected = m_expected[i];
+            log.itemsIn += aliveBefore;
+            log.itemsPruned += aliveBefore - std::min<std::size_t>(aliveBefore, got.result.alive);
+            if (!sameView(got, expected)) note(i, "the views differ" + viewDifference(got, expected));
+            const IterationResult& g = got.result;
+            const IterationResult& e = expected.result;
+            const bool sameRange = g.ownerMin == e.ownerMin && g.ownerMax == e.ownerMax;
+            const bool sameBounds = g.bounds.min == e.bounds.min && g.bounds.max == e.bounds.max;
+            if (g.overflows != 0 || g.alive != e.alive || (e.alive != 0 && !(sameRange && sameBounds)))
+                note(i, std::to_string(aliveBefore) + " items in, GL keeps " + std::to_string(g.alive) +
+                            " (overflows " + std::to_string(g.overflows) + "), reference keeps " +
+                            std::to_string(e.alive));
+            aliveBefore = g.alive;
+        }
         std::size_t differing = 0;
-        std::size_t firstDiffering = m_gotAlive.size();
-        for (std::size_t i = 0; i < m_gotAlive.size() && i < m_expectedAlive.size(); ++i) {
-            if (m_gotAlive[i] == m_expectedAlive[i]) continue;
+        std::size_t firstDiffering = gotAlive.size();
+        for (std::size_t i = 0; i < gotAlive.size() && i < m_expectedAlive.size(); ++i) {
+            if (gotAlive[i] == m_expectedAlive[i]) continue;
             if (differing++ == 0) firstDiffering = i;
         }
-        const bool countersDiffer = got.overflows != 0 || got.alive != expected.alive ||
-                                    (expected.alive != 0 && (got.ownerMin != expected.ownerMin ||
-                                                             got.ownerMax != expected.ownerMax ||
-                                                             got.bounds.min != expected.bounds.min ||
-                                                             got.bounds.max != expected.bounds.max));
-        if (differing != 0 || countersDiffer || m_gotAlive.size() != m_expectedAlive.size()) {
-            ++log.mismatches;
+        if (differing != 0 || gotAlive.size() != m_expectedAlive.size()) {
             log.itemsDiffering += differing;
-            if (log.details.size() < 8) {
-                std::ostringstream s;
-                s << "level " << log.levels << " iteration " << m_iteration << ": " << m_aliveBefore
-                  << " items in, GL keeps " << got.alive << " (overflows " << got.overflows << "), reference keeps "
-                  << expected.alive << ", " << differing << " items differ";
-                if (differing != 0)
-                    s << " (first: item " << firstDiffering << ", GL " << int(m_gotAlive[firstDiffering])
-                      << ", reference " << int(m_expectedAlive[firstDiffering]) << ")";
-                log.details.push_back(s.str());
-            }
+            std::ostringstream s;
+            s << "the survivors differ in " << differing << " items";
+            if (differing != 0)
+                s << " (first: item " << firstDiffering << ", GL " << int(gotAlive[firstDiffering]) << ", reference "
+                  << int(m_expectedAlive[firstDiffering]) << ")";
+            note(m_got.size(), s.str());
         }
-        m_aliveBefore = got.alive;
+    }
+
+    static bool sameFloats(const float (&a)[3], const float (&b)[3]) {
+        return std::memcmp(a, b, sizeof a) == 0;
+    }
+
+    static bool sameView(const IterationTrace& a, const IterationTrace& b) {
+        const View& x = a.view;
+        const View& y = b.view;
+        return a.idBits == b.idBits && x.box.min == y.box.min && x.box.max == y.box.max && sameFloats(x.lo, y.lo) &&
+               sameFloats(x.pixelScale, y.pixelScale) && sameFloats(x.depthScale, y.depthScale) &&
+               sameFloats(x.halfSize, y.halfSize) && sameFloats(x.depthPad, y.depthPad);
+    }
+
+    static std::string viewDifference(const IterationTrace& a, const IterationTrace& b) {
+        std::ostringstream s;
+        s.precision(17);
+        s << ": GL box min " << a.view.box.min.transpose() << " halfSize " << a.view.halfSize[0] << " idBits "
+          << a.idBits << ", reference box min " << b.view.box.min.transpose() << " halfSize " << b.view.halfSize[0]
+          << " idBits " << b.idBits;
+        return s.str();
+    }
+
+    void note(std::size_t iteration, const std::string& what) {
+        LockstepLog& log = *m_log;
+        ++log.mismatches;
+        if (log.details.size() < 8)
+            log.details.push_back("level " + std::to_string(log.levels) + " iteration " + std::to_string(iteration) +
+                                  ": " + what);
     }
 
     std::unique_ptr<PruningBackend> m_tested;
@@ -89,9 +121,8 @@ private:
     std::shared_ptr<LockstepLog> m_log;
     Stats m_scratch;  ///< what the checks cost is not the culler's
     LevelStats m_scratchLevel;
-    std::size_t m_iteration = 0;
-    std::size_t m_aliveBefore = 0;
-    std::vector<std::uint8_t> m_gotAlive;
+    std::vector<IterationTrace> m_got;
+    std::vector<IterationTrace> m_expected;
     std::vector<std::uint8_t> m_expectedAlive;
 };
 
@@ -128,6 +159,9 @@ Settings lockstepSettings(const LockstepCase& c) {
     s.resolution = c.resolution;
     s.gpuLevels = GpuLevels::Always;
     s.exactThreshold = 0;  // every level runs
+    // The paper's pipeline iterates until the set stops changing (both stop rules of the chain are held to the
+    // reference: Auto's stop at the default minPruneFraction).
+    if (c.pipeline == Pipeline::Paper) s.minPruneFraction = 0.0;
     s.threads = 2;
     return s;
 }

@@ -1,7 +1,7 @@
-// A PruningBackend that runs the GL backend and the CPU reference (ReferenceVisibility) side by side, iteration by
-// iteration, and records every difference: the alive sets item by item and the counters the level loop reads (alive
-// count, owner range, bounds). The GL backend's answer drives the culler, so a whole frame runs exactly as in
-// production while every iteration of every level is checked.
+// A PruningBackend that runs the GL backend and the CPU reference (ReferenceVisibility) side by side, level by level,
+// and records every difference: iteration by iteration the view (fitted on the device after the first) and what the
+// iteration left (alive count, owner range, bounds), then the level's alive set item by item. The GL backend's answer
+// drives the culler, so a whole frame runs exactly as in production while every iteration of every level is checked.
 #pragma once
 
 #include "CullerBackends.h"
@@ -21,7 +21,7 @@ struct LockstepLog {
     std::size_t iterations = 0;
     std::size_t itemsIn = 0;      ///< items entering the compared iterations, summed
     std::size_t itemsPruned = 0;  ///< items the GL backend pruned in them, summed
-    std::size_t mismatches = 0;   ///< iterations where the two differ in any way
+    std::size_t mismatches = 0;   ///< differences found (an iteration's view or result, a level's survivors)
     std::size_t itemsDiffering = 0;
     std::vector<std::string> details;  ///< the first few differences, for the failure message
     std::string summary() const;
@@ -43,7 +43,8 @@ struct LockstepCase {
 std::string lockstepName(const LockstepCase& c);
 void PrintTo(const LockstepCase& c, std::ostream* os);
 
-/// Settings of the case that run every level (GpuLevels::Always, exactThreshold 0) on two threads.
+/// Settings of the case that run every level (GpuLevels::Always, exactThreshold 0) on two threads; Pipeline::Paper
+/// cases iterate until the set stops changing (minPruneFraction 0).
 Settings lockstepSettings(const LockstepCase& c);
 
 /// Runs `frames` through a culler whose GL backend is checked against the reference; returns the comparison. The

@@ -26,9 +26,8 @@ public:
     std::size_t deviceBytes() const override { return 0; }
     std::string renderer() const override { return "recording"; }
     std::string device() const override { return "none"; }
-    void beginLevel(const LevelItems&, const View&, LevelStats&, Stats&) override {}
-    IterationResult iterate(const View&, std::uint32_t, LevelStats&, Stats&) override { return {}; }
-    void readAlive(std::vector<std::uint8_t>&, LevelStats&, Stats&) override {}
+    void pruneLevel(const LevelItems&, const LevelStart&, std::vector<std::uint8_t>&, LevelStats&, Stats&,
+                    std::vector<IterationTrace>*) override {}  // prunes nothing
 };
 
 TEST(ClusterGeometry, StaticMeshesAreSentOnceAndOthersEveryUpload) {

@@ -24,6 +24,11 @@ TEST(Settings, RejectsOutOfRangeFields) {
     EXPECT_NE(bad([](Settings& s) { s.resolution = 5000; }), "");
     EXPECT_NE(bad([](Settings& s) { s.groupSize = 0; }), "");
     EXPECT_NE(bad([](Settings& s) { s.maxIterations = 0; }), "");
+    EXPECT_NE(bad([](Settings& s) { s.minPruneFraction = -0.01; }), "");
+    EXPECT_NE(bad([](Settings& s) { s.minPruneFraction = 1.5; }), "");
+    EXPECT_NE(bad([](Settings& s) { s.minPruneFraction = std::nan(""); }), "");
+    EXPECT_EQ(bad([](Settings& s) { s.minPruneFraction = 0.0; }), "");
+    EXPECT_EQ(bad([](Settings& s) { s.minPruneFraction = 1.0; }), "");
     EXPECT_NE(bad([](Settings& s) { s.margin = -1; }), "");
     EXPECT_NE(bad([](Settings& s) { s.margin = std::numeric_limits<double>::quiet_NaN(); }), "");
     EXPECT_NE(bad([](Settings& s) { s.margin = std::numeric_limits<double>::infinity(); }), "");

@@ -98,5 +98,38 @@ TEST(VisibilityLevel, DeviceBoundsAreTheBoxesOfTheUploadedPrimitives) {
     EXPECT_EQ(c.max, Vec3(1.0, 3.0, double{1e30f}));
 }
 
+/// The stop rule of a level's loop (stepAfter), which the device's chain (survive.comp) follows too: what ends a
+/// level, in order, and an iteration that pruned too little of its items.
+TEST(VisibilityLevel, StopRule) {
+    Settings s;
+    s.maxIterations = 4;
+    s.minPruneFraction = 0.25;
+    IterationResult r;
+    r.ownerMin = 0;
+    r.ownerMax = 3;
+    r.alive = 60;  // of 100: 40 pruned
+    EXPECT_EQ(stepAfter(r, 100, 0, s), Step::Next);
+    EXPECT_EQ(stepAfter(r, 100, 3, s), Step::Stop) << "the last iteration allowed";
+    r.alive = 76;  // 24 pruned, under a quarter
+    EXPECT_EQ(stepAfter(r, 100, 0, s), Step::Stop);
+    r.alive = 75;  // a quarter exactly: worth another
+    EXPECT_EQ(stepAfter(r, 100, 0, s), Step::Next);
+    s.minPruneFraction = 0.0;
+    r.alive = 99;
+    EXPECT_EQ(stepAfter(r, 100, 0, s), Step::Next) << "0: iterate while the set changes";
+    r.alive = 100;
+    EXPECT_EQ(stepAfter(r, 100, 0, s), Step::Stop) << "the set did not change";
+    r.alive = 50;
+    r.overflows = 1;
+    EXPECT_EQ(stepAfter(r, 100, 0, s), Step::Stop) << "an overflow: the iteration pruned nothing";
+    r.overflows = 0;
+    r.ownerMax = 0;
+    EXPECT_EQ(stepAfter(r, 100, 0, s), Step::AllPruned) << "one owner left";
+    s.minPruneFraction = 1.0;
+    EXPECT_EQ(stepAfter(r, 100, 3, s), Step::AllPruned) << "one owner left comes before the other rules";
+    r.alive = 0;
+    EXPECT_EQ(stepAfter(r, 100, 0, s), Step::Stop) << "none left";
+}
+
 }  // namespace
 }  // namespace cullide::test

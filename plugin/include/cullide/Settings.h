@@ -63,6 +63,10 @@ struct Settings {
     unsigned axes = 7;
     /// Maximum pruning iterations per level (each iteration draws all three axes, both directions), 1..64.
     int maxIterations = 4;
+    /// An iteration that prunes less than this fraction of the items it started with ends its level, 0..1: the next
+    /// one would prune fewer still, at the cost of a whole iteration. 0: a level iterates until its set stops changing
+    /// or maxIterations. The exact stage decides the pairs either way: only the candidate set grows a little.
+    double minPruneFraction = 0.0625;
     /// Distance margin d >= 0: triangle pairs closer than d are reported as well.
     double margin = 0.0;
     /// true: ObjectPair::triangles are the exactly intersecting (within-margin) pairs. false: the exact test is left

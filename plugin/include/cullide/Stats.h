@@ -29,12 +29,16 @@ struct LevelStats {
     /// Of recordBuilds, those that needed more records than the device's record buffers held: they wrote none, their
     /// iteration pruned nothing, and they were built again after the buffers grew (kept between frames).
     std::size_t shortBuilds = 0;
-    /// Of cpuMs, GL back-end: blocked in read-backs (one per iteration: its counters and the alive set), i.e.
-    /// waiting for the device to finish the work submitted before. The rest of cpuMs is issuing commands and the
-    /// level loop.
+    /// GL back-end: iterations issued after the device had stopped the level's chain (it stops by itself when the
+    /// set stops changing): their passes were dispatched with empty arguments and ran nothing. A level issues as
+    /// many iterations as the level in its place ran last time; more when that was not enough (blockingReadBacks).
+    std::size_t idleIterations = 0;
+    /// Of cpuMs, GL back-end: blocked in read-backs, i.e. waiting for the device to finish the work submitted
+    /// before. The rest of cpuMs is issuing commands and the level loop.
     double waitMs = 0.0;
-    /// GL back-end: read-backs that blocked on the device: one per iteration (its counters and the alive set; two
-    /// where the iteration's record build was short and ran again, LevelStats::shortBuilds).
+    /// GL back-end: read-backs that blocked on the device: one per level (its counters, the chain of iterations and
+    /// the alive set), and one more for each time the chain stopped to have its records built again (a short build,
+    /// LevelStats::shortBuilds; a view that shrank to a quarter) or ran past the iterations issued.
     std::size_t blockingReadBacks = 0;
     /// GPU time of the level's iterations and record builds from timer queries. Only meaningful with
     /// gpuTimingValid; 0 otherwise.

@@ -6,6 +6,7 @@
 #include "gl/GlBuffers.h"
 #include "gl/GpuTimes.h"
 #include "gl/GlProgram.h"
+#include "gl/ViewRecords.h"
 #include "CullerBackends.h"
 #include "VisibilityLevel.h"
 
@@ -53,20 +54,13 @@ enum Buffer {
     kItemPrims,
     kBands,
     kBuild,
+    kViews,
     kBufferCount
 };
 constexpr std::size_t kRecordBytes = 7 * 16;  // PrimRecord in common.glsl
 
-/// Words of the counter buffer for a level of `items` items: counters, dispatch block and a bit per item.
+/// Words of the counter buffer for a level of `items` items: counters, dispatch block, chain and a bit per item.
 std::size_t counterWords(std::size_t items) { return CULLIDE_ALIVE_BITS + (items + 31) / 32; }
-
-/// Inverse of survive.comp's orderedBits.
-float fromOrderedBits(std::uint32_t key) {
-    const std::uint32_t bits = (key & 0x80000000u) != 0 ? (key & 0x7FFFFFFFu) : ~key;
-    float f = 0.0f;
-    std::memcpy(&f, &bits, sizeof f);
-    return f;
-}
 
 }  // namespace
 
@@ -87,45 +81,46 @@ struct VisibilityPass::Impl {
     std::size_t valid[kBufferCount] = {};  ///< bytes of the buffer that hold the last upload (positions, indices)
     GLuint timer = 0;
     std::size_t maxGroups = 65535;  ///< GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]
-    std::vector<std::uint32_t> readScratch;  ///< an iteration's read-back: counters, dispatch block, alive bits
-    std::vector<std::uint32_t> aliveBits;    ///< the alive set after the level's last iteration, a bit per item
+    std::vector<std::uint32_t> readScratch;  ///< a level's read-back: counters, dispatch block, chain, alive bits
     const GpuGeometry* geometry = nullptr;
-    // The level being pruned (beginLevel .. its last iterate).
-    const LevelItems* levelItems = nullptr;
-    std::size_t recordCount = 0;  ///< records of the alive items, in kPrims (after an iteration that followed no build)
-    bool dispatchFromBuild = false;  ///< the dispatch block is the last build's (buildRecords), not yet run over
+    const LevelItems* levelItems = nullptr;  ///< the level being pruned
+    /// Iterations the last level in each place of a frame ran (LevelStart::place): how many a level in that place
+    /// issues before its read-back.
+    std::vector<int> ranBefore;
     /// Records the record buffers (kPrims, kPrimsNext; kRecords on the raster back-end) hold: kept between levels and
     /// frames, grown when a build needs more (the iteration then runs again).
     std::size_t recordCapacity = 0;
-    /// The open timer query's span: from the first pass after the last read-back (a record build's, or an
-    /// iteration's) to the iteration's read-back.
+    /// The open timer query's span: from the first pass after the last read-back to the next read-back.
     bool timing = false;
     Clock::time_point timedSpan;
-    Aabb recordedView;            ///< the view the records' bands were fitted to
     double readBackDelayMs = 0.0;  ///< GlBackendOptions::readBackDelayMs (tests: a slow device's round trip)
 
     Impl(std::unique_ptr<EglContext> c, const Settings& s, const GlBackendOptions& options)
         : ownContext(std::move(c)), context(*ownContext), settings(s), readBackDelayMs(options.readBackDelayMs) {
         context.makeCurrent();
         if (settings.backend == Backend::Compute) {
-            program = linkProgram({compileShader(GL_COMPUTE_SHADER, {"common.glsl", "visit.glsl", "cull.comp"})},
+            program = linkProgram(
+                {compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl", "cull.comp"})},
                                   "the visibility program");
         } else {
             setupProgram = linkProgram(
-                {compileShader(GL_COMPUTE_SHADER, {"common.glsl", "records.glsl", "cull_setup.comp"})},
+                {compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "records.glsl", "cull_setup.comp"})},
                 "the visibility setup program");
-            GLuint vs = compileShader(GL_VERTEX_SHADER, {"common.glsl", "records.glsl", "cull.vert"});
+            GLuint vs = compileShader(GL_VERTEX_SHADER, {"view.glsl", "common.glsl", "records.glsl", "cull.vert"});
             GLuint fs = 0;
             try {
-                fs = compileShader(GL_FRAGMENT_SHADER, {"common.glsl", "visit.glsl", "records.glsl", "cull.frag"});
+                fs = compileShader(GL_FRAGMENT_SHADER,
+                                   {"view.glsl", "common.glsl", "visit.glsl", "records.glsl", "cull.frag"});
             } catch (...) {
                 glDeleteShader(vs);
                 throw;
             }
             program = linkProgram({vs, fs}, "the visibility raster program");
         }
-        surviveProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"survive.comp"})}, "the survivor program");
-        buildProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"build.comp"})}, "the record build program");
+        surviveProgram =
+            linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "survive.comp"})}, "the survivor program");
+        buildProgram =
+            linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "build.comp"})}, "the record build program");
         if (settings.backend == Backend::Compute)
             bands = context.isSoftware() && !options.shortBands ? CULLIDE_BANDS_LONG : CULLIDE_BANDS_SHORT;
         glCreateVertexArrays(1, &vao);
@@ -141,7 +136,8 @@ struct VisibilityPass::Impl {
         GLint limit = 65535;
         glGetIntegeri_v(GL_MAX_COMPUTE_WORK_GROUP_COUNT, 0, &limit);
         maxGroups = static_cast<std::size_t>(std::max(1, limit));
-        reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * CULLIDE_COUNTERS_SIZE);
+        reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * CULLIDE_ALIVE_BITS);
+        reserveBuffer(buffers[kViews], capacity[kViews], sizeof(ViewRecord) * (CULLIDE_MAX_ITERATIONS + 1));
         checkGlError("creating the visibility pass");
         // Every call makes the context current on its own thread: the culler may be used from another thread than
         // the one that made it (the Bullet adapter makes Culling::Auto's culler off the step's thread).
@@ -188,28 +184,32 @@ struct VisibilityPass::Impl {
         stats.draws += 1;
     }
 
-    void setUniforms(std::uint32_t idBits, const View& view) const {
+    void setUniforms(int iteration) const {
         glUniform1i(CULLIDE_LOC_RESOLUTION, settings.resolution);
-        glUniform3fv(CULLIDE_LOC_VIEW_LO, 1, view.lo);
-        glUniform3fv(CULLIDE_LOC_PIXEL_SCALE, 1, view.pixelScale);
-        glUniform3fv(CULLIDE_LOC_DEPTH_SCALE, 1, view.depthScale);
-        glUniform3fv(CULLIDE_LOC_HALF_SIZE, 1, view.halfSize);
-        glUniform3fv(CULLIDE_LOC_DEPTH_PAD, 1, view.depthPad);
-        glUniform1ui(CULLIDE_LOC_ID_BITS, idBits);
+        glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
         glUniform1i(CULLIDE_LOC_CONSERVATIVE, settings.mode == Mode::Reliable ? 1 : 0);
         glUniform1ui(CULLIDE_LOC_AXES, settings.axes);
     }
 
-    /// Sends what the record build and the survivor pass need of the level's items (their primitives and owners)
-    /// and clears their boxes (built by buildRecords) and the alive set (every item alive).
-    void uploadItems(const LevelItems& items, LevelStats& level, Stats& stats) {
+    /// Sends what the record build and the survivor pass need of the level's items (their primitives and owners) and
+    /// the first view; clears their boxes (built by buildRecords) and the chain, and sets the alive set (every item
+    /// alive).
+    void uploadItems(const LevelItems& items, const LevelStart& start, LevelStats& level, Stats& stats) {
         const std::size_t n = items.size();
         const auto send = Clock::now();
         uploadBuffer(buffers[kOwners], capacity[kOwners], items.owner.data(), n * 4);
         uploadBuffer(buffers[kPrimBegin], capacity[kPrimBegin], items.primBegin.data(), items.primBegin.size() * 4);
         uploadBuffer(buffers[kItemPrims], capacity[kItemPrims], items.prims.data(), items.prims.size() * 4);
-        stats.bytesUploaded += (n + items.primBegin.size() + items.prims.size()) * 4;
+        const ViewRecord first = toViewRecord(start.view, start.idBits);
+        glNamedBufferSubData(buffers[kViews], 0, sizeof first, &first);
+        stats.bytesUploaded += (n + items.primBegin.size() + items.prims.size()) * 4 + sizeof first;
         reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * counterWords(n));
+        const GLuint zero = 0, ones = 0xFFFFFFFFu;
+        glClearNamedBufferSubData(buffers[kCounters], GL_R32UI, 4 * CULLIDE_CHAIN_RAN,
+                                  4 * (CULLIDE_ALIVE_BITS - CULLIDE_CHAIN_RAN), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+        glClearNamedBufferSubData(buffers[kCounters], GL_R32UI, 4 * CULLIDE_ALIVE_BITS,
+                                  static_cast<GLsizeiptr>(4 * (counterWords(n) - CULLIDE_ALIVE_BITS)), GL_RED_INTEGER,
+                                  GL_UNSIGNED_INT, &ones);
         reserveBuffer(buffers[kFlags], capacity[kFlags], n * 4);
         reserveBuffer(buffers[kAlive], capacity[kAlive], n * 4);
         reserveBuffer(buffers[kItemBounds], capacity[kItemBounds], n * 24);
@@ -232,7 +232,7 @@ struct VisibilityPass::Impl {
             {CULLIDE_SSBO_COUNTERS, kCounters},     {CULLIDE_SSBO_ALIVE, kAlive},
             {CULLIDE_SSBO_ITEM_BOUNDS, kItemBounds}, {CULLIDE_SSBO_PRIM_BEGIN, kPrimBegin},
             {CULLIDE_SSBO_ITEM_PRIMS, kItemPrims},  {CULLIDE_SSBO_BANDS, kBands},
-            {CULLIDE_SSBO_BUILD, kBuild}};
+            {CULLIDE_SSBO_BUILD, kBuild},           {CULLIDE_SSBO_VIEWS, kViews}};
         for (const auto& [binding, buffer] : bindings)
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffers[buffer]);
     }
@@ -246,17 +246,18 @@ struct VisibilityPass::Impl {
         stats.draws += 1;
     }
 
-    /// Builds the records of the level's alive items for `view` on the device (build.comp; on the compute back-end
-    /// each primitive is split into bands of its largest footprint over the three views; first the items' boxes when
-    /// `withBounds`: at a level's start). Its last work group writes the count and the indirect arguments of the next
-    /// iteration's record-sized passes. Nothing is read back: the iteration's counters bring the count, and a build
-    /// that needed more records than the buffers hold is run again.
-    void buildRecords(const View& view, bool withBounds, LevelStats& level, Stats& stats) {
+    /// Builds the records of the level's alive items for the view of iteration `iteration` on the device
+    /// (build.comp; on the compute back-end each primitive is split into bands of its largest footprint over the three
+    /// views; first the items' boxes when `withBounds`: at a level's start). Its last work group writes the count and
+    /// the indirect arguments of the next iteration's record-sized passes. Nothing is read back: the level's read-back
+    /// brings the count, and a build that needed more records than the buffers hold is run again.
+    void buildRecords(int iteration, bool withBounds, LevelStats& level, Stats& stats) {
         const std::size_t primCount = levelItems->prims.size();
         const std::size_t groups = (primCount + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
         if (groups > kMaxBuildGroups)
             throw BackendError("a level of " + std::to_string(primCount) + " primitives is over the limit of " +
                                std::to_string(kMaxBuildGroups * CULLIDE_COMPUTE_GROUP_SIZE));
+        const auto setUp = Clock::now();
         reserveRecords(primCount);
         reserveBuffer(buffers[kBands], capacity[kBands], primCount * 4);
         reserveBuffer(buffers[kBuild], capacity[kBuild], (CULLIDE_BUILD_GROUPS + groups) * 4);
@@ -269,8 +270,7 @@ struct VisibilityPass::Impl {
                                   GL_UNSIGNED_INT, &zero);
         bindBuffers();
         glUseProgram(buildProgram);
-        glUniform3fv(CULLIDE_LOC_PIXEL_SCALE, 1, view.pixelScale);
-        glUniform3fv(CULLIDE_LOC_HALF_SIZE, 1, view.halfSize);
+        glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
         glUniform1ui(CULLIDE_LOC_ITEM_COUNT, static_cast<GLuint>(levelItems->size()));
         glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(primCount));
         glUniform1i(CULLIDE_LOC_BANDS, bands);
@@ -283,8 +283,8 @@ struct VisibilityPass::Impl {
         if (bands != CULLIDE_BANDS_NONE) buildPass(CULLIDE_BUILD_PASS_FOOTPRINTS, primCount, level, stats);
         buildPass(CULLIDE_BUILD_PASS_APPEND, primCount, level, stats);
         checkGlError("building a level's records");
-        dispatchFromBuild = true;
         level.recordBuilds += 1;
+        level.setupMs += msSince(setUp);
     }
 
     /// Grows the record buffers to hold at least `records` records (and recordCapacity).
@@ -296,38 +296,14 @@ struct VisibilityPass::Impl {
             reserveBuffer(buffers[kRecords], capacity[kRecords], 3 * recordCapacity * kRecordBytes);
     }
 
-    /// After an iteration whose build needed `needed` records (`approx`: the same summed in float) and found the
-    /// buffers short: room for them and a quarter more, within the limit of one build.
+    /// After a build that needed `needed` records (`approx`: the same summed in float) and found the buffers short:
+    /// room for them and a quarter more, within the limit of one build.
     void growRecords(std::uint32_t needed, float approx) {
         if (!(approx <= kMaxRecords))  // also NaN
             throw BackendError("a level needs about " + std::to_string(approx) + " records, over the limit of " +
                                std::to_string(static_cast<std::size_t>(kMaxRecords)));
         const double want = std::max<double>(needed, approx) * 1.25 + 64.0;
         recordCapacity = static_cast<std::size_t>(std::min(want, kMaxRecords));
-    }
-
-    /// The count and indirect arguments of the record-sized passes over `records` records, written by the CPU where
-    /// it knows the count (an iteration after no build); as build.comp's writeDispatch writes them.
-    void writeDispatch(std::size_t records) const {
-        GLuint block[CULLIDE_COUNTERS_SIZE - CULLIDE_DISPATCH_RECORDS] = {};
-        const auto at = [&](int slot) -> GLuint& { return block[slot - CULLIDE_DISPATCH_RECORDS]; };
-        // A grid of at least `count` invocations: work groups along x, as many rows of them along z as needed.
-        const auto grid = [&](int slot, std::size_t count, GLuint layers) {
-            const std::size_t groups = (count + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
-            const std::size_t x = std::min(groups, maxGroups);
-            at(slot) = static_cast<GLuint>(x);
-            at(slot + 1) = layers;
-            at(slot + 2) = static_cast<GLuint>(x == 0 ? 0 : (groups + x - 1) / x);
-        };
-        grid(CULLIDE_DISPATCH_CULL, records, 3);
-        grid(CULLIDE_DISPATCH_SURVIVE, std::max(records, levelItems->size()), 1);
-        at(CULLIDE_DISPATCH_RECORDS) = static_cast<GLuint>(records);
-        at(CULLIDE_DISPATCH_NEEDED) = static_cast<GLuint>(records);
-        const float approx = static_cast<float>(records);
-        std::memcpy(&at(CULLIDE_DISPATCH_NEEDED_APPROX), &approx, sizeof approx);
-        at(CULLIDE_DISPATCH_DRAW) = static_cast<GLuint>(9 * records);
-        at(CULLIDE_DISPATCH_DRAW + 1) = 1;
-        glNamedBufferSubData(buffers[kCounters], 4 * CULLIDE_DISPATCH_RECORDS, sizeof block, block);
     }
 
     void startTiming() {
@@ -337,7 +313,13 @@ struct VisibilityPass::Impl {
         if (timer) glBeginQuery(GL_TIME_ELAPSED, timer);
     }
 
-    /// Binds what every pass reads and writes and clears the images, the flags and the counters.
+    void endTiming() {
+        if (!timing) return;
+        if (timer) glEndQuery(GL_TIME_ELAPSED);
+        timing = false;
+    }
+
+    /// Clears the images, the flags and the counters of one iteration and binds what every pass reads and writes.
     void prepareIteration(std::size_t itemCount) {
         const GLuint empty[2] = {0xFFFFFFFFu, 0u};
         glClearTexImage(images[CULLIDE_IMAGE_NEAR1], 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[0]);
@@ -350,9 +332,6 @@ struct VisibilityPass::Impl {
         counters[CULLIDE_COUNTER_OWNER_MIN] = 0xFFFFFFFFu;
         for (int a = 0; a < 3; ++a) counters[CULLIDE_COUNTER_LO + a] = 0xFFFFFFFFu;
         glNamedBufferSubData(buffers[kCounters], 0, sizeof counters, counters);
-        glClearNamedBufferSubData(buffers[kCounters], GL_R32UI, 4 * CULLIDE_ALIVE_BITS,
-                                  static_cast<GLsizeiptr>(4 * (counterWords(itemCount) - CULLIDE_ALIVE_BITS)),
-                                  GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
         for (GLuint unit = 0; unit < 4; ++unit)
             glBindImageTexture(unit, images[unit], 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32UI);
         bindBuffers();
@@ -365,73 +344,25 @@ struct VisibilityPass::Impl {
         glBindVertexArray(vao);
     }
 
-    /// One iteration on the device: the records first where they were just counted, the three passes over the
-    /// alive items' records, and the survivor pass, which also packs the records of the items still alive; the
-    /// record-sized passes dispatched indirectly. Reads back the counters, the dispatch block and the alive set as
-    /// bits (128 bytes + a bit per item) in one read-back. Where the build before it found the record
-    /// buffers short, the iteration pruned nothing: the buffers grow and the build and the iteration run again.
-    IterationResult runIteration(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) {
-        const std::size_t words = counterWords(levelItems->size());
-        for (int attempt = 0;; ++attempt) {
-            const bool afterBuild = dispatchFromBuild;
-            issueIteration(view, idBits, level, stats);
-            readScratch.resize(words);
-            readBack(buffers[kCounters], 0, 4 * words, readScratch.data(), level, stats);
-            const std::uint32_t* counters = readScratch.data();
-            recordGpuTime(timer ? timerResultMs(timer, msSince(timedSpan)) : -1.0, level, stats);
-            checkGlError("a visibility iteration");
-            const std::size_t ranOver = counters[CULLIDE_DISPATCH_RECORDS];
-            level.primitivesDrawn += 3 * 3 * ranOver;  // three passes over three views
-            if (counters[CULLIDE_DISPATCH_SHORT] != 0) {
-                if (attempt == 2) throw BackendError("the record buffers were short after growing twice");
-                level.shortBuilds += 1;
-                float approx = 0.0f;
-                std::memcpy(&approx, &counters[CULLIDE_DISPATCH_NEEDED_APPROX], sizeof approx);
-                growRecords(counters[CULLIDE_DISPATCH_NEEDED], approx);
-                const auto setUp = Clock::now();
-                buildRecords(view, false, level, stats);  // the items' boxes are built already
-                level.setupMs += msSince(setUp);
-                continue;
-            }
-            if (afterBuild) level.records += counters[CULLIDE_DISPATCH_NEEDED];
-            aliveBits.assign(counters + CULLIDE_ALIVE_BITS, counters + words);
-            recordCount = counters[CULLIDE_COUNTER_RECORDS];
-            std::swap(buffers[kPrims], buffers[kPrimsNext]);
-            std::swap(capacity[kPrims], capacity[kPrimsNext]);
-            IterationResult r;
-            r.overflows = counters[CULLIDE_COUNTER_OVERFLOWS];
-            r.alive = counters[CULLIDE_COUNTER_ALIVE];
-            r.ownerMin = counters[CULLIDE_COUNTER_OWNER_MIN];
-            r.ownerMax = counters[CULLIDE_COUNTER_OWNER_MAX];
-            for (int a = 0; a < 3; ++a) {
-                r.bounds.min[a] = fromOrderedBits(counters[CULLIDE_COUNTER_LO + a]);
-                r.bounds.max[a] = fromOrderedBits(counters[CULLIDE_COUNTER_HI + a]);
-            }
-            return r;
-        }
-    }
-
-    /// Issues one iteration's passes (nothing waits for them) and ends the timed span.
-    void issueIteration(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) {
+    /// Issues iteration `iteration` of the level (nothing waits for it): the three passes over the alive items'
+    /// records and the survivor pass, which packs the records of the items still alive and whose last work group
+    /// ends the iteration on the device (survive.comp: the stop rule, the next view and the next iteration's indirect
+    /// arguments). Where the chain stopped before it, every pass is dispatched with empty arguments: nothing runs.
+    void issueIteration(int iteration, double coordinateBound, LevelStats& level, Stats& stats) {
         const std::size_t itemCount = levelItems->size();
         startTiming();
         prepareIteration(itemCount);
-        if (!dispatchFromBuild) {
-            writeDispatch(recordCount);
-            stats.bytesUploaded += 4 * (CULLIDE_COUNTERS_SIZE - CULLIDE_DISPATCH_RECORDS);
-        }
-        dispatchFromBuild = false;
         if (settings.backend == Backend::Raster) {
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_RECORDS, buffers[kRecords]);
             glUseProgram(setupProgram);
-            setUniforms(idBits, view);
+            setUniforms(iteration);
             glDispatchComputeIndirect(4 * CULLIDE_DISPATCH_CULL);
             glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
             level.draws += 1;
             stats.draws += 1;
         }
         glUseProgram(program);
-        setUniforms(idBits, view);
+        setUniforms(iteration);
         draw(CULLIDE_PASS_NEAREST, level, stats);
         draw(CULLIDE_PASS_SECOND, level, stats);
         draw(CULLIDE_PASS_FLAG, level, stats);
@@ -439,13 +370,20 @@ struct VisibilityPass::Impl {
         glUseProgram(surviveProgram);
         glUniform1ui(CULLIDE_LOC_ITEM_COUNT, static_cast<GLuint>(itemCount));
         glUniform1ui(CULLIDE_LOC_REQUIRED, requiredFlags(settings.axes));
+        glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
+        glUniform1ui(CULLIDE_LOC_MAX_ITERATIONS, static_cast<GLuint>(settings.maxIterations));
+        glUniform1ui(CULLIDE_LOC_MAX_GROUPS, static_cast<GLuint>(maxGroups));
+        glUniform1i(CULLIDE_LOC_RESOLUTION, settings.resolution);
+        glUniform1d(CULLIDE_LOC_MARGIN, settings.margin);
+        glUniform1d(CULLIDE_LOC_COORDINATE_BOUND, coordinateBound);
+        glUniform1d(CULLIDE_LOC_MIN_PRUNE_FRACTION, settings.minPruneFraction);
         glDispatchComputeIndirect(4 * CULLIDE_DISPATCH_SURVIVE);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
         level.draws += 1;
         stats.draws += 1;
-        if (timer) glEndQuery(GL_TIME_ELAPSED);
-        timing = false;
-        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        // The records the survivor pass packed are the next iteration's.
+        std::swap(buffers[kPrims], buffers[kPrimsNext]);
+        std::swap(capacity[kPrims], capacity[kPrimsNext]);
     }
 
     /// Reads `bytes` at `offset` of `buffer` back into `to`: blocks until the device has finished the work submitted
@@ -461,10 +399,108 @@ struct VisibilityPass::Impl {
         stats.bytesReadBack += bytes;
     }
 
-    /// The alive set as 0/1 per item, from the last iteration's read-back (nothing is waited for).
-    void readAlive(std::size_t itemCount, std::vector<std::uint8_t>& alive) const {
-        alive.resize(itemCount);
-        for (std::size_t i = 0; i < itemCount; ++i) alive[i] = (aliveBits[i / 32] >> (i % 32)) & 1u;
+    /// Waits for the iterations issued: one read-back of the counters, the chain and the alive set.
+    void waitForChain(LevelStats& level, Stats& stats) {
+        const std::size_t words = counterWords(levelItems->size());
+        endTiming();
+        readScratch.resize(words);
+        readBack(buffers[kCounters], 0, 4 * words, readScratch.data(), level, stats);
+        recordGpuTime(timer ? timerResultMs(timer, msSince(timedSpan)) : -1.0, level, stats);
+        checkGlError("a level's visibility iterations");
+    }
+
+    /// The level on the device: its records built, then its iterations issued in batches, each batch waited for by
+    /// one read-back. The level issues as many iterations as the last level in its place ran (all that are allowed
+    /// the first time); the device stops the chain itself, so too many cost only empty dispatches, too few a second
+    /// read-back. The chain also stops where the records need building again: for a view that
+    /// shrank to a quarter (built for it, and the chain goes on) or where they did not fit (the buffers grow, and
+    /// the iteration runs again).
+    void runLevel(const LevelItems& items, const LevelStart& start, std::vector<std::uint8_t>& survivors,
+                  LevelStats& level, Stats& stats, std::vector<IterationTrace>* trace) {
+        endTiming();  // a level abandoned by an error
+        levelItems = &items;
+        const auto send = Clock::now();
+        uploadItems(items, start, level, stats);
+        level.setupMs += msSince(send);
+        buildRecords(0, true, level, stats);
+        const int maxIterations = settings.maxIterations;
+        const std::size_t place = start.place;
+        int target = place < ranBefore.size() ? ranBefore[place] : maxIterations;  // iterations to issue in all
+        int next = 0;  // the next iteration to issue
+        bool built = true;
+        int shortBuilds = 0;
+        int ran = 0;
+        std::uint32_t stop = CULLIDE_STOP_DONE;
+        for (;;) {
+            const int issued = std::min(maxIterations, std::max(target, next + 1));
+            for (int i = next; i < issued; ++i) issueIteration(i, start.coordinateBound, level, stats);
+            waitForChain(level, stats);
+            const std::uint32_t* counters = readScratch.data();
+            ran = static_cast<int>(counters[CULLIDE_CHAIN_RAN]);
+            stop = counters[CULLIDE_CHAIN_STOP];
+            if (ran <= next || ran > issued) throw BackendError("the device's chain of iterations did not run");
+            level.idleIterations += static_cast<std::size_t>(issued - ran);
+            if (counters[CULLIDE_DISPATCH_SHORT] != 0) {  // iteration ran - 1 pruned nothing: build again, rerun it
+                if (++shortBuilds > 2) throw BackendError("the record buffers were short after growing twice");
+                level.shortBuilds += 1;
+                float approx = 0.0f;
+                std::memcpy(&approx, &counters[CULLIDE_DISPATCH_NEEDED_APPROX], sizeof approx);
+                growRecords(counters[CULLIDE_DISPATCH_NEEDED], approx);
+                next = ran - 1;
+                buildRecords(next, false, level, stats);  // the items' boxes are built already
+                continue;
+            }
+            if (built) level.records += counters[CULLIDE_DISPATCH_NEEDED];
+            built = false;
+            if (stop == CULLIDE_STOP_REFIT) {  // the next view is on the device: records for it, and go on
+                next = ran;
+                buildRecords(next, false, level, stats);
+                built = true;
+                continue;
+            }
+            if (stop == CULLIDE_STOP_NONE && ran < maxIterations) {  // the batch was too short
+                next = ran;
+                target = maxIterations;
+                continue;
+            }
+            break;
+        }
+        if (place >= ranBefore.size()) ranBefore.resize(place + 1, maxIterations);
+        ranBefore[place] = ran;
+        noteIterations(ran, stop, level);
+        readSurvivors(stop, survivors);
+        if (trace) readTrace(ran, *trace);
+    }
+
+    /// The level's iterations into its stats, from the chain's items alive after each.
+    void noteIterations(int ran, std::uint32_t stop, LevelStats& level) const {
+        const std::uint32_t* aliveAfter = readScratch.data() + CULLIDE_CHAIN_ALIVE;
+        std::size_t before = levelItems->size();
+        for (int i = 0; i < ran; ++i) {
+            const bool last = i + 1 == ran;
+            const Step step = !last ? Step::Next : (stop == CULLIDE_STOP_ONE_OWNER ? Step::AllPruned : Step::Stop);
+            noteIteration(level, before, aliveAfter[i], step);
+            before = aliveAfter[i];
+        }
+        level.primitivesDrawn += 3 * 3 * std::size_t{readScratch[CULLIDE_CHAIN_RECORDS_RUN]};  // 3 passes, 3 views
+    }
+
+    /// The alive set as 0/1 per item, from the level's read-back (every item pruned where one owner is left).
+    void readSurvivors(std::uint32_t stop, std::vector<std::uint8_t>& survivors) const {
+        const std::size_t n = levelItems->size();
+        const std::uint32_t* bits = readScratch.data() + CULLIDE_ALIVE_BITS;
+        survivors.resize(n);
+        const bool allPruned = stop == CULLIDE_STOP_ONE_OWNER;
+        for (std::size_t i = 0; i < n; ++i)
+            survivors[i] = allPruned ? 0 : static_cast<std::uint8_t>((bits[i / 32] >> (i % 32)) & 1u);
+    }
+
+    /// The iterations as they ran on the device (tests only: a read-back that no stat counts).
+    void readTrace(int ran, std::vector<IterationTrace>& trace) const {
+        std::vector<ViewRecord> records(static_cast<std::size_t>(ran));
+        glGetNamedBufferSubData(buffers[kViews], 0, static_cast<GLsizeiptr>(records.size() * sizeof(ViewRecord)),
+                                records.data());
+        for (const ViewRecord& r : records) trace.push_back(toTrace(r));
     }
 };
 
@@ -505,50 +541,14 @@ void VisibilityPass::forgetUploads() {
     for (std::size_t& v : s.valid) v = 0;
     for (std::size_t& c : s.capacity) c = 0;
     s.recordCapacity = 0;
+    s.ranBefore.clear();
 }
 
-namespace {
-
-/// The records are rebuilt (bands fitted to the new view) when the view has shrunk to a quarter along some axis:
-/// each pixel band of a record grows with the square of the view's shrinking.
-bool recordsStale(const Aabb& view, const Aabb& recordedView) {
-    const Vec3 now = view.extent(), then = recordedView.extent();
-    for (int a = 0; a < 3; ++a)
-        if (4.0 * now[a] < then[a]) return true;
-    return false;
-}
-
-}  // namespace
-
-void VisibilityPass::beginLevel(const LevelItems& items, const View& view, LevelStats& level, Stats& stats) {
+void VisibilityPass::pruneLevel(const LevelItems& items, const LevelStart& start, std::vector<std::uint8_t>& survivors,
+                                LevelStats& level, Stats& stats, std::vector<IterationTrace>* trace) {
     Impl& s = *m_impl;
     s.context.makeCurrent();
-    if (s.timing) {  // a level abandoned between its build and its first iteration
-        if (s.timer) glEndQuery(GL_TIME_ELAPSED);
-        s.timing = false;
-    }
-    const auto setUp = Clock::now();
-    s.levelItems = &items;
-    s.uploadItems(items, level, stats);
-    s.buildRecords(view, true, level, stats);
-    s.recordedView = view.box;
-    level.setupMs += msSince(setUp);
-}
-
-IterationResult VisibilityPass::iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) {
-    Impl& s = *m_impl;
-    s.context.makeCurrent();
-    if (recordsStale(view.box, s.recordedView)) {
-        const auto setUp = Clock::now();
-        s.buildRecords(view, false, level, stats);
-        s.recordedView = view.box;
-        level.setupMs += msSince(setUp);
-    }
-    return s.runIteration(view, idBits, level, stats);
-}
-
-void VisibilityPass::readAlive(std::vector<std::uint8_t>& alive, LevelStats& /*level*/, Stats& /*stats*/) {
-    m_impl->readAlive(m_impl->levelItems->size(), alive);
+    s.runLevel(items, start, survivors, level, stats, trace);
 }
 
 }  // namespace cullide::gl

@@ -1,7 +1,8 @@
 // The image-space visibility test of CULLIDE on the GPU (OpenGL 4.5 through headless EGL): the PruningBackend that
-// production runs. The iterations' alive set, records and counters stay on the device; the records are built there
-// (build.comp) and the passes over them are dispatched indirectly, so a build is never waited for. The one read-back
-// of an iteration brings its counters and the alive set as bits: nothing else is waited for.
+// production runs. A level runs on the device as a chain: its records are built there (build.comp), the passes over
+// them are dispatched indirectly, and each iteration's last work group decides whether the next one runs, fits its
+// view and writes its arguments (survive.comp). The C++ side issues the level's iterations without waiting and reads
+// back once at the end: the counters, the chain and the alive set as bits.
 #pragma once
 
 #include "CullerBackends.h"
@@ -28,9 +29,8 @@ public:
     std::string renderer() const override;
     std::string device() const override;
 
-    void beginLevel(const LevelItems& items, const View& view, LevelStats& level, Stats& stats) override;
-    IterationResult iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats) override;
-    void readAlive(std::vector<std::uint8_t>& alive, LevelStats& level, Stats& stats) override;
+    void pruneLevel(const LevelItems& items, const LevelStart& start, std::vector<std::uint8_t>& survivors,
+                    LevelStats& level, Stats& stats, std::vector<IterationTrace>* trace) override;
 
 private:
     struct Impl;
