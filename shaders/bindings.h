@@ -26,6 +26,10 @@
 #define CULLIDE_SSBO_VIEWS 15      /* ViewRecord[CULLIDE_MAX_ITERATIONS + 1] (view.glsl): iteration i's view (the first
                                       * written by the C++ side, each next one by survive.comp's last work group) and
                                       * what the iteration left */
+#define CULLIDE_SSBO_PARENT 16     /* uint[parents + 1]: a level whose items inherit the last level's survivors (ordered
+                                      * by parent): items parentBegin[p] .. parentBegin[p + 1] start alive when item p
+                                      * of that level survived it */
+#define CULLIDE_SSBO_PARENT_ALIVE 17 /* uint[last level's itemCount]: that level's alive set (a copy) */
 
 /* Counters, reset before every iteration. */
 #define CULLIDE_COUNTER_OVERFLOWS 0 /* compute invocations that would exceed CULLIDE_MAX_LOOP_ITERATIONS */
@@ -61,11 +65,16 @@
 #define CULLIDE_CHAIN_SURVIVE_DONE 34 /* survive.comp's work groups that have finished (its last one resets it) */
 #define CULLIDE_CHAIN_RECORDS_RUN 35  /* records the level's iterations ran over, summed */
 #define CULLIDE_CHAIN_RECORDED_VIEW 36 /* the view the records were built for (build.comp's APPEND pass) */
+#define CULLIDE_CHAIN_ALIVE_START 37 /* items alive at the level's start (all, or those whose parent survived) */
 #define CULLIDE_CHAIN_ALIVE 48      /* CULLIDE_MAX_ITERATIONS words: items alive after iteration i */
 #define CULLIDE_MAX_ITERATIONS 64   /* Settings::maxIterations at most */
-/* Then the level's alive set, one bit per item (item i: bit i % 32 of word CULLIDE_ALIVE_BITS + i / 32): set by the
- * C++ side at the level's start, cleared by survive.comp as items leave. The level's one read-back brings it all. */
-#define CULLIDE_ALIVE_BITS 112
+/* Then words CULLIDE_DISPATCH_RECORDS .. CULLIDE_AHEAD of the level run before this one without being waited for
+ * (copied there before the read-back: one read-back brings both levels' chains). */
+#define CULLIDE_AHEAD 112
+/* Then the level's alive set, one bit per item (item i: bit i % 32 of word CULLIDE_ALIVE_BITS + i / 32): set at the
+ * level's start (by the C++ side, or by build.comp where items inherit their parents'), cleared by survive.comp as
+ * items leave. The level's one read-back brings it all. */
+#define CULLIDE_ALIVE_BITS 208
 
 /* Why a level's chain of iterations stopped (CULLIDE_CHAIN_STOP). */
 #define CULLIDE_STOP_NONE 0      /* it did not: the next iteration runs */
@@ -116,6 +125,8 @@
 #define CULLIDE_LOC_MARGIN 21       /* double: survive.comp: Settings::margin (the next view's fit) */
 #define CULLIDE_LOC_COORDINATE_BOUND 22 /* double: survive.comp: GpuGeometry::coordinateBound */
 #define CULLIDE_LOC_MIN_PRUNE_FRACTION 23 /* double: survive.comp: Settings::minPruneFraction */
+#define CULLIDE_LOC_PARENTS 24      /* uint: build.comp: items of the last level whose survivors the items inherit (0:
+                                     * they do not) */
 
 #define CULLIDE_BANDS_NONE 0        /* one record per primitive (raster back-end) */
 #define CULLIDE_BANDS_LONG 1        /* bands of CULLIDE_PIXELS_PER_INVOCATION pixels (software renderers) */

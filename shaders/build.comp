@@ -19,7 +19,9 @@ layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
 layout(std430, binding = CULLIDE_SSBO_POSITIONS) readonly buffer Positions { float positions[]; };
 layout(std430, binding = CULLIDE_SSBO_INDICES) readonly buffer Indices { uint indices[]; };
 layout(std430, binding = CULLIDE_SSBO_BOXES) readonly buffer Boxes { float boxes[]; };
-layout(std430, binding = CULLIDE_SSBO_ALIVE) readonly buffer Alive { uint alive[]; };
+layout(std430, binding = CULLIDE_SSBO_ALIVE) buffer Alive { uint alive[]; };
+layout(std430, binding = CULLIDE_SSBO_PARENT) readonly buffer ParentBegin { uint parentBegin[]; };
+layout(std430, binding = CULLIDE_SSBO_PARENT_ALIVE) readonly buffer ParentAlive { uint parentAlive[]; };
 layout(std430, binding = CULLIDE_SSBO_PRIM_BEGIN) readonly buffer PrimBegin { uint primBegin[]; };
 layout(std430, binding = CULLIDE_SSBO_ITEM_PRIMS) readonly buffer ItemPrims { uint itemPrims[]; };
 layout(std430, binding = CULLIDE_SSBO_BANDS) buffer Bands { uint bands[]; };
@@ -37,6 +39,7 @@ layout(location = CULLIDE_LOC_GROUPS) uniform uint u_groups;
 layout(location = CULLIDE_LOC_CAPACITY) uniform uint u_capacity;
 layout(location = CULLIDE_LOC_MAX_GROUPS) uniform uint u_maxGroups;
 layout(location = CULLIDE_LOC_WITH_BOUNDS) uniform int u_withBounds;
+layout(location = CULLIDE_LOC_PARENTS) uniform uint u_parents;
 
 const uint kLanes = uint(CULLIDE_COMPUTE_GROUP_SIZE);
 shared uint s_scan[CULLIDE_COMPUTE_GROUP_SIZE];
@@ -190,12 +193,35 @@ uint itemOf(uint p) {
     return lo;
 }
 
+// An item that inherits its parent's fate (the level's first build, by its first primitive): alive when the parent
+// survived the last level, counted and marked in the alive set (which the C++ side cleared).
+void inheritAlive(uint item, bool live) {
+    alive[item] = live ? 1u : 0u;
+    if (!live) return;
+    atomicOr(counters[CULLIDE_ALIVE_BITS + item / 32u], 1u << (item % 32u));
+    atomicAdd(counters[CULLIDE_CHAIN_ALIVE_START], 1u);
+}
+
+// The item of the last level that item `item` inherits from: the last p with parentBegin[p] <= item.
+uint parentOf(uint item) {
+    uint lo = 0u;
+    uint hi = u_parents;  // parentBegin[lo] <= item < parentBegin[hi]
+    while (hi - lo > 1u) {
+        uint mid = lo + (hi - lo) / 2u;
+        if (parentBegin[mid] <= item) lo = mid; else hi = mid;
+    }
+    return lo;
+}
+
 void main() {
     uint lane = gl_LocalInvocationID.x;
     uint group = u_primBase / kLanes + gl_WorkGroupID.x;
     uint p = u_primBase + gl_GlobalInvocationID.x;
     uint item = p < u_primCount ? itemOf(p) : 0u;
-    bool live = p < u_primCount && alive[item] != 0u;
+    // The level's first build, in its first pass (APPEND reads what it wrote): the items' start.
+    bool inherits = u_withBounds != 0 && u_parents != 0u && u_pass != CULLIDE_BUILD_PASS_APPEND;
+    bool live = p < u_primCount && (inherits ? parentAlive[parentOf(item)] != 0u : alive[item] != 0u);
+    if (inherits && p < u_primCount && p == primBegin[item]) inheritAlive(item, live);
     if (u_pass == CULLIDE_BUILD_PASS_FOOTPRINTS) {
         if (u_withBounds != 0 && p < u_primCount) addToItemBounds(p, item);
         float pixels = live ? footprintOf(primExtent(itemPrims[p])) : 0.0;

@@ -128,7 +128,7 @@ void finishIteration() {
     uint ownerMin = counters[CULLIDE_COUNTER_OWNER_MIN];
     uint ownerMax = counters[CULLIDE_COUNTER_OWNER_MAX];
     uint ranOver = counters[CULLIDE_DISPATCH_RECORDS];
-    uint before = it == 0u ? u_itemCount : counters[CULLIDE_CHAIN_ALIVE + it - 1u];
+    uint before = it == 0u ? counters[CULLIDE_CHAIN_ALIVE_START] : counters[CULLIDE_CHAIN_ALIVE + it - 1u];
     uint stop = CULLIDE_STOP_NONE;
     if (overflows != 0u || counters[CULLIDE_DISPATCH_SHORT] != 0u || left == before || left == 0u)
         stop = CULLIDE_STOP_DONE;

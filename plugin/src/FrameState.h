@@ -26,6 +26,7 @@ struct Group {
 struct FrameTriangle {
     std::uint32_t object;
     std::uint32_t triangle;
+    std::uint32_t group = 0;  ///< collectTriangles: the index of its group in the groups it was given
 };
 
 struct FrameState {

@@ -26,6 +26,7 @@ struct LevelRun {
     std::vector<std::uint8_t>& survivors;  ///< of the last level, per item
     std::vector<std::uint32_t>& ownerId;   ///< per object: its compact owner id in the level being built
     std::vector<FrameTriangle>& triangles;
+    std::size_t& place;  ///< the next level's place in the frame (LevelStart::place)
     std::uint32_t ownerCount = 0;
     bool uploaded = false;  ///< the cluster's geometry is on the device (sent when its first level runs)
 };
@@ -93,14 +94,28 @@ void addTriangleItems(LevelRun& run, const std::vector<FrameTriangle>& triangles
     });
 }
 
-/// Runs the level built since beginLevel; run.survivors says which items survive.
-void prune(LevelRun& run, const char* name) {
+/// Adds the stats of a level about to run.
+LevelStats& addLevel(LevelRun& run, const char* name) {
     if (run.frame.runDeadline.expired()) throw RunAbandoned{};
     if (run.frame.levelsDeadline.expired()) throw LevelsAbandoned{};
     run.stats.levels.push_back(LevelStats{});
-    LevelStats& level = run.stats.levels.back();
-    level.name = name;
-    pruneLevel(run.backend, run.items, run.settings, run.geometry.coordinateBound(), run.survivors, level, run.stats);
+    run.stats.levels.back().name = name;
+    return run.stats.levels.back();
+}
+
+/// Runs the level built since beginLevel; run.survivors says which items survive.
+void prune(LevelRun& run, const char* name) {
+    LevelStats& level = addLevel(run, name);
+    pruneLevel(run.backend, run.items, run.settings, run.geometry.coordinateBound(), run.place++, run.survivors, level,
+               run.stats);
+}
+
+/// Runs the level built since beginLevel with its survivors left on the backend for the next level's items to inherit;
+/// false where it did not reach the backend (run.survivors then says which items survive).
+bool pruneAhead(LevelRun& run, const char* name) {
+    addLevel(run, name);
+    return pruneLevelAhead(run.backend, run.items, run.settings, run.geometry.coordinateBound(), run.place++,
+                           run.survivors, run.stats.levels.size() - 1, run.stats);
 }
 
 std::vector<std::uint32_t> clusterProxies(const LevelRun& run) {
@@ -120,12 +135,24 @@ void keepSurvivors(const std::vector<std::uint8_t>& survivors, std::size_t first
 }
 
 /// The triangles of run.triangles and the proxies (occluders only) as one level; the surviving triangles go to
-/// frame.surviving.
-void runTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
+/// frame.surviving. `inherit`: the last level (groups, then the proxies) stayed on the backend; each triangle starts
+/// alive when its group survived it, each proxy when it did.
+void runTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies, bool inherit) {
     beginLevel(run);
     addTriangleItems(run, run.triangles);
     for (std::uint32_t o : proxies) addObjectBoxItem(run, o);
+    if (inherit) {
+        // The triangles in the order of their groups, then the proxies: a range of children per item of the last
+        // level (its groups, then its proxies).
+        std::vector<std::uint32_t>& begin = run.items.parentBegin;
+        const std::size_t groups = run.cluster.groups.size();
+        begin.assign(groups + proxies.size() + 1, 0);
+        for (const FrameTriangle& t : run.triangles) ++begin[t.group + 1];
+        for (std::size_t j = 0; j < proxies.size(); ++j) begin[groups + j + 1] = 1;
+        for (std::size_t p = 1; p < begin.size(); ++p) begin[p] += begin[p - 1];
+    }
     prune(run, "triangles");
+    run.backend.settle(run.stats);  // a level run ahead that the triangle level did not wait for (no two owners)
     addSurvivingTriangles(run.frame, run.triangles, run.survivors);
 }
 
@@ -145,13 +172,19 @@ void runAutoPipeline(LevelRun& run) {
         for (std::size_t g = 0; g < groups.size(); ++g)
             addBoxItem(run, groups[g].object, run.geometry.groupBox(g), groups[g].box);
         for (std::uint32_t o : proxies) addObjectBoxItem(run, o);
-        prune(run, "groups");
+        if (pruneAhead(run, "groups")) {
+            // The device goes on with the groups while every group's triangles are gathered here: a triangle
+            // starts the next level alive where its group survived.
+            collectTriangles(run.frame, groups, true, run.pool, run.scratch, run.triangles);
+            runTriangleLevel(run, proxies, true);
+            return;
+        }
         keepSurvivors(run.survivors, 0, groups);
         keepSurvivors(run.survivors, run.cluster.groups.size(), proxies);
     }
     collectTriangles(run.frame, groups, true, run.pool, run.scratch, run.triangles);
     if (run.triangles.size() > run.settings.exactThreshold)
-        runTriangleLevel(run, proxies);
+        runTriangleLevel(run, proxies, false);
     else
         addSurvivingTriangles(run.frame, run.triangles, {});
 }
@@ -192,7 +225,7 @@ void runPaperPipeline(LevelRun& run) {
     keepSurvivors(run.survivors, 0, groups);
     keepSurvivors(run.survivors, groupItems, proxies);
     collectTriangles(run.frame, groups, false, run.pool, run.scratch, run.triangles);
-    runTriangleLevel(run, proxies);
+    runTriangleLevel(run, proxies, false);
 }
 
 bool rasterisable(const FrameState& frame, const Cluster& cluster) {
@@ -207,6 +240,7 @@ void LevelPipelines::run(FrameState& frame, const Settings& settings, PruningBac
                          TriangleScratch& scratch, Stats& stats) {
     const std::vector<std::vector<std::uint32_t>> clusters = clustersOf(frame.active, frame.pairs, frame.valid);
     stats.clusters += clusters.size();
+    std::size_t place = 0;  // the frame's levels so far
     std::vector<std::uint8_t> member(frame.valid.size(), 0);
     Cluster cluster;
     for (const std::vector<std::uint32_t>& objects : clusters) {
@@ -224,11 +258,23 @@ void LevelPipelines::run(FrameState& frame, const Settings& settings, PruningBac
             continue;
         }
         LevelRun run{frame, cluster, settings, backend, pool, scratch, stats, m_geometry, m_items,
-                     m_survivors, m_ownerId, m_triangles};
-        if (settings.pipeline == Pipeline::Paper)
-            runPaperPipeline(run);
-        else
-            runAutoPipeline(run);
+                     m_survivors, m_ownerId, m_triangles, place};
+        const std::size_t firstPlace = place;
+        const std::size_t firstLevel = stats.levels.size();
+        for (int attempt = 0;; ++attempt) {
+            try {
+                if (settings.pipeline == Pipeline::Paper)
+                    runPaperPipeline(run);
+                else
+                    runAutoPipeline(run);
+                break;
+            } catch (const LevelsRerun&) {  // the backend now waits for the level it ran ahead
+                if (attempt == 1) throw BackendError("a level run ahead stopped early twice");
+                ++stats.levelReruns;  // the frame's totals keep what the first attempt cost; its levels go
+                place = firstPlace;
+                stats.levels.resize(firstLevel);
+            }
+        }
     }
 }
 

@@ -8,6 +8,7 @@
 #include "cullide/Stats.h"
 #include "cullide/Types.h"
 
+#include <algorithm>
 #include <cstddef>
 #include <cstdint>
 #include <stdexcept>
@@ -37,12 +38,23 @@ struct LevelItems {
     std::vector<std::uint32_t> primBegin{0};
     std::vector<std::uint32_t> prims;
     std::vector<Aabb> bounds;  ///< per item, relative to the upload origin, inflated by nothing
+    /// Empty: every item starts the level alive. Otherwise the items parentBegin[p] .. parentBegin[p + 1] are the
+    /// children of item p of the level the backend ran just before (pruneLevelAhead; parentBegin has one entry per
+    /// item of it and one more, the items are ordered by parent), and an item starts alive only when its parent
+    /// survived that level: the survivors never leave the device.
+    std::vector<std::uint32_t> parentBegin;
+    /// The parent of item i (parentBegin non-empty): the last p with parentBegin[p] <= i.
+    std::uint32_t parentOf(std::size_t i) const {
+        const auto after = std::upper_bound(parentBegin.begin(), parentBegin.end(), static_cast<std::uint32_t>(i));
+        return static_cast<std::uint32_t>(after - parentBegin.begin() - 1);
+    }
     std::size_t size() const { return owner.size(); }
     void clear() {
         owner.clear();
         primBegin.assign(1, 0);
         prims.clear();
         bounds.clear();
+        parentBegin.clear();
     }
 };
 
@@ -85,6 +97,11 @@ struct LevelStart {
     std::size_t place = 0;
 };
 
+/// Thrown by pruneLevel where the level run ahead before it (pruneLevelAhead) stopped early on the device (its records
+/// needed building again, or it needed more iterations than were issued): both levels run again, the first one
+/// waited for (Stats::levelReruns). Nothing of the frame is lost.
+struct LevelsRerun {};
+
 /// A backend failure in the middle of a frame (a GL error). The culler finishes that frame without pruning: every
 /// triangle the CPU pre-pass keeps goes to the exact stage, so no contact is lost.
 class BackendError : public std::runtime_error {
@@ -117,6 +134,14 @@ public:
     /// receives every iteration run, in order (tests: the GL back-end reads it back off the books).
     virtual void pruneLevel(const LevelItems& items, const LevelStart& start, std::vector<std::uint8_t>& survivors,
                             LevelStats& level, Stats& stats, std::vector<IterationTrace>* trace) = 0;
+    /// Runs a level as pruneLevel does, whose survivors stay with the backend for the next level's items to inherit
+    /// (LevelItems::parent). The GL back-end issues it and returns at once, unless the level in its place stopped
+    /// early last time (then it waits, as pruneLevel): its stats (stats.levels[levelIndex]) and trace are complete
+    /// once the next level has been waited for (pruneLevel, which may throw LevelsRerun) or settle().
+    virtual void pruneLevelAhead(const LevelItems& items, const LevelStart& start, std::size_t levelIndex,
+                                 Stats& stats, std::vector<IterationTrace>* trace) = 0;
+    /// Waits for a level run ahead that no level followed, and completes its stats.
+    virtual void settle(Stats& stats) = 0;
 };
 
 }  // namespace cullide

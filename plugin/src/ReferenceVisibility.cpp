@@ -187,10 +187,16 @@ void ReferenceVisibility::pruneLevel(const LevelItems& items, const LevelStart& 
                                      std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats,
                                      std::vector<IterationTrace>* trace) {
     m_items = &items;
-    m_alive.assign(items.size(), 1);
+    if (items.parentBegin.empty()) {
+        m_alive.assign(items.size(), 1);
+    } else {
+        m_parentAlive.swap(m_alive);
+        m_alive.resize(items.size());
+        for (std::size_t i = 0; i < items.size(); ++i) m_alive[i] = m_parentAlive.at(items.parentOf(i));
+    }
     View view = start.view;
     std::uint32_t idBits = start.idBits;
-    std::size_t alive = items.size();
+    std::size_t alive = static_cast<std::size_t>(std::count(m_alive.begin(), m_alive.end(), 1));
     for (int iteration = 0;; ++iteration) {
         const IterationResult r = iterate(view, idBits, level, stats);
         if (trace) trace->push_back({view, idBits, r});
@@ -203,6 +209,12 @@ void ReferenceVisibility::pruneLevel(const LevelItems& items, const LevelStart& 
         idBits = idBitsFor(r.ownerMax);
     }
     survivors = m_alive;
+}
+
+void ReferenceVisibility::pruneLevelAhead(const LevelItems& items, const LevelStart& start, std::size_t levelIndex,
+                                          Stats& stats, std::vector<IterationTrace>* trace) {
+    std::vector<std::uint8_t> survivors;
+    pruneLevel(items, start, survivors, stats.levels.at(levelIndex), stats, trace);
 }
 
 IterationResult ReferenceVisibility::iterate(const View& view, std::uint32_t idBits, LevelStats& level,

@@ -29,6 +29,10 @@ public:
     /// The level's loop of iterations on the CPU: the reference of the GL back-end's chain on the device.
     void pruneLevel(const LevelItems& items, const LevelStart& start, std::vector<std::uint8_t>& survivors,
                     LevelStats& level, Stats& stats, std::vector<IterationTrace>* trace) override;
+    /// pruneLevel at once: nothing is left to wait for.
+    void pruneLevelAhead(const LevelItems& items, const LevelStart& start, std::size_t levelIndex, Stats& stats,
+                         std::vector<IterationTrace>* trace) override;
+    void settle(Stats&) override {}
 
 private:
     /// One iteration: both views along every enabled axis over the alive items; an item stays alive when it is not
@@ -38,7 +42,8 @@ private:
     Settings m_settings;
     const GpuGeometry* m_geometry = nullptr;
     const LevelItems* m_items = nullptr;
-    std::vector<std::uint8_t> m_alive;
+    std::vector<std::uint8_t> m_alive;        ///< of the level being run; after it, of the last level
+    std::vector<std::uint8_t> m_parentAlive;  ///< the last level's, while a level inherits it
     std::vector<std::uint32_t> m_flags;
     std::vector<std::uint32_t> m_near1, m_far1, m_near2, m_far2;  ///< one view's images
 };

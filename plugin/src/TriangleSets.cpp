@@ -109,7 +109,7 @@ void collectTriangles(const FrameState& frame, const std::vector<Group>& groups,
                 for (std::uint32_t k = g.first; k < g.first + g.count; ++k) {
                     const std::uint32_t t = (*frame.order[g.object])[k];
                     if (test && !frame.overlapsPartner(g.object, boxes[t])) continue;
-                    kept.push_back({g.object, t});
+                    kept.push_back({g.object, t, static_cast<std::uint32_t>(i)});
                 }
             }
             assignKeeping(scratch.taskTriangles[task], kept.begin(), kept.end());

@@ -102,29 +102,52 @@ void noteIteration(LevelStats& level, std::size_t aliveBefore, std::size_t alive
     if (step == Step::AllPruned) level.itemsPerIteration.push_back(0);
 }
 
-void pruneLevel(PruningBackend& backend, const LevelItems& items, const Settings& settings, double coordinateBound,
-                std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats) {
-    const Timer timer;
+namespace {
+
+/// What the backend needs to run a level; false (survivors set, stats noted) where the level ends at once: no items,
+/// one owner (nothing to collide with: all pruned), or owner ids over 16 bits (no pruning, conservative).
+bool startLevel(const LevelItems& items, const Settings& settings, double coordinateBound, std::size_t place,
+                std::vector<std::uint8_t>& survivors, LevelStats& level, LevelStart& start) {
     const std::size_t n = items.size();
     assignKeeping(survivors, n, std::uint8_t{1});
-    if (n == 0) return;
+    if (n == 0) return false;
     level.itemsPerIteration.push_back(n);
     const std::size_t owners = distinctOwners(items);
-    if (owners == 0) return;  // owner ids need more than 16 bits: no pruning (conservative)
-    if (owners < 2) {         // nothing to collide with
+    if (owners == 0) return false;
+    if (owners < 2) {
         std::fill(survivors.begin(), survivors.end(), 0);
         level.itemsPerIteration.push_back(0);
-        return;
+        return false;
     }
     Aabb bounds;
     for (const Aabb& b : items.bounds) bounds.grow(b);
-    LevelStart start;
     start.view = fitView(bounds, settings, coordinateBound);
     start.idBits = idBitsFor(*std::max_element(items.owner.begin(), items.owner.end()));
     start.coordinateBound = coordinateBound;
-    start.place = stats.levels.empty() ? 0 : stats.levels.size() - 1;  // `level` is the frame's last
-    backend.pruneLevel(items, start, survivors, level, stats, nullptr);
+    start.place = place;
+    return true;
+}
+
+}  // namespace
+
+void pruneLevel(PruningBackend& backend, const LevelItems& items, const Settings& settings, double coordinateBound,
+                std::size_t place, std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats) {
+    const Timer timer;
+    LevelStart start;
+    if (startLevel(items, settings, coordinateBound, place, survivors, level, start))
+        backend.pruneLevel(items, start, survivors, level, stats, nullptr);
     level.cpuMs += timer.ms();
+}
+
+bool pruneLevelAhead(PruningBackend& backend, const LevelItems& items, const Settings& settings,
+                     double coordinateBound, std::size_t place, std::vector<std::uint8_t>& survivors,
+                     std::size_t levelIndex, Stats& stats) {
+    const Timer timer;
+    LevelStart start;
+    const bool ahead = startLevel(items, settings, coordinateBound, place, survivors, stats.levels[levelIndex], start);
+    if (ahead) backend.pruneLevelAhead(items, start, levelIndex, stats, nullptr);
+    stats.levels[levelIndex].cpuMs += timer.ms();
+    return ahead;
 }
 
 }  // namespace cullide

@@ -56,8 +56,16 @@ void noteIteration(LevelStats& level, std::size_t aliveBefore, std::size_t alive
 /// Runs one level on `backend`: survivors[i] is 1 when item i may intersect an item of another owner. At most
 /// Settings::maxIterations iterations, each fitted to the items still alive, until stepAfter says stop
 /// (PruningBackend::pruneLevel); a level without two owners ends at once. `coordinateBound`:
-/// GpuGeometry::coordinateBound of the upload the items refer to.
+/// GpuGeometry::coordinateBound of the upload the items refer to; `place`: the level's place in the frame.
 void pruneLevel(PruningBackend& backend, const LevelItems& items, const Settings& settings, double coordinateBound,
-                std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats);
+                std::size_t place, std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats);
+
+/// pruneLevel with the survivors left on the backend for the next level's items to inherit
+/// (PruningBackend::pruneLevelAhead; the level's stats are stats.levels[levelIndex]). Returns false where the level
+/// did not reach the backend (no two owners): `survivors` then says which items survive, and the next level cannot
+/// inherit them.
+bool pruneLevelAhead(PruningBackend& backend, const LevelItems& items, const Settings& settings,
+                     double coordinateBound, std::size_t place, std::vector<std::uint8_t>& survivors,
+                     std::size_t levelIndex, Stats& stats);
 
 }  // namespace cullide

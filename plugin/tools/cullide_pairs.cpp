@@ -170,6 +170,7 @@ nlohmann::ordered_json statsToJson(const cullide::Stats& s) {
     j["prepass_groups_out"] = s.prepassGroupsOut;
     j["clusters"] = s.clusters;
     j["unrasterised_clusters"] = s.unrasterisedClusters;
+    j["level_reruns"] = s.levelReruns;
     nlohmann::ordered_json levels = nlohmann::ordered_json::array();
     for (const cullide::LevelStats& l : s.levels) {
         nlohmann::ordered_json lj;

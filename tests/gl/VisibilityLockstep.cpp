@@ -34,17 +34,55 @@ public:
                     LevelStats& level, Stats& stats, std::vector<IterationTrace>* trace) override {
         m_got.clear();
         m_expected.clear();
-        m_tested->pruneLevel(items, start, survivors, level, stats, &m_got);
         m_reference->pruneLevel(items, start, m_expectedAlive, m_scratchLevel, m_scratch, &m_expected);
+        try {
+            m_tested->pruneLevel(items, start, survivors, level, stats, &m_got);
+        } catch (const LevelsRerun&) {
+            m_aheadPending = false;  // both levels run again
+            throw;
+        }
+        compareAhead();
         ++m_log->levels;
-        compare(items.size(), survivors);
+        compare(items.size(), &survivors);
         if (trace) trace->insert(trace->end(), m_got.begin(), m_got.end());
     }
 
+    /// The tested level's trace is complete once the next level is waited for: compared then (its survivors are
+    /// compared through the next level's, which inherit them).
+    void pruneLevelAhead(const LevelItems& items, const LevelStart& start, std::size_t levelIndex, Stats& stats,
+                         std::vector<IterationTrace>* trace) override {
+        m_aheadGot.clear();
+        m_aheadExpected.clear();
+        m_aheadItems = items.size();
+        m_scratch.levels.assign(1, LevelStats{});
+        m_reference->pruneLevelAhead(items, start, 0, m_scratch, &m_aheadExpected);
+        m_tested->pruneLevelAhead(items, start, levelIndex, stats, &m_aheadGot);
+        m_aheadPending = true;
+        (void)trace;  // the culler asks for none (the tested trace comes with the next level)
+    }
+
+    void settle(Stats& stats) override {
+        m_tested->settle(stats);
+        compareAhead();
+    }
+
 private:
+    void compareAhead() {
+        if (!m_aheadPending) return;
+        m_aheadPending = false;
+        ++m_log->levels;
+        ++m_log->levelsAhead;
+        m_got.swap(m_aheadGot);
+        m_expected.swap(m_aheadExpected);
+        compare(m_aheadItems, nullptr);
+        m_got.swap(m_aheadGot);
+        m_expected.swap(m_aheadExpected);
+    }
+
     /// Iteration by iteration: the view the tested backend used (fitted on the device after the first) and what it
-    /// left, against the reference's; then the alive sets at the level's end, item by item.
-    void compare(std::size_t itemCount, const std::vector<std::uint8_t>& gotAlive) {
+    /// left, against the reference's; then the alive sets at the level's end, item by item (`gotAlive`, where the
+    /// level was waited for).
+    void compare(std::size_t itemCount, const std::vector<std::uint8_t>* gotAliveOrNull) {
         LockstepLog& log = *m_log;
         std::size_t aliveBefore = itemCount;
         const std::size_t iterations = std::max(m_got.size(), m_expected.size());
@@ -70,6 +108,8 @@ private:
                             std::to_string(e.alive));
             aliveBefore = g.alive;
         }
+        if (gotAliveOrNull == nullptr) return;
+        const std::vector<std::uint8_t>& gotAlive = *gotAliveOrNull;
         std::size_t differing = 0;
         std::size_t firstDiffering = gotAlive.size();
         for (std::size_t i = 0; i < gotAlive.size() && i < m_expectedAlive.size(); ++i) {
@@ -123,6 +163,10 @@ private:
     LevelStats m_scratchLevel;
     std::vector<IterationTrace> m_got;
     std::vector<IterationTrace> m_expected;
+    bool m_aheadPending = false;  ///< a level run ahead whose comparison waits for the next level
+    std::size_t m_aheadItems = 0;
+    std::vector<IterationTrace> m_aheadGot;
+    std::vector<IterationTrace> m_aheadExpected;
     std::vector<std::uint8_t> m_expectedAlive;
 };
 

@@ -28,6 +28,9 @@ public:
     std::string device() const override { return "none"; }
     void pruneLevel(const LevelItems&, const LevelStart&, std::vector<std::uint8_t>&, LevelStats&, Stats&,
                     std::vector<IterationTrace>*) override {}  // prunes nothing
+    void pruneLevelAhead(const LevelItems&, const LevelStart&, std::size_t, Stats&,
+                         std::vector<IterationTrace>*) override {}
+    void settle(Stats&) override {}
 };
 
 TEST(ClusterGeometry, StaticMeshesAreSentOnceAndOthersEveryUpload) {

@@ -67,6 +67,11 @@ struct Stats {
     std::size_t clusters = 0;
     /// ... of which too large for float coordinates (extent above 1e30): their triangles went to the exact stage.
     std::size_t unrasterisedClusters = 0;
+    /// GL back-end, Pipeline::Auto: clusters whose two levels ran again because the group level, run ahead without
+    /// waiting, stopped early on the device (its records needed building again, or it needed more iterations than
+    /// the level in its place ran the frame before); the second time it is waited for. The results are the same;
+    /// `levels` lists the second attempt, the frame's totals (draws, bytes, read-backs) both.
+    std::size_t levelReruns = 0;
     std::size_t prepassGroupsIn = 0;   ///< groups of k triangles entering the pre-pass (0 without GPU levels:
     std::size_t prepassGroupsOut = 0;  ///< that path filters triangles directly)
     std::vector<LevelStats> levels;

@@ -55,12 +55,36 @@ enum Buffer {
     kBands,
     kBuild,
     kViews,
+    kParent,
+    kParentAlive,
+    kStash,       ///< a level run ahead: words CULLIDE_DISPATCH_RECORDS .. CULLIDE_AHEAD of its counters
+    kStashViews,  ///< ... and its views (where a trace is asked for)
     kBufferCount
 };
 constexpr std::size_t kRecordBytes = 7 * 16;  // PrimRecord in common.glsl
 
-/// Words of the counter buffer for a level of `items` items: counters, dispatch block, chain and a bit per item.
+/// Words of the counter buffer for a level of `items` items: counters, dispatch block, chain, the chain of a level
+/// run ahead and a bit per item.
 std::size_t counterWords(std::size_t items) { return CULLIDE_ALIVE_BITS + (items + 31) / 32; }
+
+/// The words of a level's chain that a level run ahead keeps (kStash) until the next level's read-back.
+constexpr std::size_t kChainWords = CULLIDE_AHEAD - CULLIDE_DISPATCH_RECORDS;
+
+/// A level's chain as read back: word w of its counter buffer (CULLIDE_DISPATCH_RECORDS <= w < CULLIDE_AHEAD).
+struct Chain {
+    const std::uint32_t* words;  ///< word CULLIDE_DISPATCH_RECORDS
+    std::uint32_t operator[](int w) const { return words[w - CULLIDE_DISPATCH_RECORDS]; }
+    int ran() const { return static_cast<int>((*this)[CULLIDE_CHAIN_RAN]); }
+    std::uint32_t stop() const { return (*this)[CULLIDE_CHAIN_STOP]; }
+};
+
+/// A level run ahead (pruneLevelAhead) whose chain has not been read back yet.
+struct AheadLevel {
+    std::size_t levelIndex = 0;  ///< into Stats::levels
+    std::size_t place = 0;
+    int issued = 0;
+    std::vector<IterationTrace>* trace = nullptr;
+};
 
 }  // namespace
 
@@ -87,6 +111,10 @@ struct VisibilityPass::Impl {
     /// Iterations the last level in each place of a frame ran (LevelStart::place): how many a level in that place
     /// issues before its read-back.
     std::vector<int> ranBefore;
+    /// Places whose level run ahead stopped early: the level there is waited for until it runs as one chain.
+    std::vector<bool> waitAt;
+    std::unique_ptr<AheadLevel> ahead;  ///< a level run ahead, not read back yet
+    std::size_t lastItemCount = 0;       ///< of the last level (what the next level's items may inherit)
     /// Records the record buffers (kPrims, kPrimsNext; kRecords on the raster back-end) hold: kept between levels and
     /// frames, grown when a build needs more (the iteration then runs again).
     std::size_t recordCapacity = 0;
@@ -138,6 +166,7 @@ struct VisibilityPass::Impl {
         maxGroups = static_cast<std::size_t>(std::max(1, limit));
         reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * CULLIDE_ALIVE_BITS);
         reserveBuffer(buffers[kViews], capacity[kViews], sizeof(ViewRecord) * (CULLIDE_MAX_ITERATIONS + 1));
+        for (Buffer b : {kParent, kParentAlive, kStash, kStashViews}) reserveBuffer(buffers[b], capacity[b], 4);
         checkGlError("creating the visibility pass");
         // Every call makes the context current on its own thread: the culler may be used from another thread than
         // the one that made it (the Bullet adapter makes Culling::Auto's culler off the step's thread).
@@ -196,7 +225,16 @@ struct VisibilityPass::Impl {
     /// alive).
     void uploadItems(const LevelItems& items, const LevelStart& start, LevelStats& level, Stats& stats) {
         const std::size_t n = items.size();
+        const bool inherits = !items.parentBegin.empty();
         const auto send = Clock::now();
+        if (inherits) {  // the last level's alive set, before this level's replaces it
+            reserveBuffer(buffers[kParentAlive], capacity[kParentAlive], lastItemCount * 4);
+            glCopyNamedBufferSubData(buffers[kAlive], buffers[kParentAlive], 0, 0,
+                                     static_cast<GLsizeiptr>(lastItemCount * 4));
+            uploadBuffer(buffers[kParent], capacity[kParent], items.parentBegin.data(), items.parentBegin.size() * 4);
+            stats.bytesUploaded += items.parentBegin.size() * 4;
+        }
+        lastItemCount = n;
         uploadBuffer(buffers[kOwners], capacity[kOwners], items.owner.data(), n * 4);
         uploadBuffer(buffers[kPrimBegin], capacity[kPrimBegin], items.primBegin.data(), items.primBegin.size() * 4);
         uploadBuffer(buffers[kItemPrims], capacity[kItemPrims], items.prims.data(), items.prims.size() * 4);
@@ -204,18 +242,21 @@ struct VisibilityPass::Impl {
         glNamedBufferSubData(buffers[kViews], 0, sizeof first, &first);
         stats.bytesUploaded += (n + items.primBegin.size() + items.prims.size()) * 4 + sizeof first;
         reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * counterWords(n));
-        const GLuint zero = 0, ones = 0xFFFFFFFFu;
+        // Every item alive, or (inheriting) none until build.comp's first pass marks those whose parent survived.
+        const GLuint zero = 0, startAlive = inherits ? 0u : static_cast<GLuint>(n);
+        const GLuint aliveWord = inherits ? 0u : 0xFFFFFFFFu, aliveItem = inherits ? 0u : 1u;
         glClearNamedBufferSubData(buffers[kCounters], GL_R32UI, 4 * CULLIDE_CHAIN_RAN,
                                   4 * (CULLIDE_ALIVE_BITS - CULLIDE_CHAIN_RAN), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+        glNamedBufferSubData(buffers[kCounters], 4 * CULLIDE_CHAIN_ALIVE_START, 4, &startAlive);
         glClearNamedBufferSubData(buffers[kCounters], GL_R32UI, 4 * CULLIDE_ALIVE_BITS,
                                   static_cast<GLsizeiptr>(4 * (counterWords(n) - CULLIDE_ALIVE_BITS)), GL_RED_INTEGER,
-                                  GL_UNSIGNED_INT, &ones);
+                                  GL_UNSIGNED_INT, &aliveWord);
         reserveBuffer(buffers[kFlags], capacity[kFlags], n * 4);
         reserveBuffer(buffers[kAlive], capacity[kAlive], n * 4);
         reserveBuffer(buffers[kItemBounds], capacity[kItemBounds], n * 24);
-        const GLuint one = 1, empty[2] = {0xFFFFFFFFu, 0u};
+        const GLuint empty[2] = {0xFFFFFFFFu, 0u};
         glClearNamedBufferSubData(buffers[kAlive], GL_R32UI, 0, static_cast<GLsizeiptr>(n * 4), GL_RED_INTEGER,
-                                  GL_UNSIGNED_INT, &one);
+                                  GL_UNSIGNED_INT, &aliveItem);
         glClearNamedBufferSubData(buffers[kItemBounds], GL_R32UI, 0, static_cast<GLsizeiptr>(n * 12), GL_RED_INTEGER,
                                   GL_UNSIGNED_INT, &empty[0]);
         glClearNamedBufferSubData(buffers[kItemBounds], GL_R32UI, static_cast<GLintptr>(n * 12),
@@ -232,7 +273,8 @@ struct VisibilityPass::Impl {
             {CULLIDE_SSBO_COUNTERS, kCounters},     {CULLIDE_SSBO_ALIVE, kAlive},
             {CULLIDE_SSBO_ITEM_BOUNDS, kItemBounds}, {CULLIDE_SSBO_PRIM_BEGIN, kPrimBegin},
             {CULLIDE_SSBO_ITEM_PRIMS, kItemPrims},  {CULLIDE_SSBO_BANDS, kBands},
-            {CULLIDE_SSBO_BUILD, kBuild},           {CULLIDE_SSBO_VIEWS, kViews}};
+            {CULLIDE_SSBO_BUILD, kBuild},           {CULLIDE_SSBO_VIEWS, kViews},
+            {CULLIDE_SSBO_PARENT, kParent},         {CULLIDE_SSBO_PARENT_ALIVE, kParentAlive}};
         for (const auto& [binding, buffer] : bindings)
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffers[buffer]);
     }
@@ -278,6 +320,8 @@ struct VisibilityPass::Impl {
         glUniform1ui(CULLIDE_LOC_CAPACITY, static_cast<GLuint>(recordCapacity));
         glUniform1ui(CULLIDE_LOC_MAX_GROUPS, static_cast<GLuint>(maxGroups));
         glUniform1i(CULLIDE_LOC_WITH_BOUNDS, withBounds ? 1 : 0);
+        const std::size_t parents = levelItems->parentBegin.empty() ? 0 : levelItems->parentBegin.size() - 1;
+        glUniform1ui(CULLIDE_LOC_PARENTS, static_cast<GLuint>(parents));
         startTiming();
         if (withBounds && bands == CULLIDE_BANDS_NONE) buildPass(CULLIDE_BUILD_PASS_BOUNDS, primCount, level, stats);
         if (bands != CULLIDE_BANDS_NONE) buildPass(CULLIDE_BUILD_PASS_FOOTPRINTS, primCount, level, stats);
@@ -399,90 +443,166 @@ struct VisibilityPass::Impl {
         stats.bytesReadBack += bytes;
     }
 
-    /// Waits for the iterations issued: one read-back of the counters, the chain and the alive set.
+    /// Waits for the iterations issued: one read-back of the counters, the chain (and that of a level run ahead) and
+    /// the alive set.
     void waitForChain(LevelStats& level, Stats& stats) {
         const std::size_t words = counterWords(levelItems->size());
         endTiming();
+        if (ahead)
+            glCopyNamedBufferSubData(buffers[kStash], buffers[kCounters], 0, 4 * CULLIDE_AHEAD, 4 * kChainWords);
         readScratch.resize(words);
         readBack(buffers[kCounters], 0, 4 * words, readScratch.data(), level, stats);
         recordGpuTime(timer ? timerResultMs(timer, msSince(timedSpan)) : -1.0, level, stats);
         checkGlError("a level's visibility iterations");
     }
 
-    /// The level on the device: its records built, then its iterations issued in batches, each batch waited for by
-    /// one read-back. The level issues as many iterations as the last level in its place ran (all that are allowed
-    /// the first time); the device stops the chain itself, so too many cost only empty dispatches, too few a second
-    /// read-back. The chain also stops where the records need building again: for a view that
-    /// shrank to a quarter (built for it, and the chain goes on) or where they did not fit (the buffers grow, and
-    /// the iteration runs again).
-    void runLevel(const LevelItems& items, const LevelStart& start, std::vector<std::uint8_t>& survivors,
-                  LevelStats& level, Stats& stats, std::vector<IterationTrace>* trace) {
+    /// Issues the level: its items sent, its records built and the iterations the last level in its place ran (all
+    /// that are allowed the first time). Returns how many were issued.
+    int issueLevel(const LevelItems& items, const LevelStart& start, LevelStats& level, Stats& stats) {
         endTiming();  // a level abandoned by an error
         levelItems = &items;
         const auto send = Clock::now();
         uploadItems(items, start, level, stats);
         level.setupMs += msSince(send);
         buildRecords(0, true, level, stats);
+        const int issued = std::min(settings.maxIterations, std::max(guessFor(start.place), 1));
+        for (int i = 0; i < issued; ++i) issueIteration(i, start.coordinateBound, level, stats);
+        return issued;
+    }
+
+    int guessFor(std::size_t place) const {
+        return place < ranBefore.size() ? ranBefore[place] : settings.maxIterations;
+    }
+
+    void remember(std::size_t place, int ran, bool oneChain) {
+        if (place >= ranBefore.size()) {
+            ranBefore.resize(place + 1, settings.maxIterations);
+            waitAt.resize(place + 1, false);
+        }
+        ranBefore[place] = ran;
+        waitAt[place] = !oneChain;
+    }
+
+    /// The level on the device, waited for: issued (issueLevel), then each chain of its iterations read back once.
+    /// The device stops the chain itself, so iterations issued past its end cost only empty dispatches, too few a
+    /// second read-back. The chain also stops where the records need building again: for a view that shrank to a
+    /// quarter (built for it, and the chain goes on) or where they did not fit (the buffers grow, and the iteration
+    /// runs again). Throws LevelsRerun where the level run ahead before it (its parents) stopped early.
+    void runLevel(const LevelItems& items, const LevelStart& start, std::vector<std::uint8_t>& survivors,
+                  LevelStats& level, Stats& stats, std::vector<IterationTrace>* trace) {
         const int maxIterations = settings.maxIterations;
-        const std::size_t place = start.place;
-        int target = place < ranBefore.size() ? ranBefore[place] : maxIterations;  // iterations to issue in all
-        int next = 0;  // the next iteration to issue
+        int issued = issueLevel(items, start, level, stats);
+        int next = 0;  // the first iteration of the chain being waited for
         bool built = true;
+        bool oneChain = true;
         int shortBuilds = 0;
-        int ran = 0;
-        std::uint32_t stop = CULLIDE_STOP_DONE;
         for (;;) {
-            const int issued = std::min(maxIterations, std::max(target, next + 1));
-            for (int i = next; i < issued; ++i) issueIteration(i, start.coordinateBound, level, stats);
             waitForChain(level, stats);
-            const std::uint32_t* counters = readScratch.data();
-            ran = static_cast<int>(counters[CULLIDE_CHAIN_RAN]);
-            stop = counters[CULLIDE_CHAIN_STOP];
+            if (ahead) finishAhead(stats, true);
+            const Chain chain{readScratch.data() + CULLIDE_DISPATCH_RECORDS};
+            const int ran = chain.ran();
             if (ran <= next || ran > issued) throw BackendError("the device's chain of iterations did not run");
             level.idleIterations += static_cast<std::size_t>(issued - ran);
-            if (counters[CULLIDE_DISPATCH_SHORT] != 0) {  // iteration ran - 1 pruned nothing: build again, rerun it
+            next = ran;
+            if (chain[CULLIDE_DISPATCH_SHORT] != 0) {  // iteration ran - 1 pruned nothing: build again, rerun it
                 if (++shortBuilds > 2) throw BackendError("the record buffers were short after growing twice");
                 level.shortBuilds += 1;
                 float approx = 0.0f;
-                std::memcpy(&approx, &counters[CULLIDE_DISPATCH_NEEDED_APPROX], sizeof approx);
-                growRecords(counters[CULLIDE_DISPATCH_NEEDED], approx);
+                const std::uint32_t approxBits = chain[CULLIDE_DISPATCH_NEEDED_APPROX];
+                std::memcpy(&approx, &approxBits, sizeof approx);
+                growRecords(chain[CULLIDE_DISPATCH_NEEDED], approx);
                 next = ran - 1;
+            } else {
+                if (built) level.records += chain[CULLIDE_DISPATCH_NEEDED];
+                built = false;
+                if (chain.stop() == CULLIDE_STOP_DONE || chain.stop() == CULLIDE_STOP_ONE_OWNER ||
+                    ran == maxIterations)
+                    break;
+            }
+            oneChain = false;
+            // Records for the next view (a refit) or again (short); the chain goes on from `next`: to the end where
+            // the batch was too short.
+            if (chain[CULLIDE_DISPATCH_SHORT] != 0 || chain.stop() == CULLIDE_STOP_REFIT) {
                 buildRecords(next, false, level, stats);  // the items' boxes are built already
-                continue;
-            }
-            if (built) level.records += counters[CULLIDE_DISPATCH_NEEDED];
-            built = false;
-            if (stop == CULLIDE_STOP_REFIT) {  // the next view is on the device: records for it, and go on
-                next = ran;
-                buildRecords(next, false, level, stats);
                 built = true;
-                continue;
             }
-            if (stop == CULLIDE_STOP_NONE && ran < maxIterations) {  // the batch was too short
-                next = ran;
-                target = maxIterations;
-                continue;
-            }
-            break;
+            const int guess = std::max(guessFor(start.place), next + 1);
+            issued = chain.stop() == CULLIDE_STOP_NONE ? maxIterations : std::min(maxIterations, guess);
+            for (int i = next; i < issued; ++i) issueIteration(i, start.coordinateBound, level, stats);
         }
-        if (place >= ranBefore.size()) ranBefore.resize(place + 1, maxIterations);
-        ranBefore[place] = ran;
-        noteIterations(ran, stop, level);
-        readSurvivors(stop, survivors);
-        if (trace) readTrace(ran, *trace);
+        const Chain chain{readScratch.data() + CULLIDE_DISPATCH_RECORDS};
+        remember(start.place, chain.ran(), oneChain);
+        noteIterations(chain, items.size(), level);
+        readSurvivors(chain.stop(), survivors);
+        if (trace) readTrace(buffers[kViews], chain.ran(), *trace);
     }
 
-    /// The level's iterations into its stats, from the chain's items alive after each.
-    void noteIterations(int ran, std::uint32_t stop, LevelStats& level) const {
-        const std::uint32_t* aliveAfter = readScratch.data() + CULLIDE_CHAIN_ALIVE;
-        std::size_t before = levelItems->size();
+    /// A level run ahead: issued, its chain and views kept for the next level's read-back (nothing waits). Where the
+    /// level in its place stopped early last time, it is waited for instead.
+    void runAhead(const LevelItems& items, const LevelStart& start, std::size_t levelIndex, Stats& stats,
+                  std::vector<IterationTrace>* trace) {
+        LevelStats& level = stats.levels[levelIndex];
+        if (start.place < waitAt.size() && waitAt[start.place]) {
+            std::vector<std::uint8_t> survivors;
+            runLevel(items, start, survivors, level, stats, trace);
+            return;
+        }
+        const int issued = issueLevel(items, start, level, stats);
+        reserveBuffer(buffers[kStash], capacity[kStash], 4 * kChainWords);
+        glCopyNamedBufferSubData(buffers[kCounters], buffers[kStash], 4 * CULLIDE_DISPATCH_RECORDS, 0,
+                                 4 * kChainWords);
+        if (trace) {
+            const std::size_t bytes = sizeof(ViewRecord) * static_cast<std::size_t>(issued);
+            reserveBuffer(buffers[kStashViews], capacity[kStashViews], bytes);
+            glCopyNamedBufferSubData(buffers[kViews], buffers[kStashViews], 0, 0, static_cast<GLsizeiptr>(bytes));
+        }
+        endTiming();  // its device time is in the next level's span
+        ahead = std::make_unique<AheadLevel>(AheadLevel{levelIndex, start.place, issued, trace});
+        checkGlError("a level run ahead");
+    }
+
+    /// The level run ahead, from the chain read back with the next level's (`inReadBack`) or on its own: its stats
+    /// and trace. Where it stopped early (records to build again, more iterations needed) it is waited for next time
+    /// and, when a level inherited its survivors, both run again (LevelsRerun).
+    void finishAhead(Stats& stats, bool inReadBack) {
+        const std::unique_ptr<AheadLevel> a = std::move(ahead);
+        std::vector<std::uint32_t> own;
+        const std::uint32_t* words = nullptr;
+        if (inReadBack) {
+            words = readScratch.data() + CULLIDE_AHEAD;
+        } else {
+            own.resize(kChainWords);
+            readBack(buffers[kStash], 0, 4 * kChainWords, own.data(), stats.levels[a->levelIndex], stats);
+            words = own.data();
+        }
+        const Chain chain{words};
+        LevelStats& level = stats.levels[a->levelIndex];
+        const int ran = chain.ran();
+        if (ran < 1 || ran > a->issued) throw BackendError("the device's chain of iterations did not run");
+        const bool early = chain[CULLIDE_DISPATCH_SHORT] != 0 || chain.stop() == CULLIDE_STOP_REFIT ||
+                           (chain.stop() == CULLIDE_STOP_NONE && ran < settings.maxIterations);
+        level.idleIterations += static_cast<std::size_t>(a->issued - ran);
+        if (chain[CULLIDE_DISPATCH_SHORT] != 0) level.shortBuilds += 1;
+        else level.records += chain[CULLIDE_DISPATCH_NEEDED];
+        remember(a->place, early ? settings.maxIterations : ran, !early);
+        noteIterations(chain, std::size_t{chain[CULLIDE_CHAIN_ALIVE_START]}, level);
+        if (a->trace) readTrace(buffers[kStashViews], ran, *a->trace);
+        if (early && inReadBack) throw LevelsRerun{};
+    }
+
+    /// The level's iterations into its stats, from the chain's items alive at its start and after each iteration.
+    static void noteIterations(const Chain& chain, std::size_t aliveAtStart, LevelStats& level) {
+        std::size_t before = aliveAtStart;
+        const int ran = chain.ran();
         for (int i = 0; i < ran; ++i) {
             const bool last = i + 1 == ran;
-            const Step step = !last ? Step::Next : (stop == CULLIDE_STOP_ONE_OWNER ? Step::AllPruned : Step::Stop);
-            noteIteration(level, before, aliveAfter[i], step);
-            before = aliveAfter[i];
+            const std::size_t after = chain[CULLIDE_CHAIN_ALIVE + i];
+            const Step step = !last ? Step::Next
+                                    : (chain.stop() == CULLIDE_STOP_ONE_OWNER ? Step::AllPruned : Step::Stop);
+            noteIteration(level, before, after, step);
+            before = after;
         }
-        level.primitivesDrawn += 3 * 3 * std::size_t{readScratch[CULLIDE_CHAIN_RECORDS_RUN]};  // 3 passes, 3 views
+        level.primitivesDrawn += 3 * 3 * std::size_t{chain[CULLIDE_CHAIN_RECORDS_RUN]};  // 3 passes, 3 views
     }
 
     /// The alive set as 0/1 per item, from the level's read-back (every item pruned where one owner is left).
@@ -496,9 +616,9 @@ struct VisibilityPass::Impl {
     }
 
     /// The iterations as they ran on the device (tests only: a read-back that no stat counts).
-    void readTrace(int ran, std::vector<IterationTrace>& trace) const {
+    static void readTrace(GLuint views, int ran, std::vector<IterationTrace>& trace) {
         std::vector<ViewRecord> records(static_cast<std::size_t>(ran));
-        glGetNamedBufferSubData(buffers[kViews], 0, static_cast<GLsizeiptr>(records.size() * sizeof(ViewRecord)),
+        glGetNamedBufferSubData(views, 0, static_cast<GLsizeiptr>(records.size() * sizeof(ViewRecord)),
                                 records.data());
         for (const ViewRecord& r : records) trace.push_back(toTrace(r));
     }
@@ -524,6 +644,7 @@ void VisibilityPass::upload(const GpuGeometry& geometry, Stats& stats) {
     uploadBuffer(s.buffers[kBoxes], s.capacity[kBoxes], geometry.boxes.data(), geometry.boxes.size() * 4);
     stats.bytesUploaded += geometry.boxes.size() * 4;
     s.geometry = &geometry;
+    s.ahead.reset();  // a cluster starts: a level run ahead before belongs to an abandoned frame
 }
 
 std::size_t VisibilityPass::deviceBytes() const {
@@ -542,6 +663,9 @@ void VisibilityPass::forgetUploads() {
     for (std::size_t& c : s.capacity) c = 0;
     s.recordCapacity = 0;
     s.ranBefore.clear();
+    s.waitAt.clear();
+    s.ahead.reset();
+    s.lastItemCount = 0;
 }
 
 void VisibilityPass::pruneLevel(const LevelItems& items, const LevelStart& start, std::vector<std::uint8_t>& survivors,
@@ -549,6 +673,21 @@ void VisibilityPass::pruneLevel(const LevelItems& items, const LevelStart& start
     Impl& s = *m_impl;
     s.context.makeCurrent();
     s.runLevel(items, start, survivors, level, stats, trace);
+}
+
+void VisibilityPass::pruneLevelAhead(const LevelItems& items, const LevelStart& start, std::size_t levelIndex,
+                                     Stats& stats, std::vector<IterationTrace>* trace) {
+    Impl& s = *m_impl;
+    s.context.makeCurrent();
+    s.ahead.reset();  // one never waited for belongs to an abandoned frame
+    s.runAhead(items, start, levelIndex, stats, trace);
+}
+
+void VisibilityPass::settle(Stats& stats) {
+    Impl& s = *m_impl;
+    if (!s.ahead) return;
+    s.context.makeCurrent();
+    s.finishAhead(stats, false);
 }
 
 }  // namespace cullide::gl

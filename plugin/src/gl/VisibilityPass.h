@@ -31,6 +31,9 @@ public:
 
     void pruneLevel(const LevelItems& items, const LevelStart& start, std::vector<std::uint8_t>& survivors,
                     LevelStats& level, Stats& stats, std::vector<IterationTrace>* trace) override;
+    void pruneLevelAhead(const LevelItems& items, const LevelStart& start, std::size_t levelIndex, Stats& stats,
+                         std::vector<IterationTrace>* trace) override;
+    void settle(Stats& stats) override;
 
 private:
     struct Impl;
