@@ -78,6 +78,8 @@ void RunRecord::write(nlohmann::json& r) const {
     r["bytes_read_back_max"] = m_maxReadBack;
     r["draws_median"] = median(m_draws);
     r["blocking_read_backs_median"] = median(m_readBacks);
+    r["draws_max"] = m_draws.empty() ? 0.0 : *std::max_element(m_draws.begin(), m_draws.end());
+    r["blocking_read_backs_max"] = m_readBacks.empty() ? 0.0 : *std::max_element(m_readBacks.begin(), m_readBacks.end());
     std::vector<double> faults(m_faults.begin(), m_faults.end());
     r["minor_faults_median"] = median(faults);  // per frame or step: memory freshly touched (see frame_minor_faults)
     if (!m_pool[0].empty()) {

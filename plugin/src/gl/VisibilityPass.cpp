@@ -108,11 +108,15 @@ struct VisibilityPass::Impl {
     std::vector<std::uint32_t> readScratch;  ///< a level's read-back: counters, dispatch block, chain, alive bits
     const GpuGeometry* geometry = nullptr;
     const LevelItems* levelItems = nullptr;  ///< the level being pruned
-    /// Iterations the last level in each place of a frame ran (LevelStart::place): how many a level in that place
-    /// issues before its read-back.
-    std::vector<int> ranBefore;
-    /// Places whose level run ahead stopped early: the level there is waited for until it runs as one chain.
-    std::vector<bool> waitAt;
+    /// Per place of a frame (LevelStart::place): how many iterations a level there issues before its read-back, the
+    /// most the levels there ran over the last frames (a level whose count goes up and down then never waits twice:
+    /// the iterations issued past the end of its chain cost empty dispatches, a second read-back a round trip).
+    struct PlaceHistory {
+        int guess = 0;       ///< 0: nothing ran there yet (all that are allowed)
+        int sinceGuess = 0;  ///< levels there since one ran `guess` iterations
+        bool wait = false;   ///< the level run ahead there stopped early: waited for until it runs as one chain
+    };
+    std::vector<PlaceHistory> places;
     std::unique_ptr<AheadLevel> ahead;  ///< a level run ahead, not read back yet
     std::size_t lastItemCount = 0;       ///< of the last level (what the next level's items may inherit)
     /// Records the record buffers (kPrims, kPrimsNext; kRecords on the raster back-end) hold: kept between levels and
@@ -471,16 +475,20 @@ struct VisibilityPass::Impl {
     }
 
     int guessFor(std::size_t place) const {
-        return place < ranBefore.size() ? ranBefore[place] : settings.maxIterations;
+        const int guess = place < places.size() ? places[place].guess : 0;
+        return guess > 0 ? guess : settings.maxIterations;
     }
 
+    /// A level in `place` ran `ran` iterations (`oneChain`: in one chain, read back once).
     void remember(std::size_t place, int ran, bool oneChain) {
-        if (place >= ranBefore.size()) {
-            ranBefore.resize(place + 1, settings.maxIterations);
-            waitAt.resize(place + 1, false);
+        constexpr int kWindow = 16;  // levels over which the most iterations run is kept
+        if (place >= places.size()) places.resize(place + 1);
+        PlaceHistory& h = places[place];
+        if (ran >= h.guess || ++h.sinceGuess > kWindow) {
+            h.guess = ran;
+            h.sinceGuess = 0;
         }
-        ranBefore[place] = ran;
-        waitAt[place] = !oneChain;
+        h.wait = !oneChain;
     }
 
     /// The level on the device, waited for: issued (issueLevel), then each chain of its iterations read back once.
@@ -542,7 +550,7 @@ struct VisibilityPass::Impl {
     void runAhead(const LevelItems& items, const LevelStart& start, std::size_t levelIndex, Stats& stats,
                   std::vector<IterationTrace>* trace) {
         LevelStats& level = stats.levels[levelIndex];
-        if (start.place < waitAt.size() && waitAt[start.place]) {
+        if (start.place < places.size() && places[start.place].wait) {
             std::vector<std::uint8_t> survivors;
             runLevel(items, start, survivors, level, stats, trace);
             return;
@@ -584,7 +592,12 @@ struct VisibilityPass::Impl {
         level.idleIterations += static_cast<std::size_t>(a->issued - ran);
         if (chain[CULLIDE_DISPATCH_SHORT] != 0) level.shortBuilds += 1;
         else level.records += chain[CULLIDE_DISPATCH_NEEDED];
-        remember(a->place, early ? settings.maxIterations : ran, !early);
+        if (early) {  // how many it needs is not known: waited for next time, which finds out
+            if (a->place >= places.size()) places.resize(a->place + 1);
+            places[a->place].wait = true;
+        } else {
+            remember(a->place, ran, true);
+        }
         noteIterations(chain, std::size_t{chain[CULLIDE_CHAIN_ALIVE_START]}, level);
         if (a->trace) readTrace(buffers[kStashViews], ran, *a->trace);
         if (early && inReadBack) throw LevelsRerun{};
@@ -662,8 +675,7 @@ void VisibilityPass::forgetUploads() {
     for (std::size_t& v : s.valid) v = 0;
     for (std::size_t& c : s.capacity) c = 0;
     s.recordCapacity = 0;
-    s.ranBefore.clear();
-    s.waitAt.clear();
+    s.places.clear();
     s.ahead.reset();
     s.lastItemCount = 0;
 }
