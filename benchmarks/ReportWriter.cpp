@@ -601,12 +601,13 @@ void ReportWriter::gpuLevels(const Class& c) {
             "`Auto`: the decision after the last frame and the timed trial frames behind it (whole-frame ms; on a "
             "software renderer `Auto` does not trial and runs the CPU path). GPU levels forced: the levels' wall time (CPU side included: records, uploads, waiting for the flags), "
             "their GPU time from timer queries (– where the driver's timer is absent or implausible) and the "
-            "draws and dispatches and the read-backs that waited for the device per frame (medians); per level, the "
+            "draws and dispatches and the read-backs that waited for the device per frame (medians, and in brackets the "
+            "largest of any frame: the first timed frame, a frame of two clusters); per level, the "
             "last frame's items per iteration and its CPU / GPU ms, and of the CPU ms the set-up (item data and records built and sent; of it, the GL calls "
             "that send them, and the records sent) and the time blocked in read-backs (waiting for the device); the "
             "rest is issuing commands.\n\n| scene | Auto decision | "
             "trial: CPU path ms | trial: GPU levels ms | engine | levels "
-            "wall ms | levels GPU ms | draws / read-backs | per level (last frame): items per iteration, CPU / GPU ms |\n"
+            "wall ms | levels GPU ms | draws / read-backs (max) | per level (last frame): items per iteration, CPU / GPU ms |\n"
             "|---|---|---|---|---|---|---|---|---|\n";
     std::ostringstream rows;
     for (const auto& scene : scenes(c, "side")) {
@@ -626,6 +627,8 @@ void ReportWriter::gpuLevels(const Class& c) {
                 std::string items;
                 for (const auto& n : l.value("items", json::array()))
                     items += (items.empty() ? "" : " → ") + count(n.get<double>());
+                const double idle = l.value("idle_iterations", 0.0);
+                if (idle > 0) items += " (+" + count(idle) + " idle)";
                 levels += (levels.empty() ? "" : "; ") + l.value("name", std::string()) + " " + items + ", " +
                           ms(l.value("cpu_ms", 0.0)) + " / " +
                           (l.contains("gpu_ms") ? ms(l.value("gpu_ms", 0.0)) : std::string("–"));
@@ -640,7 +643,11 @@ void ReportWriter::gpuLevels(const Class& c) {
             rows << "| " << scene << " | " << decision << " | " << cpuTrial << " | " << gpuTrial << " | " << e
                  << " | " << ms(wall) << " | "
                  << (number(*r, "gpu_timer_ms_median") ? ms(*number(*r, "gpu_timer_ms_median")) : "–") << " | "
-                 << optCount(*r, "draws_median") << " / " << optCount(*r, "blocking_read_backs_median") << " | "
+                 << optCount(*r, "draws_median") << " / " << optCount(*r, "blocking_read_backs_median")
+                 << (number(*r, "draws_max") ? " (" + optCount(*r, "draws_max") + " / " +
+                                                   optCount(*r, "blocking_read_backs_max") + ")"
+                                             : std::string())
+                 << " | "
                  << levels << " |\n";
         }
     }
