@@ -603,7 +603,8 @@ void ReportWriter::gpuLevels(const Class& c) {
             "their GPU time from timer queries (– where the driver's timer is absent or implausible) and the "
             "draws and dispatches and the read-backs that waited for the device per frame (medians, and in brackets the "
             "largest of any frame: the first timed frame, a frame of two clusters); per level, the "
-            "last frame's items per iteration and its CPU / GPU ms, and of the CPU ms the set-up (item data and records built and sent; of it, the GL calls "
+            "last frame's items per iteration and its CPU / GPU ms (\"ahead\": a level run ahead, whose GPU time is in the next "
+            "level's), and of the CPU ms the set-up (item data and records built and sent; of it, the GL calls "
             "that send them, and the records sent) and the time blocked in read-backs (waiting for the device); the "
             "rest is issuing commands.\n\n| scene | Auto decision | "
             "trial: CPU path ms | trial: GPU levels ms | engine | levels "
@@ -629,9 +630,11 @@ void ReportWriter::gpuLevels(const Class& c) {
                     items += (items.empty() ? "" : " → ") + count(n.get<double>());
                 const double idle = l.value("idle_iterations", 0.0);
                 if (idle > 0) items += " (+" + count(idle) + " idle)";
+                // A level run ahead (no read-back of its own): its GPU time is in the next level's.
+                const bool ahead = l.value("blocking_read_backs", 0.0) == 0 && l.value("draws", 0.0) > 0;
                 levels += (levels.empty() ? "" : "; ") + l.value("name", std::string()) + " " + items + ", " +
                           ms(l.value("cpu_ms", 0.0)) + " / " +
-                          (l.contains("gpu_ms") ? ms(l.value("gpu_ms", 0.0)) : std::string("–"));
+                          (ahead ? std::string("ahead") : l.contains("gpu_ms") ? ms(l.value("gpu_ms", 0.0)) : "–");
                 // Set-up split into sending (GL calls) and building on the CPU, where the record has it.
                 if (l.contains("setup_ms"))
                     levels += " (set-up " + ms(l.value("setup_ms", 0.0)) +

@@ -41,7 +41,8 @@ struct LevelStats {
     /// LevelStats::shortBuilds; a view that shrank to a quarter) or ran past the iterations issued.
     std::size_t blockingReadBacks = 0;
     /// GPU time of the level's iterations and record builds from timer queries. Only meaningful with
-    /// gpuTimingValid; 0 otherwise.
+    /// gpuTimingValid; 0 otherwise, and 0 for a level run ahead (blockingReadBacks 0): its device time is in the span
+    /// of the level waited for after it, as its wait is in that level's waitMs.
     double gpuMs = 0.0;
     /// true when every iteration of the level was timed by an available, plausible timer-query result (at most
     /// the CPU wall time of the same span): false without timer queries and where a driver reports nonsense
