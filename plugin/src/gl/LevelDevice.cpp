@@ -1,0 +1,375 @@
+#include "gl/LevelDevice.h"
+
+#include "gl/GlBuffers.h"
+#include "gl/GlProgram.h"
+#include "gl/GpuTimes.h"
+#include "gl/ViewRecords.h"
+#include "VisibilityLevel.h"
+
+#include <algorithm>
+#include <cstring>
+#include <initializer_list>
+#include <stdexcept>
+#include <string>
+#include <thread>
+
+namespace cullide::gl {
+namespace {
+
+/// Records of one build beyond which the level gives up (BackendError: that frame prunes nothing): 64 Mi records,
+/// 1 GiB of device memory. A build makes about (primitives + max(CULLIDE_TARGET_INVOCATIONS, footprint pixels /
+/// CULLIDE_PIXELS_PER_INVOCATION)) records on a hardware GPU, primitives + footprint pixels / 4,096 on llvmpipe.
+constexpr double kMaxRecords = 67108864.0;
+
+/// Work groups of primitives (64 each) beyond which a level gives up (BackendError, as above): 16.7 M primitives.
+/// build.comp's single-group passes loop over the work groups, about 13 iterations per 64 of them, and llvmpipe
+/// silently ends a shader's loops after 65,535 iterations.
+constexpr std::size_t kMaxBuildGroups = 262144;
+
+constexpr std::size_t kRecordBytes = 7 * 16;  // PrimRecord in common.glsl
+
+}  // namespace
+
+double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+
+std::size_t counterWords(std::size_t items) { return CULLIDE_ALIVE_BITS + (items + 31) / 32; }
+
+LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const GlBackendOptions& options)
+    : ownContext(std::move(c)), context(*ownContext), settings(s), readBackDelayMs(options.readBackDelayMs) {
+    context.makeCurrent();
+    if (settings.backend == Backend::Compute) {
+        program = linkProgram(
+            {compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl", "cull.comp"})},
+            "the visibility program");
+    } else {
+        setupProgram = linkProgram(
+            {compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "records.glsl", "cull_setup.comp"})},
+            "the visibility setup program");
+        GLuint vs = compileShader(GL_VERTEX_SHADER, {"view.glsl", "common.glsl", "records.glsl", "cull.vert"});
+        GLuint fs = 0;
+        try {
+            fs = compileShader(GL_FRAGMENT_SHADER,
+                               {"view.glsl", "common.glsl", "visit.glsl", "records.glsl", "cull.frag"});
+        } catch (...) {
+            glDeleteShader(vs);
+            throw;
+        }
+        program = linkProgram({vs, fs}, "the visibility raster program");
+    }
+    surviveProgram =
+        linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "survive.comp"})}, "the survivor program");
+    buildProgram =
+        linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "build.comp"})}, "the record build program");
+    if (settings.backend == Backend::Compute)
+        bands = context.isSoftware() && !options.shortBands ? CULLIDE_BANDS_LONG : CULLIDE_BANDS_SHORT;
+    glCreateVertexArrays(1, &vao);
+    glCreateBuffers(kBufferCount, buffers);
+    const GLsizei width = 3 * settings.resolution;
+    const GLsizei height = settings.resolution;
+    glCreateTextures(GL_TEXTURE_2D, 4, images);
+    for (GLuint image : images) glTextureStorage2D(image, 1, GL_R32UI, width, height);
+    glCreateFramebuffers(1, &framebuffer);
+    glNamedFramebufferParameteri(framebuffer, GL_FRAMEBUFFER_DEFAULT_WIDTH, width);
+    glNamedFramebufferParameteri(framebuffer, GL_FRAMEBUFFER_DEFAULT_HEIGHT, height);
+    if (context.hasTimerQueries()) glGenQueries(1, &timer);
+    GLint limit = 65535;
+    glGetIntegeri_v(GL_MAX_COMPUTE_WORK_GROUP_COUNT, 0, &limit);
+    maxGroups = static_cast<std::size_t>(std::max(1, limit));
+    reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * CULLIDE_ALIVE_BITS);
+    reserveBuffer(buffers[kViews], capacity[kViews], sizeof(ViewRecord) * (CULLIDE_MAX_ITERATIONS + 1));
+    for (Buffer b : {kParent, kParentAlive, kStash, kStashViews}) reserveBuffer(buffers[b], capacity[b], 4);
+    checkGlError("creating the visibility pass");
+    // Every call makes the context current on its own thread: the culler may be used from another thread than
+    // the one that made it (the Bullet adapter makes Culling::Auto's culler off the step's thread).
+    context.release();
+}
+
+LevelDevice::~LevelDevice() {
+    if (!context.tryMakeCurrent()) return;  // the context is gone: so are its objects
+    if (timer) glDeleteQueries(1, &timer);
+    glDeleteFramebuffers(1, &framebuffer);
+    glDeleteTextures(4, images);
+    glDeleteBuffers(kBufferCount, buffers);
+    glDeleteVertexArrays(1, &vao);
+    glDeleteProgram(program);
+    if (setupProgram) glDeleteProgram(setupProgram);
+    glDeleteProgram(surviveProgram);
+    glDeleteProgram(buildProgram);
+}
+
+void LevelDevice::dispatchAll(std::size_t count) const {
+    const std::size_t groups = (count + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
+    for (std::size_t first = 0; first < groups; first += maxGroups) {
+        glUniform1ui(CULLIDE_LOC_PRIM_BASE, static_cast<GLuint>(first * CULLIDE_COMPUTE_GROUP_SIZE));
+        glDispatchCompute(static_cast<GLuint>(std::min<std::size_t>(maxGroups, groups - first)), 1, 1);
+    }
+    glUniform1ui(CULLIDE_LOC_PRIM_BASE, 0);
+}
+
+void LevelDevice::draw(int pass, LevelStats& level, Stats& stats) const {
+    glUniform1i(CULLIDE_LOC_PASS, pass);
+    if (settings.backend == Backend::Compute) {
+        glDispatchComputeIndirect(4 * CULLIDE_DISPATCH_CULL);
+    } else {
+        const ThirdPartyLeakScope ignoreMesaDrawLeak;
+        // 3 views x the records, a triangle each
+        const std::uintptr_t offset = 4 * CULLIDE_DISPATCH_DRAW;
+        glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(offset));
+    }
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+    level.draws += 1;
+    stats.draws += 1;
+}
+
+void LevelDevice::setUniforms(int iteration) const {
+    glUniform1i(CULLIDE_LOC_RESOLUTION, settings.resolution);
+    glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
+    glUniform1i(CULLIDE_LOC_CONSERVATIVE, settings.mode == Mode::Reliable ? 1 : 0);
+    glUniform1ui(CULLIDE_LOC_AXES, settings.axes);
+}
+
+void LevelDevice::uploadItems(const LevelItems& items, const LevelStart& start, LevelStats& level, Stats& stats) {
+    const std::size_t n = items.size();
+    const bool inherits = !items.parentBegin.empty();
+    const auto send = Clock::now();
+    if (inherits) {  // the last level's alive set, before this level's replaces it
+        reserveBuffer(buffers[kParentAlive], capacity[kParentAlive], lastItemCount * 4);
+        glCopyNamedBufferSubData(buffers[kAlive], buffers[kParentAlive], 0, 0,
+                                 static_cast<GLsizeiptr>(lastItemCount * 4));
+        uploadBuffer(buffers[kParent], capacity[kParent], items.parentBegin.data(), items.parentBegin.size() * 4);
+        stats.bytesUploaded += items.parentBegin.size() * 4;
+    }
+    lastItemCount = n;
+    uploadBuffer(buffers[kOwners], capacity[kOwners], items.owner.data(), n * 4);
+    uploadBuffer(buffers[kPrimBegin], capacity[kPrimBegin], items.primBegin.data(), items.primBegin.size() * 4);
+    uploadBuffer(buffers[kItemPrims], capacity[kItemPrims], items.prims.data(), items.prims.size() * 4);
+    const ViewRecord first = toViewRecord(start.view, start.idBits);
+    glNamedBufferSubData(buffers[kViews], 0, sizeof first, &first);
+    stats.bytesUploaded += (n + items.primBegin.size() + items.prims.size()) * 4 + sizeof first;
+    reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * counterWords(n));
+    // Every item alive, or (inheriting) none until build.comp's first pass marks those whose parent survived.
+    const GLuint zero = 0, startAlive = inherits ? 0u : static_cast<GLuint>(n);
+    const GLuint aliveWord = inherits ? 0u : 0xFFFFFFFFu, aliveItem = inherits ? 0u : 1u;
+    glClearNamedBufferSubData(buffers[kCounters], GL_R32UI, 4 * CULLIDE_CHAIN_RAN,
+                              4 * (CULLIDE_ALIVE_BITS - CULLIDE_CHAIN_RAN), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    glNamedBufferSubData(buffers[kCounters], 4 * CULLIDE_CHAIN_ALIVE_START, 4, &startAlive);
+    glClearNamedBufferSubData(buffers[kCounters], GL_R32UI, 4 * CULLIDE_ALIVE_BITS,
+                              static_cast<GLsizeiptr>(4 * (counterWords(n) - CULLIDE_ALIVE_BITS)), GL_RED_INTEGER,
+                              GL_UNSIGNED_INT, &aliveWord);
+    reserveBuffer(buffers[kFlags], capacity[kFlags], n * 4);
+    reserveBuffer(buffers[kAlive], capacity[kAlive], n * 4);
+    reserveBuffer(buffers[kItemBounds], capacity[kItemBounds], n * 24);
+    const GLuint empty[2] = {0xFFFFFFFFu, 0u};
+    glClearNamedBufferSubData(buffers[kAlive], GL_R32UI, 0, static_cast<GLsizeiptr>(n * 4), GL_RED_INTEGER,
+                              GL_UNSIGNED_INT, &aliveItem);
+    glClearNamedBufferSubData(buffers[kItemBounds], GL_R32UI, 0, static_cast<GLsizeiptr>(n * 12), GL_RED_INTEGER,
+                              GL_UNSIGNED_INT, &empty[0]);
+    glClearNamedBufferSubData(buffers[kItemBounds], GL_R32UI, static_cast<GLintptr>(n * 12),
+                              static_cast<GLsizeiptr>(n * 12), GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
+    level.setupSendMs += msSince(send);
+}
+
+void LevelDevice::bindBuffers() const {
+    const std::pair<GLuint, Buffer> bindings[] = {
+        {CULLIDE_SSBO_POSITIONS, kPositions},   {CULLIDE_SSBO_INDICES, kIndices},
+        {CULLIDE_SSBO_BOXES, kBoxes},           {CULLIDE_SSBO_PRIMS, kPrims},
+        {CULLIDE_SSBO_ITEM_OWNER, kOwners},     {CULLIDE_SSBO_FLAGS, kFlags},
+        {CULLIDE_SSBO_COUNTERS, kCounters},     {CULLIDE_SSBO_ALIVE, kAlive},
+        {CULLIDE_SSBO_ITEM_BOUNDS, kItemBounds}, {CULLIDE_SSBO_PRIM_BEGIN, kPrimBegin},
+        {CULLIDE_SSBO_ITEM_PRIMS, kItemPrims},  {CULLIDE_SSBO_BANDS, kBands},
+        {CULLIDE_SSBO_BUILD, kBuild},           {CULLIDE_SSBO_VIEWS, kViews},
+        {CULLIDE_SSBO_PARENT, kParent},         {CULLIDE_SSBO_PARENT_ALIVE, kParentAlive}};
+    for (const auto& [binding, buffer] : bindings)
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffers[buffer]);
+}
+
+void LevelDevice::buildPass(int pass, std::size_t invocations, LevelStats& level, Stats& stats) const {
+    glUniform1i(CULLIDE_LOC_PASS, pass);
+    dispatchAll(invocations);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    level.draws += 1;
+    stats.draws += 1;
+}
+
+void LevelDevice::buildRecords(int iteration, bool withBounds, LevelStats& level, Stats& stats) {
+    const std::size_t primCount = levelItems->prims.size();
+    const std::size_t groups = (primCount + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
+    if (groups > kMaxBuildGroups)
+        throw BackendError("a level of " + std::to_string(primCount) + " primitives is over the limit of " +
+                           std::to_string(kMaxBuildGroups * CULLIDE_COMPUTE_GROUP_SIZE));
+    const auto setUp = Clock::now();
+    reserveRecords(primCount);
+    reserveBuffer(buffers[kBands], capacity[kBands], primCount * 4);
+    reserveBuffer(buffers[kBuild], capacity[kBuild], (CULLIDE_BUILD_GROUPS + groups) * 4);
+    // The build's atomic counters start at 0 (the dispatch block is rewritten by the build's last work group).
+    const GLuint zero = 0;
+    glClearNamedBufferSubData(buffers[kCounters], GL_R32UI, 4 * CULLIDE_DISPATCH_NEEDED,
+                              4 * (CULLIDE_COUNTERS_SIZE - CULLIDE_DISPATCH_NEEDED), GL_RED_INTEGER,
+                              GL_UNSIGNED_INT, &zero);
+    glClearNamedBufferSubData(buffers[kBuild], GL_R32UI, 4 * CULLIDE_BUILD_FOOTPRINTS_DONE, 4, GL_RED_INTEGER,
+                              GL_UNSIGNED_INT, &zero);
+    bindBuffers();
+    glUseProgram(buildProgram);
+    glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
+    glUniform1ui(CULLIDE_LOC_ITEM_COUNT, static_cast<GLuint>(levelItems->size()));
+    glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(primCount));
+    glUniform1i(CULLIDE_LOC_BANDS, bands);
+    glUniform1ui(CULLIDE_LOC_GROUPS, static_cast<GLuint>(groups));
+    glUniform1ui(CULLIDE_LOC_CAPACITY, static_cast<GLuint>(recordCapacity));
+    glUniform1ui(CULLIDE_LOC_MAX_GROUPS, static_cast<GLuint>(maxGroups));
+    glUniform1i(CULLIDE_LOC_WITH_BOUNDS, withBounds ? 1 : 0);
+    const std::size_t parents = levelItems->parentBegin.empty() ? 0 : levelItems->parentBegin.size() - 1;
+    glUniform1ui(CULLIDE_LOC_PARENTS, static_cast<GLuint>(parents));
+    startTiming();
+    if (withBounds && bands == CULLIDE_BANDS_NONE) buildPass(CULLIDE_BUILD_PASS_BOUNDS, primCount, level, stats);
+    if (bands != CULLIDE_BANDS_NONE) buildPass(CULLIDE_BUILD_PASS_FOOTPRINTS, primCount, level, stats);
+    buildPass(CULLIDE_BUILD_PASS_APPEND, primCount, level, stats);
+    checkGlError("building a level's records");
+    level.recordBuilds += 1;
+    level.setupMs += msSince(setUp);
+}
+
+void LevelDevice::reserveRecords(std::size_t records) {
+    recordCapacity = std::max<std::size_t>({recordCapacity, records, 64});
+    reserveBuffer(buffers[kPrims], capacity[kPrims], recordCapacity * 16);
+    reserveBuffer(buffers[kPrimsNext], capacity[kPrimsNext], recordCapacity * 16);
+    if (settings.backend == Backend::Raster)
+        reserveBuffer(buffers[kRecords], capacity[kRecords], 3 * recordCapacity * kRecordBytes);
+}
+
+void LevelDevice::growRecords(std::uint32_t needed, float approx) {
+    if (!(approx <= kMaxRecords))  // also NaN
+        throw BackendError("a level needs about " + std::to_string(approx) + " records, over the limit of " +
+                           std::to_string(static_cast<std::size_t>(kMaxRecords)));
+    const double want = std::max<double>(needed, approx) * 1.25 + 64.0;
+    recordCapacity = static_cast<std::size_t>(std::min(want, kMaxRecords));
+}
+
+void LevelDevice::startTiming() {
+    if (timing) return;
+    timing = true;
+    timedSpan = Clock::now();
+    if (timer) glBeginQuery(GL_TIME_ELAPSED, timer);
+}
+
+void LevelDevice::endTiming() {
+    if (!timing) return;
+    if (timer) glEndQuery(GL_TIME_ELAPSED);
+    timing = false;
+}
+
+void LevelDevice::prepareIteration(std::size_t itemCount) {
+    const GLuint empty[2] = {0xFFFFFFFFu, 0u};
+    glClearTexImage(images[CULLIDE_IMAGE_NEAR1], 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[0]);
+    glClearTexImage(images[CULLIDE_IMAGE_NEAR2], 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[0]);
+    glClearTexImage(images[CULLIDE_IMAGE_FAR1], 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
+    glClearTexImage(images[CULLIDE_IMAGE_FAR2], 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
+    glClearNamedBufferSubData(buffers[kFlags], GL_R32UI, 0, static_cast<GLsizeiptr>(itemCount * 4),
+                              GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
+    GLuint counters[CULLIDE_COUNTER_COUNT] = {};
+    counters[CULLIDE_COUNTER_OWNER_MIN] = 0xFFFFFFFFu;
+    for (int a = 0; a < 3; ++a) counters[CULLIDE_COUNTER_LO + a] = 0xFFFFFFFFu;
+    glNamedBufferSubData(buffers[kCounters], 0, sizeof counters, counters);
+    for (GLuint unit = 0; unit < 4; ++unit)
+        glBindImageTexture(unit, images[unit], 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32UI);
+    bindBuffers();
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, buffers[kCounters]);
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, buffers[kCounters]);
+    glBindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+    glViewport(0, 0, 3 * settings.resolution, settings.resolution);
+    glDisable(GL_DEPTH_TEST);
+    glDisable(GL_CULL_FACE);
+    glBindVertexArray(vao);
+}
+
+void LevelDevice::issueIteration(int iteration, double coordinateBound, LevelStats& level, Stats& stats) {
+    const std::size_t itemCount = levelItems->size();
+    startTiming();
+    prepareIteration(itemCount);
+    if (settings.backend == Backend::Raster) {
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_RECORDS, buffers[kRecords]);
+        glUseProgram(setupProgram);
+        setUniforms(iteration);
+        glDispatchComputeIndirect(4 * CULLIDE_DISPATCH_CULL);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        level.draws += 1;
+        stats.draws += 1;
+    }
+    glUseProgram(program);
+    setUniforms(iteration);
+    draw(CULLIDE_PASS_NEAREST, level, stats);
+    draw(CULLIDE_PASS_SECOND, level, stats);
+    draw(CULLIDE_PASS_FLAG, level, stats);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_PRIMS_OUT, buffers[kPrimsNext]);
+    glUseProgram(surviveProgram);
+    glUniform1ui(CULLIDE_LOC_ITEM_COUNT, static_cast<GLuint>(itemCount));
+    glUniform1ui(CULLIDE_LOC_REQUIRED, requiredFlags(settings.axes));
+    glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
+    glUniform1ui(CULLIDE_LOC_MAX_ITERATIONS, static_cast<GLuint>(settings.maxIterations));
+    glUniform1ui(CULLIDE_LOC_MAX_GROUPS, static_cast<GLuint>(maxGroups));
+    glUniform1i(CULLIDE_LOC_RESOLUTION, settings.resolution);
+    glUniform1d(CULLIDE_LOC_MARGIN, settings.margin);
+    glUniform1d(CULLIDE_LOC_COORDINATE_BOUND, coordinateBound);
+    glUniform1d(CULLIDE_LOC_MIN_PRUNE_FRACTION, settings.minPruneFraction);
+    glDispatchComputeIndirect(4 * CULLIDE_DISPATCH_SURVIVE);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    level.draws += 1;
+    stats.draws += 1;
+    // The records the survivor pass packed are the next iteration's.
+    std::swap(buffers[kPrims], buffers[kPrimsNext]);
+    std::swap(capacity[kPrims], capacity[kPrimsNext]);
+}
+
+void LevelDevice::readBack(GLuint buffer, std::size_t offset, std::size_t bytes, void* to, LevelStats& level,
+                           Stats& stats) {
+    const auto waitStart = Clock::now();
+    glGetNamedBufferSubData(buffer, static_cast<GLintptr>(offset), static_cast<GLsizeiptr>(bytes), to);
+    if (readBackDelayMs > 0.0)
+        std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(readBackDelayMs));
+    level.waitMs += msSince(waitStart);
+    level.blockingReadBacks += 1;
+    stats.blockingReadBacks += 1;
+    stats.bytesReadBack += bytes;
+}
+
+void LevelDevice::waitForChain(bool withAhead, LevelStats& level, Stats& stats) {
+    const std::size_t words = counterWords(levelItems->size());
+    endTiming();
+    if (withAhead)
+        glCopyNamedBufferSubData(buffers[kStash], buffers[kCounters], 0, 4 * CULLIDE_AHEAD, 4 * kChainWords);
+    readScratch.resize(words);
+    readBack(buffers[kCounters], 0, 4 * words, readScratch.data(), level, stats);
+    recordGpuTime(timer ? timerResultMs(timer, msSince(timedSpan)) : -1.0, level, stats);
+    checkGlError("a level's visibility iterations");
+}
+
+int LevelDevice::issueLevel(const LevelItems& items, const LevelStart& start, int iterations, LevelStats& level,
+                           Stats& stats) {
+    endTiming();  // a level abandoned by an error
+    levelItems = &items;
+    const auto send = Clock::now();
+    uploadItems(items, start, level, stats);
+    level.setupMs += msSince(send);
+    buildRecords(0, true, level, stats);
+    const int issued = std::min(settings.maxIterations, std::max(iterations, 1));
+    for (int i = 0; i < issued; ++i) issueIteration(i, start.coordinateBound, level, stats);
+    return issued;
+}
+
+void LevelDevice::readSurvivors(std::uint32_t stop, std::vector<std::uint8_t>& survivors) const {
+    const std::size_t n = levelItems->size();
+    const std::uint32_t* bits = readScratch.data() + CULLIDE_ALIVE_BITS;
+    survivors.resize(n);
+    const bool allPruned = stop == CULLIDE_STOP_ONE_OWNER;
+    for (std::size_t i = 0; i < n; ++i)
+        survivors[i] = allPruned ? 0 : static_cast<std::uint8_t>((bits[i / 32] >> (i % 32)) & 1u);
+}
+
+void LevelDevice::readTrace(GLuint views, int ran, std::vector<IterationTrace>& trace) {
+    std::vector<ViewRecord> records(static_cast<std::size_t>(ran));
+    glGetNamedBufferSubData(views, 0, static_cast<GLsizeiptr>(records.size() * sizeof(ViewRecord)),
+                            records.data());
+    for (const ViewRecord& r : records) trace.push_back(toTrace(r));
+}
+
+}  // namespace cullide::gl

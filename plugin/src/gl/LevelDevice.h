@@ -1,0 +1,170 @@
+// The device side of CULLIDE's visibility levels (OpenGL 4.5 through headless EGL): the programs, buffers and images,
+// and the steps a level is made of — its items and first view sent, its records built (build.comp), an iteration
+// issued (three passes and survive.comp, dispatched indirectly: nothing waits), the chain read back. gl::VisibilityPass
+// decides which steps run and when it waits. GL code: only under plugin/src/gl.
+#pragma once
+
+#include "CullerBackends.h"
+#include "PruningBackend.h"
+#include "bindings.h"
+#include "cullide/Settings.h"
+#include "gl/EglContext.h"
+#include "gl/GlApi.h"
+
+#include <chrono>
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace cullide::gl {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t0);
+
+enum Buffer {
+    kPositions,
+    kIndices,
+    kBoxes,
+    kPrims,
+    kPrimsNext,  ///< survive.comp's packed records; swapped with kPrims after every iteration
+    kOwners,
+    kFlags,
+    kRecords,
+    kCounters,
+    kAlive,
+    kItemBounds,
+    kPrimBegin,
+    kItemPrims,
+    kBands,
+    kBuild,
+    kViews,
+    kParent,
+    kParentAlive,
+    kStash,       ///< a level run ahead: words CULLIDE_DISPATCH_RECORDS .. CULLIDE_AHEAD of its counters
+    kStashViews,  ///< ... and its views (where a trace is asked for)
+    kBufferCount
+};
+
+/// Words of the counter buffer for a level of `items` items: counters, dispatch block, chain, the chain of a level
+/// run ahead and a bit per item.
+std::size_t counterWords(std::size_t items);
+
+/// The words of a level's chain that a level run ahead keeps (kStash) until the next level's read-back.
+constexpr std::size_t kChainWords = CULLIDE_AHEAD - CULLIDE_DISPATCH_RECORDS;
+
+/// A level's chain as read back: word w of its counter buffer (CULLIDE_DISPATCH_RECORDS <= w < CULLIDE_AHEAD).
+struct Chain {
+    const std::uint32_t* words;  ///< word CULLIDE_DISPATCH_RECORDS
+    std::uint32_t operator[](int w) const { return words[w - CULLIDE_DISPATCH_RECORDS]; }
+    int ran() const { return static_cast<int>((*this)[CULLIDE_CHAIN_RAN]); }
+    std::uint32_t stop() const { return (*this)[CULLIDE_CHAIN_STOP]; }
+};
+
+/// One GL context's programs and resources for the visibility levels, and the steps a level is made of. Every public
+/// step expects the context current on the calling thread.
+struct LevelDevice {
+    std::unique_ptr<EglContext> ownContext;
+    EglContext& context;
+    Settings settings;
+    GLuint program = 0;
+    GLuint setupProgram = 0;  // raster back-end only
+    GLuint surviveProgram = 0;
+    GLuint buildProgram = 0;
+    int bands = CULLIDE_BANDS_NONE;  ///< build.comp's CULLIDE_BANDS_* for this back-end and device
+    GLuint vao = 0;
+    GLuint framebuffer = 0;
+    GLuint images[4] = {};
+    GLuint buffers[kBufferCount] = {};
+    std::size_t capacity[kBufferCount] = {};
+    std::size_t valid[kBufferCount] = {};  ///< bytes of the buffer that hold the last upload (positions, indices)
+    GLuint timer = 0;
+    std::size_t maxGroups = 65535;  ///< GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]
+    std::vector<std::uint32_t> readScratch;  ///< a level's read-back: counters, dispatch block, chain, alive bits
+    const GpuGeometry* geometry = nullptr;
+    const LevelItems* levelItems = nullptr;  ///< the level being pruned
+    std::size_t lastItemCount = 0;       ///< of the last level (what the next level's items may inherit)
+    /// Records the record buffers (kPrims, kPrimsNext; kRecords on the raster back-end) hold: kept between levels and
+    /// frames, grown when a build needs more (the iteration then runs again).
+    std::size_t recordCapacity = 0;
+    /// The open timer query's span: from the first pass after the last read-back to the next read-back.
+    bool timing = false;
+    Clock::time_point timedSpan;
+    double readBackDelayMs = 0.0;  ///< GlBackendOptions::readBackDelayMs (tests: a slow device's round trip)
+
+    /// Builds the programs of Settings::backend in context `c` (made current, then released).
+    LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const GlBackendOptions& options);
+    ~LevelDevice();
+    LevelDevice(const LevelDevice&) = delete;
+    LevelDevice& operator=(const LevelDevice&) = delete;
+
+    /// `count` invocations in dispatches of at most GL_MAX_COMPUTE_WORK_GROUP_COUNT[0] groups each; the program
+    /// reads its first index from CULLIDE_LOC_PRIM_BASE (build.comp: the passes over records are indirect).
+    void dispatchAll(std::size_t count) const;
+
+    /// One pass over the iteration's records (their count and the arguments are on the device).
+    void draw(int pass, LevelStats& level, Stats& stats) const;
+
+    /// The visibility passes' uniforms for iteration `iteration` (its view is views[iteration] on the device).
+    void setUniforms(int iteration) const;
+
+    /// Sends what the record build and the survivor pass need of the level's items (their primitives and owners, and
+    /// parentBegin where they inherit) and the first view; clears their boxes (built by buildRecords) and the chain,
+    /// and sets the alive set: every item alive, or (inheriting) none until the first build marks those whose parent
+    /// survived (the last level's alive set is copied aside first).
+    void uploadItems(const LevelItems& items, const LevelStart& start, LevelStats& level, Stats& stats);
+
+    /// Binds the shader storage buffers every program reads and writes.
+    void bindBuffers() const;
+
+    /// One pass of build.comp over `invocations` invocations.
+    void buildPass(int pass, std::size_t invocations, LevelStats& level, Stats& stats) const;
+
+    /// Builds the records of the level's alive items for the view of iteration `iteration` on the device
+    /// (build.comp; on the compute back-end each primitive is split into bands of its largest footprint over the three
+    /// views; first the items' boxes when `withBounds`: at a level's start). Its last work group writes the count and
+    /// the indirect arguments of the next iteration's record-sized passes. Nothing is read back: the level's read-back
+    /// brings the count, and a build that needed more records than the buffers hold is run again.
+    void buildRecords(int iteration, bool withBounds, LevelStats& level, Stats& stats);
+
+    /// Grows the record buffers to hold at least `records` records (and recordCapacity).
+    void reserveRecords(std::size_t records);
+
+    /// After a build that needed `needed` records (`approx`: the same summed in float) and found the buffers short:
+    /// room for them and a quarter more, within the limit of one build.
+    void growRecords(std::uint32_t needed, float approx);
+
+    /// Opens the timer query's span (unless open) / closes it: one span from the first pass after a read-back to the
+    /// next read-back.
+    void startTiming();
+    void endTiming();
+
+    /// Clears the images, the flags and the counters of one iteration and binds what every pass reads and writes.
+    void prepareIteration(std::size_t itemCount);
+
+    /// Issues iteration `iteration` of the level (nothing waits for it): the three passes over the alive items'
+    /// records and the survivor pass, which packs the records of the items still alive and whose last work group
+    /// ends the iteration on the device (survive.comp: the stop rule, the next view and the next iteration's indirect
+    /// arguments). Where the chain stopped before it, every pass is dispatched with empty arguments: nothing runs.
+    void issueIteration(int iteration, double coordinateBound, LevelStats& level, Stats& stats);
+
+    /// Reads `bytes` at `offset` of `buffer` back into `to`: blocks until the device has finished the work submitted
+    /// before, which the level's waitMs counts (with the tests' readBackDelayMs inside it).
+    void readBack(GLuint buffer, std::size_t offset, std::size_t bytes, void* to, LevelStats& level, Stats& stats);
+
+    /// Waits for the iterations issued: one read-back of the counters, the chain (and that of a level run ahead) and
+    /// the alive set.
+    void waitForChain(bool withAhead, LevelStats& level, Stats& stats);
+
+    /// Issues the level: its items sent, its records built and `iterations` iterations (at least 1, at most
+    /// Settings::maxIterations). Returns how many were issued.
+    int issueLevel(const LevelItems& items, const LevelStart& start, int iterations, LevelStats& level, Stats& stats);
+
+    /// The alive set as 0/1 per item, from the level's read-back (every item pruned where one owner is left).
+    void readSurvivors(std::uint32_t stop, std::vector<std::uint8_t>& survivors) const;
+
+    /// The iterations as they ran on the device (tests only: a read-back that no stat counts).
+    static void readTrace(GLuint views, int ran, std::vector<IterationTrace>& trace);
+};
+
+}  // namespace cullide::gl
