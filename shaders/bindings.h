@@ -30,6 +30,8 @@
                                       * by parent): items parentBegin[p] .. parentBegin[p + 1] start alive when item p
                                       * of that level survived it */
 #define CULLIDE_SSBO_PARENT_ALIVE 17 /* uint[last level's itemCount]: that level's alive set (a copy) */
+#define CULLIDE_SSBO_PARENT_OWNER 18 /* uint[last level's itemCount]: that level's owners (a copy), where the items'
+                                      * owners are their parents' (CULLIDE_LOC_INHERIT_OWNERS) */
 
 /* Counters, reset before every iteration. */
 #define CULLIDE_COUNTER_OVERFLOWS 0 /* compute invocations that would exceed CULLIDE_MAX_LOOP_ITERATIONS */
@@ -127,6 +129,9 @@
 #define CULLIDE_LOC_MIN_PRUNE_FRACTION 23 /* double: survive.comp: Settings::minPruneFraction */
 #define CULLIDE_LOC_PARENTS 24      /* uint: build.comp: items of the last level whose survivors the items inherit (0:
                                      * they do not) */
+#define CULLIDE_LOC_ONE_PRIM_EACH 25 /* int: build.comp: 1 = item i is primitive i (CULLIDE_SSBO_PRIM_BEGIN not sent) */
+#define CULLIDE_LOC_INHERIT_OWNERS 26 /* int: build.comp: 1 = the items' owners are their parents' (not sent: the
+                                       * first build writes them) */
 
 #define CULLIDE_BANDS_NONE 0        /* one record per primitive (raster back-end) */
 #define CULLIDE_BANDS_LONG 1        /* bands of CULLIDE_PIXELS_PER_INVOCATION pixels (software renderers) */

@@ -22,6 +22,8 @@ layout(std430, binding = CULLIDE_SSBO_BOXES) readonly buffer Boxes { float boxes
 layout(std430, binding = CULLIDE_SSBO_ALIVE) buffer Alive { uint alive[]; };
 layout(std430, binding = CULLIDE_SSBO_PARENT) readonly buffer ParentBegin { uint parentBegin[]; };
 layout(std430, binding = CULLIDE_SSBO_PARENT_ALIVE) readonly buffer ParentAlive { uint parentAlive[]; };
+layout(std430, binding = CULLIDE_SSBO_PARENT_OWNER) readonly buffer ParentOwners { uint parentOwners[]; };
+layout(std430, binding = CULLIDE_SSBO_ITEM_OWNER) writeonly buffer Owners { uint owners[]; };
 layout(std430, binding = CULLIDE_SSBO_PRIM_BEGIN) readonly buffer PrimBegin { uint primBegin[]; };
 layout(std430, binding = CULLIDE_SSBO_ITEM_PRIMS) readonly buffer ItemPrims { uint itemPrims[]; };
 layout(std430, binding = CULLIDE_SSBO_BANDS) buffer Bands { uint bands[]; };
@@ -40,6 +42,8 @@ layout(location = CULLIDE_LOC_CAPACITY) uniform uint u_capacity;
 layout(location = CULLIDE_LOC_MAX_GROUPS) uniform uint u_maxGroups;
 layout(location = CULLIDE_LOC_WITH_BOUNDS) uniform int u_withBounds;
 layout(location = CULLIDE_LOC_PARENTS) uniform uint u_parents;
+layout(location = CULLIDE_LOC_ONE_PRIM_EACH) uniform int u_onePrimEach;
+layout(location = CULLIDE_LOC_INHERIT_OWNERS) uniform int u_inheritOwners;
 
 const uint kLanes = uint(CULLIDE_COMPUTE_GROUP_SIZE);
 shared uint s_scan[CULLIDE_COMPUTE_GROUP_SIZE];
@@ -184,6 +188,7 @@ void addToItemBounds(uint p, uint item) {
 
 // The item primitive p belongs to: the last i with primBegin[i] <= p (binary search over the items).
 uint itemOf(uint p) {
+    if (u_onePrimEach != 0) return p;
     uint lo = 0u;
     uint hi = u_itemCount;  // primBegin[lo] <= p < primBegin[hi]
     while (hi - lo > 1u) {
@@ -191,15 +196,6 @@ uint itemOf(uint p) {
         if (primBegin[mid] <= p) lo = mid; else hi = mid;
     }
     return lo;
-}
-
-// An item that inherits its parent's fate (the level's first build, by its first primitive): alive when the parent
-// survived the last level, counted and marked in the alive set (which the C++ side cleared).
-void inheritAlive(uint item, bool live) {
-    alive[item] = live ? 1u : 0u;
-    if (!live) return;
-    atomicOr(counters[CULLIDE_ALIVE_BITS + item / 32u], 1u << (item % 32u));
-    atomicAdd(counters[CULLIDE_CHAIN_ALIVE_START], 1u);
 }
 
 // The item of the last level that item `item` inherits from: the last p with parentBegin[p] <= item.
@@ -213,6 +209,17 @@ uint parentOf(uint item) {
     return lo;
 }
 
+// An item that inherits from its parent (the level's first build, by its first primitive): its owner where it is the
+// parent's, and its fate: alive when the parent survived the last level, counted and marked in the alive set (which
+// the C++ side cleared).
+void inherit(uint item, bool live) {
+    if (u_inheritOwners != 0) owners[item] = parentOwners[parentOf(item)];
+    alive[item] = live ? 1u : 0u;
+    if (!live) return;
+    atomicOr(counters[CULLIDE_ALIVE_BITS + item / 32u], 1u << (item % 32u));
+    atomicAdd(counters[CULLIDE_CHAIN_ALIVE_START], 1u);
+}
+
 void main() {
     uint lane = gl_LocalInvocationID.x;
     uint group = u_primBase / kLanes + gl_WorkGroupID.x;
@@ -221,7 +228,7 @@ void main() {
     // The level's first build, in its first pass (APPEND reads what it wrote): the items' start.
     bool inherits = u_withBounds != 0 && u_parents != 0u && u_pass != CULLIDE_BUILD_PASS_APPEND;
     bool live = p < u_primCount && (inherits ? parentAlive[parentOf(item)] != 0u : alive[item] != 0u);
-    if (inherits && p < u_primCount && p == primBegin[item]) inheritAlive(item, live);
+    if (inherits && p < u_primCount && (u_onePrimEach != 0 || p == primBegin[item])) inherit(item, live);
     if (u_pass == CULLIDE_BUILD_PASS_FOOTPRINTS) {
         if (u_withBounds != 0 && p < u_primCount) addToItemBounds(p, item);
         float pixels = live ? footprintOf(primExtent(itemPrims[p])) : 0.0;

@@ -32,15 +32,18 @@ struct LevelRun {
 };
 
 /// Starts building a level's items. The cluster's geometry goes to the device only when a level actually runs.
-void beginLevel(LevelRun& run) {
+/// `keepOwners`: the owner ids of the last level go on (a level that inherits its survivors).
+void beginLevel(LevelRun& run, bool keepOwners = false) {
     if (!run.uploaded) {
         Timer upload;
         run.geometry.upload(run.frame, run.cluster, run.backend, run.pool, run.stats);
         run.stats.uploadMs += upload.ms();
         run.uploaded = true;
     }
-    run.ownerId.assign(run.frame.valid.size(), kNoOwner);
-    run.ownerCount = 0;
+    if (!keepOwners) {
+        run.ownerId.assign(run.frame.valid.size(), kNoOwner);
+        run.ownerCount = 0;
+    }
     run.items.clear();
 }
 
@@ -138,7 +141,7 @@ void keepSurvivors(const std::vector<std::uint8_t>& survivors, std::size_t first
 /// frame.surviving. `inherit`: the last level (groups, then the proxies) stayed on the backend; each triangle starts
 /// alive when its group survived it, each proxy when it did.
 void runTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies, bool inherit) {
-    beginLevel(run);
+    beginLevel(run, inherit);
     addTriangleItems(run, run.triangles);
     for (std::uint32_t o : proxies) addObjectBoxItem(run, o);
     if (inherit) {
@@ -150,6 +153,7 @@ void runTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies, 
         for (const FrameTriangle& t : run.triangles) ++begin[t.group + 1];
         for (std::size_t j = 0; j < proxies.size(); ++j) begin[groups + j + 1] = 1;
         for (std::size_t p = 1; p < begin.size(); ++p) begin[p] += begin[p - 1];
+        run.items.ownersFromParents = true;  // the group level's owner ids went on
     }
     prune(run, "triangles");
     run.backend.settle(run.stats);  // a level run ahead that the triangle level did not wait for (no two owners)

@@ -43,18 +43,28 @@ struct LevelItems {
     /// item of it and one more, the items are ordered by parent), and an item starts alive only when its parent
     /// survived that level: the survivors never leave the device.
     std::vector<std::uint32_t> parentBegin;
+    /// With parentBegin: owner[i] is the owner of item i's parent (its ids are the last level's), so a backend may take
+    /// the owners from there instead of sending them.
+    bool ownersFromParents = false;
     /// The parent of item i (parentBegin non-empty): the last p with parentBegin[p] <= i.
     std::uint32_t parentOf(std::size_t i) const {
         const auto after = std::upper_bound(parentBegin.begin(), parentBegin.end(), static_cast<std::uint32_t>(i));
         return static_cast<std::uint32_t>(after - parentBegin.begin() - 1);
     }
     std::size_t size() const { return owner.size(); }
+    /// Whether item i is exactly primitive i (one primitive each): primBegin need not be sent.
+    bool onePrimitiveEach() const {
+        for (std::size_t i = 0; i < primBegin.size(); ++i)
+            if (primBegin[i] != i) return false;
+        return true;
+    }
     void clear() {
         owner.clear();
         primBegin.assign(1, 0);
         prims.clear();
         bounds.clear();
         parentBegin.clear();
+        ownersFromParents = false;
     }
 };
 

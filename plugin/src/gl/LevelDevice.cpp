@@ -77,7 +77,8 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
     maxGroups = static_cast<std::size_t>(std::max(1, limit));
     reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * CULLIDE_ALIVE_BITS);
     reserveBuffer(buffers[kViews], capacity[kViews], sizeof(ViewRecord) * (CULLIDE_MAX_ITERATIONS + 1));
-    for (Buffer b : {kParent, kParentAlive, kStash, kStashViews}) reserveBuffer(buffers[b], capacity[b], 4);
+    for (Buffer b : {kParent, kParentAlive, kParentOwners, kPrimBegin, kStash, kStashViews})
+        reserveBuffer(buffers[b], capacity[b], 4);
     checkGlError("creating the visibility pass");
     // Every call makes the context current on its own thread: the culler may be used from another thread than
     // the one that made it (the Bullet adapter makes Culling::Auto's culler off the step's thread).
@@ -138,14 +139,29 @@ void LevelDevice::uploadItems(const LevelItems& items, const LevelStart& start, 
                                  static_cast<GLsizeiptr>(lastItemCount * 4));
         uploadBuffer(buffers[kParent], capacity[kParent], items.parentBegin.data(), items.parentBegin.size() * 4);
         stats.bytesUploaded += items.parentBegin.size() * 4;
+        if (items.ownersFromParents) {  // the last level's owners, which the first build hands down
+            reserveBuffer(buffers[kParentOwners], capacity[kParentOwners], lastItemCount * 4);
+            glCopyNamedBufferSubData(buffers[kOwners], buffers[kParentOwners], 0, 0,
+                                     static_cast<GLsizeiptr>(lastItemCount * 4));
+        }
     }
     lastItemCount = n;
-    uploadBuffer(buffers[kOwners], capacity[kOwners], items.owner.data(), n * 4);
-    uploadBuffer(buffers[kPrimBegin], capacity[kPrimBegin], items.primBegin.data(), items.primBegin.size() * 4);
+    inheritOwners = inherits && items.ownersFromParents;
+    onePrimEach = items.onePrimitiveEach();
+    if (inheritOwners) {
+        reserveBuffer(buffers[kOwners], capacity[kOwners], n * 4);
+    } else {
+        uploadBuffer(buffers[kOwners], capacity[kOwners], items.owner.data(), n * 4);
+        stats.bytesUploaded += n * 4;
+    }
+    if (!onePrimEach) {
+        uploadBuffer(buffers[kPrimBegin], capacity[kPrimBegin], items.primBegin.data(), items.primBegin.size() * 4);
+        stats.bytesUploaded += items.primBegin.size() * 4;
+    }
     uploadBuffer(buffers[kItemPrims], capacity[kItemPrims], items.prims.data(), items.prims.size() * 4);
     const ViewRecord first = toViewRecord(start.view, start.idBits);
     glNamedBufferSubData(buffers[kViews], 0, sizeof first, &first);
-    stats.bytesUploaded += (n + items.primBegin.size() + items.prims.size()) * 4 + sizeof first;
+    stats.bytesUploaded += items.prims.size() * 4 + sizeof first;
     reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * counterWords(n));
     // Every item alive, or (inheriting) none until build.comp's first pass marks those whose parent survived.
     const GLuint zero = 0, startAlive = inherits ? 0u : static_cast<GLuint>(n);
@@ -178,7 +194,8 @@ void LevelDevice::bindBuffers() const {
         {CULLIDE_SSBO_ITEM_BOUNDS, kItemBounds}, {CULLIDE_SSBO_PRIM_BEGIN, kPrimBegin},
         {CULLIDE_SSBO_ITEM_PRIMS, kItemPrims},  {CULLIDE_SSBO_BANDS, kBands},
         {CULLIDE_SSBO_BUILD, kBuild},           {CULLIDE_SSBO_VIEWS, kViews},
-        {CULLIDE_SSBO_PARENT, kParent},         {CULLIDE_SSBO_PARENT_ALIVE, kParentAlive}};
+        {CULLIDE_SSBO_PARENT, kParent},         {CULLIDE_SSBO_PARENT_ALIVE, kParentAlive},
+        {CULLIDE_SSBO_PARENT_OWNER, kParentOwners}};
     for (const auto& [binding, buffer] : bindings)
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffers[buffer]);
 }
@@ -220,6 +237,8 @@ void LevelDevice::buildRecords(int iteration, bool withBounds, LevelStats& level
     glUniform1i(CULLIDE_LOC_WITH_BOUNDS, withBounds ? 1 : 0);
     const std::size_t parents = levelItems->parentBegin.empty() ? 0 : levelItems->parentBegin.size() - 1;
     glUniform1ui(CULLIDE_LOC_PARENTS, static_cast<GLuint>(parents));
+    glUniform1i(CULLIDE_LOC_ONE_PRIM_EACH, onePrimEach ? 1 : 0);
+    glUniform1i(CULLIDE_LOC_INHERIT_OWNERS, inheritOwners ? 1 : 0);
     startTiming();
     if (withBounds && bands == CULLIDE_BANDS_NONE) buildPass(CULLIDE_BUILD_PASS_BOUNDS, primCount, level, stats);
     if (bands != CULLIDE_BANDS_NONE) buildPass(CULLIDE_BUILD_PASS_FOOTPRINTS, primCount, level, stats);

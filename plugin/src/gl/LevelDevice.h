@@ -41,6 +41,7 @@ enum Buffer {
     kViews,
     kParent,
     kParentAlive,
+    kParentOwners,
     kStash,       ///< a level run ahead: words CULLIDE_DISPATCH_RECORDS .. CULLIDE_AHEAD of its counters
     kStashViews,  ///< ... and its views (where a trace is asked for)
     kBufferCount
@@ -83,7 +84,9 @@ struct LevelDevice {
     std::vector<std::uint32_t> readScratch;  ///< a level's read-back: counters, dispatch block, chain, alive bits
     const GpuGeometry* geometry = nullptr;
     const LevelItems* levelItems = nullptr;  ///< the level being pruned
-    std::size_t lastItemCount = 0;       ///< of the last level (what the next level's items may inherit)
+    std::size_t lastItemCount = 0;  ///< of the last level (what the next level's items may inherit)
+    bool onePrimEach = false;       ///< the level's item i is primitive i: its primBegin is not sent
+    bool inheritOwners = false;     ///< the level's owners are its items' parents': not sent, the first build writes them
     /// Records the record buffers (kPrims, kPrimsNext; kRecords on the raster back-end) hold: kept between levels and
     /// frames, grown when a build needs more (the iteration then runs again).
     std::size_t recordCapacity = 0;
