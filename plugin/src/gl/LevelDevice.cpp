@@ -381,7 +381,7 @@ void LevelDevice::readSurvivors(std::uint32_t stop, std::vector<std::uint8_t>& s
     survivors.resize(n);
     const bool allPruned = stop == CULLIDE_STOP_ONE_OWNER;
     for (std::size_t i = 0; i < n; ++i)
-        survivors[i] = allPruned ? 0 : static_cast<std::uint8_t>((bits[i / 32] >> (i % 32)) & 1u);
+        survivors[i] = static_cast<std::uint8_t>(allPruned ? 0u : (bits[i / 32] >> (i % 32)) & 1u);
 }
 
 void LevelDevice::readTrace(GLuint views, int ran, std::vector<IterationTrace>& trace) {
