@@ -122,11 +122,22 @@ void LevelDevice::draw(int pass, LevelStats& level, Stats& stats) const {
     stats.draws += 1;
 }
 
-void LevelDevice::setUniforms(int iteration) const {
-    glUniform1i(CULLIDE_LOC_RESOLUTION, settings.resolution);
-    glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
-    glUniform1i(CULLIDE_LOC_CONSERVATIVE, settings.mode == Mode::Reliable ? 1 : 0);
-    glUniform1ui(CULLIDE_LOC_AXES, settings.axes);
+void LevelDevice::setLevelUniforms(double coordinateBound) const {
+    for (GLuint p : {program, setupProgram}) {
+        if (p == 0) continue;  // no setup program on the compute back-end
+        glProgramUniform1i(p, CULLIDE_LOC_RESOLUTION, settings.resolution);
+        glProgramUniform1i(p, CULLIDE_LOC_CONSERVATIVE, settings.mode == Mode::Reliable ? 1 : 0);
+        glProgramUniform1ui(p, CULLIDE_LOC_AXES, settings.axes);
+    }
+    const GLuint s = surviveProgram;
+    glProgramUniform1ui(s, CULLIDE_LOC_ITEM_COUNT, static_cast<GLuint>(levelItems->size()));
+    glProgramUniform1ui(s, CULLIDE_LOC_REQUIRED, requiredFlags(settings.axes));
+    glProgramUniform1ui(s, CULLIDE_LOC_MAX_ITERATIONS, static_cast<GLuint>(settings.maxIterations));
+    glProgramUniform1ui(s, CULLIDE_LOC_MAX_GROUPS, static_cast<GLuint>(maxGroups));
+    glProgramUniform1i(s, CULLIDE_LOC_RESOLUTION, settings.resolution);
+    glProgramUniform1d(s, CULLIDE_LOC_MARGIN, settings.margin);
+    glProgramUniform1d(s, CULLIDE_LOC_COORDINATE_BOUND, coordinateBound);
+    glProgramUniform1d(s, CULLIDE_LOC_MIN_PRUNE_FRACTION, settings.minPruneFraction);
 }
 
 void LevelDevice::uploadItems(const LevelItems& items, const LevelStart& start, LevelStats& level, Stats& stats) {
@@ -301,35 +312,27 @@ void LevelDevice::prepareIteration(std::size_t itemCount) {
     glBindVertexArray(vao);
 }
 
-void LevelDevice::issueIteration(int iteration, double coordinateBound, LevelStats& level, Stats& stats) {
+void LevelDevice::issueIteration(int iteration, LevelStats& level, Stats& stats) {
     const std::size_t itemCount = levelItems->size();
     startTiming();
     prepareIteration(itemCount);
     if (settings.backend == Backend::Raster) {
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_RECORDS, buffers[kRecords]);
         glUseProgram(setupProgram);
-        setUniforms(iteration);
+        glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
         glDispatchComputeIndirect(4 * CULLIDE_DISPATCH_CULL);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         level.draws += 1;
         stats.draws += 1;
     }
     glUseProgram(program);
-    setUniforms(iteration);
+    glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
     draw(CULLIDE_PASS_NEAREST, level, stats);
     draw(CULLIDE_PASS_SECOND, level, stats);
     draw(CULLIDE_PASS_FLAG, level, stats);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_PRIMS_OUT, buffers[kPrimsNext]);
     glUseProgram(surviveProgram);
-    glUniform1ui(CULLIDE_LOC_ITEM_COUNT, static_cast<GLuint>(itemCount));
-    glUniform1ui(CULLIDE_LOC_REQUIRED, requiredFlags(settings.axes));
     glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
-    glUniform1ui(CULLIDE_LOC_MAX_ITERATIONS, static_cast<GLuint>(settings.maxIterations));
-    glUniform1ui(CULLIDE_LOC_MAX_GROUPS, static_cast<GLuint>(maxGroups));
-    glUniform1i(CULLIDE_LOC_RESOLUTION, settings.resolution);
-    glUniform1d(CULLIDE_LOC_MARGIN, settings.margin);
-    glUniform1d(CULLIDE_LOC_COORDINATE_BOUND, coordinateBound);
-    glUniform1d(CULLIDE_LOC_MIN_PRUNE_FRACTION, settings.minPruneFraction);
     glDispatchComputeIndirect(4 * CULLIDE_DISPATCH_SURVIVE);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     level.draws += 1;
@@ -370,8 +373,9 @@ int LevelDevice::issueLevel(const LevelItems& items, const LevelStart& start, in
     uploadItems(items, start, level, stats);
     level.setupMs += msSince(send);
     buildRecords(0, true, level, stats);
+    setLevelUniforms(start.coordinateBound);
     const int issued = std::min(settings.maxIterations, std::max(iterations, 1));
-    for (int i = 0; i < issued; ++i) issueIteration(i, start.coordinateBound, level, stats);
+    for (int i = 0; i < issued; ++i) issueIteration(i, level, stats);
     return issued;
 }
 

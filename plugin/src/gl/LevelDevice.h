@@ -60,6 +60,13 @@ struct Chain {
     std::uint32_t operator[](int w) const { return words[w - CULLIDE_DISPATCH_RECORDS]; }
     int ran() const { return static_cast<int>((*this)[CULLIDE_CHAIN_RAN]); }
     std::uint32_t stop() const { return (*this)[CULLIDE_CHAIN_STOP]; }
+    bool shortBuild() const { return (*this)[CULLIDE_DISPATCH_SHORT] != 0; }
+    /// The level ended (its set stopped changing, one owner is left, or it ran every iteration allowed: the device
+    /// stops with CULLIDE_STOP_DONE there) rather than stopping for records to build again or running past the
+    /// iterations issued.
+    bool levelEnded() const {
+        return !shortBuild() && (stop() == CULLIDE_STOP_DONE || stop() == CULLIDE_STOP_ONE_OWNER);
+    }
 };
 
 /// One GL context's programs and resources for the visibility levels, and the steps a level is made of. Every public
@@ -108,8 +115,9 @@ struct LevelDevice {
     /// One pass over the iteration's records (their count and the arguments are on the device).
     void draw(int pass, LevelStats& level, Stats& stats) const;
 
-    /// The visibility passes' uniforms for iteration `iteration` (its view is views[iteration] on the device).
-    void setUniforms(int iteration) const;
+    /// The uniforms that stay the same over a level's iterations, in the visibility and survivor programs (each
+    /// iteration sets only its index: its view is views[iteration] on the device).
+    void setLevelUniforms(double coordinateBound) const;
 
     /// Sends what the record build and the survivor pass need of the level's items (their primitives and owners, and
     /// parentBegin where they inherit) and the first view; clears their boxes (built by buildRecords) and the chain,
@@ -149,7 +157,7 @@ struct LevelDevice {
     /// records and the survivor pass, which packs the records of the items still alive and whose last work group
     /// ends the iteration on the device (survive.comp: the stop rule, the next view and the next iteration's indirect
     /// arguments). Where the chain stopped before it, every pass is dispatched with empty arguments: nothing runs.
-    void issueIteration(int iteration, double coordinateBound, LevelStats& level, Stats& stats);
+    void issueIteration(int iteration, LevelStats& level, Stats& stats);
 
     /// Reads `bytes` at `offset` of `buffer` back into `to`: blocks until the device has finished the work submitted
     /// before, which the level's waitMs counts (with the tests' readBackDelayMs inside it).

@@ -11,6 +11,7 @@
 #include <cstdint>
 #include <cstring>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -41,7 +42,7 @@ struct VisibilityPass::Impl : LevelDevice {
         bool wait = false;   ///< the level run ahead there stopped early: waited for until it runs as one chain
     };
     std::vector<PlaceHistory> places;
-    std::unique_ptr<AheadLevel> ahead;  ///< a level run ahead, not read back yet
+    std::optional<AheadLevel> ahead;  ///< a level run ahead, not read back yet
 
     int guessFor(std::size_t place) const {
         const int guess = place < places.size() ? places[place].guess : 0;
@@ -74,14 +75,14 @@ struct VisibilityPass::Impl : LevelDevice {
         bool oneChain = true;
         int shortBuilds = 0;
         for (;;) {
-            waitForChain(ahead != nullptr, level, stats);
+            waitForChain(ahead.has_value(), level, stats);
             if (ahead) finishAhead(stats, true);
             const Chain chain{readScratch.data() + CULLIDE_DISPATCH_RECORDS};
             const int ran = chain.ran();
             if (ran <= next || ran > issued) throw BackendError("the device's chain of iterations did not run");
             level.idleIterations += static_cast<std::size_t>(issued - ran);
             next = ran;
-            if (chain[CULLIDE_DISPATCH_SHORT] != 0) {  // iteration ran - 1 pruned nothing: build again, rerun it
+            if (chain.shortBuild()) {  // iteration ran - 1 pruned nothing: build again, rerun it
                 if (++shortBuilds > 2) throw BackendError("the record buffers were short after growing twice");
                 level.shortBuilds += 1;
                 float approx = 0.0f;
@@ -92,24 +93,22 @@ struct VisibilityPass::Impl : LevelDevice {
             } else {
                 if (built) level.records += chain[CULLIDE_DISPATCH_NEEDED];
                 built = false;
-                if (chain.stop() == CULLIDE_STOP_DONE || chain.stop() == CULLIDE_STOP_ONE_OWNER ||
-                    ran == maxIterations)
-                    break;
+                if (chain.levelEnded()) break;
             }
             oneChain = false;
             // Records for the next view (a refit) or again (short); the chain goes on from `next`: to the end where
             // the batch was too short.
-            if (chain[CULLIDE_DISPATCH_SHORT] != 0 || chain.stop() == CULLIDE_STOP_REFIT) {
+            if (chain.shortBuild() || chain.stop() == CULLIDE_STOP_REFIT) {
                 buildRecords(next, false, level, stats);  // the items' boxes are built already
                 built = true;
             }
             const int guess = std::max(guessFor(start.place), next + 1);
             issued = chain.stop() == CULLIDE_STOP_NONE ? maxIterations : std::min(maxIterations, guess);
-            for (int i = next; i < issued; ++i) issueIteration(i, start.coordinateBound, level, stats);
+            for (int i = next; i < issued; ++i) issueIteration(i, level, stats);
         }
         const Chain chain{readScratch.data() + CULLIDE_DISPATCH_RECORDS};
         remember(start.place, chain.ran(), oneChain);
-        noteIterations(chain, items.size(), level);
+        noteIterations(chain, level);
         readSurvivors(chain.stop(), survivors);
         if (trace) readTrace(buffers[kViews], chain.ran(), *trace);
     }
@@ -134,7 +133,7 @@ struct VisibilityPass::Impl : LevelDevice {
             glCopyNamedBufferSubData(buffers[kViews], buffers[kStashViews], 0, 0, static_cast<GLsizeiptr>(bytes));
         }
         endTiming();  // its device time is in the next level's span
-        ahead = std::make_unique<AheadLevel>(AheadLevel{levelIndex, start.place, issued, trace});
+        ahead = AheadLevel{levelIndex, start.place, issued, trace};
         checkGlError("a level run ahead");
     }
 
@@ -142,39 +141,40 @@ struct VisibilityPass::Impl : LevelDevice {
     /// and trace. Where it stopped early (records to build again, more iterations needed) it is waited for next time
     /// and, when a level inherited its survivors, both run again (LevelsRerun).
     void finishAhead(Stats& stats, bool inReadBack) {
-        const std::unique_ptr<AheadLevel> a = std::move(ahead);
+        const AheadLevel a = *ahead;
+        ahead.reset();
         std::vector<std::uint32_t> own;
         const std::uint32_t* words = nullptr;
         if (inReadBack) {
             words = readScratch.data() + CULLIDE_AHEAD;
         } else {
             own.resize(kChainWords);
-            readBack(buffers[kStash], 0, 4 * kChainWords, own.data(), stats.levels[a->levelIndex], stats);
+            readBack(buffers[kStash], 0, 4 * kChainWords, own.data(), stats.levels[a.levelIndex], stats);
             words = own.data();
         }
         const Chain chain{words};
-        LevelStats& level = stats.levels[a->levelIndex];
+        LevelStats& level = stats.levels[a.levelIndex];
         const int ran = chain.ran();
-        if (ran < 1 || ran > a->issued) throw BackendError("the device's chain of iterations did not run");
-        const bool early = chain[CULLIDE_DISPATCH_SHORT] != 0 || chain.stop() == CULLIDE_STOP_REFIT ||
-                           (chain.stop() == CULLIDE_STOP_NONE && ran < settings.maxIterations);
-        level.idleIterations += static_cast<std::size_t>(a->issued - ran);
-        if (chain[CULLIDE_DISPATCH_SHORT] != 0) level.shortBuilds += 1;
+        if (ran < 1 || ran > a.issued) throw BackendError("the device's chain of iterations did not run");
+        const bool early = !chain.levelEnded();
+        level.idleIterations += static_cast<std::size_t>(a.issued - ran);
+        if (chain.shortBuild()) level.shortBuilds += 1;
         else level.records += chain[CULLIDE_DISPATCH_NEEDED];
         if (early) {  // how many it needs is not known: waited for next time, which finds out
-            if (a->place >= places.size()) places.resize(a->place + 1);
-            places[a->place].wait = true;
+            if (a.place >= places.size()) places.resize(a.place + 1);
+            places[a.place].wait = true;
         } else {
-            remember(a->place, ran, true);
+            remember(a.place, ran, true);
         }
-        noteIterations(chain, std::size_t{chain[CULLIDE_CHAIN_ALIVE_START]}, level);
-        if (a->trace) readTrace(buffers[kStashViews], ran, *a->trace);
+        noteIterations(chain, level);
+        if (a.trace) readTrace(buffers[kStashViews], ran, *a.trace);
         if (early && inReadBack) throw LevelsRerun{};
     }
 
-    /// The level's iterations into its stats, from the chain's items alive at its start and after each iteration.
-    static void noteIterations(const Chain& chain, std::size_t aliveAtStart, LevelStats& level) {
-        std::size_t before = aliveAtStart;
+    /// The level's iterations into its stats, from the chain's items alive at its start (all, or those whose parent
+    /// survived) and after each iteration.
+    static void noteIterations(const Chain& chain, LevelStats& level) {
+        std::size_t before = chain[CULLIDE_CHAIN_ALIVE_START];
         const int ran = chain.ran();
         for (int i = 0; i < ran; ++i) {
             const bool last = i + 1 == ran;
