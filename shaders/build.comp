@@ -30,7 +30,6 @@ layout(std430, binding = CULLIDE_SSBO_BANDS) buffer Bands { uint bands[]; };
 layout(std430, binding = CULLIDE_SSBO_BUILD) coherent buffer Build { uint build[]; };
 layout(std430, binding = CULLIDE_SSBO_PRIMS) writeonly buffer Prims { uvec4 prims[]; };
 layout(std430, binding = CULLIDE_SSBO_ITEM_BOUNDS) buffer Bounds { uint bounds[]; };
-layout(std430, binding = CULLIDE_SSBO_COUNTERS) coherent buffer Counters { uint counters[]; };
 
 layout(location = CULLIDE_LOC_PASS) uniform int u_pass;
 layout(location = CULLIDE_LOC_PRIM_COUNT) uniform uint u_primCount;  // of the level's items, all of them
@@ -39,7 +38,6 @@ layout(location = CULLIDE_LOC_ITEM_COUNT) uniform uint u_itemCount;
 layout(location = CULLIDE_LOC_BANDS) uniform int u_bands;
 layout(location = CULLIDE_LOC_GROUPS) uniform uint u_groups;
 layout(location = CULLIDE_LOC_CAPACITY) uniform uint u_capacity;
-layout(location = CULLIDE_LOC_MAX_GROUPS) uniform uint u_maxGroups;
 layout(location = CULLIDE_LOC_WITH_BOUNDS) uniform int u_withBounds;
 layout(location = CULLIDE_LOC_PARENTS) uniform uint u_parents;
 layout(location = CULLIDE_LOC_ONE_PRIM_EACH) uniform int u_onePrimEach;
@@ -148,26 +146,10 @@ uint bandsOf(float footprint, float perBand) {
 void writeDispatch(uint total, float approx) {
     bool fits = approx <= 2147483648.0 && total <= u_capacity;
     uint records = fits ? total : 0u;
-    uint groups = (records + kLanes - 1u) / kLanes;
-    uint x = min(groups, u_maxGroups);
-    uint z = x == 0u ? 0u : (groups + x - 1u) / x;
-    uint surviveGroups = (max(records, u_itemCount) + kLanes - 1u) / kLanes;
-    uint sx = min(surviveGroups, u_maxGroups);
-    uint sz = sx == 0u ? 0u : (surviveGroups + sx - 1u) / sx;
-    counters[CULLIDE_DISPATCH_RECORDS] = records;
+    writePassArguments(records, max(records, u_itemCount));
     counters[CULLIDE_DISPATCH_NEEDED] = total;
     counters[CULLIDE_DISPATCH_NEEDED_APPROX] = floatBitsToUint(approx);
     counters[CULLIDE_DISPATCH_SHORT] = fits ? 0u : 1u;
-    counters[CULLIDE_DISPATCH_CULL] = x;
-    counters[CULLIDE_DISPATCH_CULL + 1] = 3u;
-    counters[CULLIDE_DISPATCH_CULL + 2] = z;
-    counters[CULLIDE_DISPATCH_SURVIVE] = sx;
-    counters[CULLIDE_DISPATCH_SURVIVE + 1] = 1u;
-    counters[CULLIDE_DISPATCH_SURVIVE + 2] = sz;
-    counters[CULLIDE_DISPATCH_DRAW] = 9u * records;
-    counters[CULLIDE_DISPATCH_DRAW + 1] = 1u;
-    counters[CULLIDE_DISPATCH_DRAW + 2] = 0u;
-    counters[CULLIDE_DISPATCH_DRAW + 3] = 0u;
 }
 
 // Primitive p's box into its item's, cleared by the C++ side (at the level's start). The axes are written out:

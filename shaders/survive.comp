@@ -16,13 +16,11 @@ layout(std430, binding = CULLIDE_SSBO_FLAGS) readonly buffer Flags { uint flags[
 layout(std430, binding = CULLIDE_SSBO_ALIVE) buffer Alive { uint alive[]; };
 layout(std430, binding = CULLIDE_SSBO_ITEM_OWNER) readonly buffer Owners { uint owners[]; };
 layout(std430, binding = CULLIDE_SSBO_ITEM_BOUNDS) readonly buffer Bounds { uint bounds[]; };
-layout(std430, binding = CULLIDE_SSBO_COUNTERS) coherent buffer Counters { uint counters[]; };
 layout(std430, binding = CULLIDE_SSBO_PRIMS) readonly buffer Prims { uvec4 prims[]; };
 layout(std430, binding = CULLIDE_SSBO_PRIMS_OUT) writeonly buffer PrimsOut { uvec4 primsOut[]; };
 layout(location = CULLIDE_LOC_ITEM_COUNT) uniform uint u_itemCount;
 layout(location = CULLIDE_LOC_REQUIRED) uniform uint u_required;
 layout(location = CULLIDE_LOC_MAX_ITERATIONS) uniform uint u_maxIterations;
-layout(location = CULLIDE_LOC_MAX_GROUPS) uniform uint u_maxGroups;
 layout(location = CULLIDE_LOC_RESOLUTION) uniform int u_resolution;
 layout(location = CULLIDE_LOC_MARGIN) uniform double u_margin;
 layout(location = CULLIDE_LOC_COORDINATE_BOUND) uniform double u_coordinateBound;
@@ -108,16 +106,6 @@ bool recordsStale(uint next) {
     return false;
 }
 
-// Indirect arguments of a grid of at least `count` invocations: work groups along x, as many rows of them along z
-// as needed (none for none).
-void writeGrid(int slot, uint count, uint layers) {
-    uint groups = (count + uint(CULLIDE_COMPUTE_GROUP_SIZE) - 1u) / uint(CULLIDE_COMPUTE_GROUP_SIZE);
-    uint x = min(groups, u_maxGroups);
-    counters[slot] = x;
-    counters[slot + 1] = x == 0u ? 0u : layers;
-    counters[slot + 2] = x == 0u ? 0u : (groups + x - 1u) / x;
-}
-
 // The end of iteration u_iteration (the last work group, one lane): what it left, the stop rule of
 // VisibilityLevel.cpp's stepAfter in the same order, the next view, and the next iteration's arguments (empty when
 // the chain stops).
@@ -158,11 +146,7 @@ void finishIteration() {
     counters[CULLIDE_CHAIN_RECORDS_RUN] += ranOver;
     counters[CULLIDE_CHAIN_SURVIVE_DONE] = 0u;
     uint next = stop == CULLIDE_STOP_NONE ? counters[CULLIDE_COUNTER_RECORDS] : 0u;
-    counters[CULLIDE_DISPATCH_RECORDS] = next;
-    writeGrid(CULLIDE_DISPATCH_CULL, next, 3u);
-    writeGrid(CULLIDE_DISPATCH_SURVIVE, stop == CULLIDE_STOP_NONE ? max(next, u_itemCount) : 0u, 1u);
-    counters[CULLIDE_DISPATCH_DRAW] = 9u * next;
-    counters[CULLIDE_DISPATCH_DRAW + 1] = next == 0u ? 0u : 1u;
+    writePassArguments(next, stop == CULLIDE_STOP_NONE ? max(next, u_itemCount) : 0u);
 }
 
 void main() {

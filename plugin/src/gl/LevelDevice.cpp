@@ -56,10 +56,10 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
         }
         program = linkProgram({vs, fs}, "the visibility raster program");
     }
-    surviveProgram =
-        linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "survive.comp"})}, "the survivor program");
-    buildProgram =
-        linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "build.comp"})}, "the record build program");
+    surviveProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "passes.glsl", "survive.comp"})},
+                                 "the survivor program");
+    buildProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "passes.glsl", "build.comp"})},
+                               "the record build program");
     if (settings.backend == Backend::Compute)
         bands = context.isSoftware() && !options.shortBands ? CULLIDE_BANDS_LONG : CULLIDE_BANDS_SHORT;
     glCreateVertexArrays(1, &vao);
