@@ -12,6 +12,13 @@ std::set<FlatPair> trianglePairs(const Result& result) {
     return out;
 }
 
+Comparison runAndCompare(Culler& tested, Culler& reference, const std::vector<Object>& objects, Result& got) {
+    Result expected;
+    tested.run(objects, got);
+    reference.run(objects, expected);
+    return compare(expected, got);
+}
+
 Comparison compare(const Result& reference, const Result& result) {
     const auto expected = trianglePairs(reference);
     const auto got = trianglePairs(result);

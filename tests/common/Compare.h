@@ -24,6 +24,9 @@ struct Comparison {
 };
 Comparison compare(const Result& reference, const Result& result);
 
+/// One frame of `objects` on `tested` (into `got`) and on `reference`, compared.
+Comparison runAndCompare(Culler& tested, Culler& reference, const std::vector<Object>& objects, Result& got);
+
 /// Seeded soup scene: `objects` clusters of random triangles (some degenerate) in the unit cube.
 std::vector<TriangleMesh> randomSoups(std::uint64_t seed, int objects, int trianglesPerObject, double clusterSize);
 

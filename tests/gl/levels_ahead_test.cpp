@@ -39,11 +39,8 @@ TEST(LevelsAhead, AGroupLevelThatNeedsMoreIterationsRunsAgainWaitedFor) {
     const std::vector<std::vector<TriangleMesh>> frames = {{torus, torus}, tori, tori, tori};
     std::vector<Result> results(frames.size());
     for (std::size_t f = 0; f < frames.size(); ++f) {
-        Result expected;
-        culler->run(asObjects(frames[f]), results[f]);
-        reference->run(asObjects(frames[f]), expected);
+        const Comparison c = runAndCompare(*culler, *reference, asObjects(frames[f]), results[f]);
         EXPECT_EQ(results[f].stats.gpuFallbacks, 0u) << "frame " << f << ": " << results[f].stats.gpuError;
-        const Comparison c = compare(expected, results[f]);
         EXPECT_EQ(c.missed, 0u) << "frame " << f << ": " << c.firstMissed;
         EXPECT_EQ(c.spurious, 0u) << "frame " << f;
         ASSERT_NE(levelNamed(results[f], "groups"), nullptr) << "frame " << f;

@@ -36,11 +36,9 @@ TEST(RecordCapacity, AShortBuildIsBuiltAgainAndTheBuffersAreKept) {
         const std::vector<Object> objects = asObjects(meshes);  // points into meshes
         std::size_t firstFrameShort = 0, firstFrameReruns = 0;
         for (int frame = 0; frame < 3; ++frame) {
-            Result r, expected;
-            culler->run(objects, r);
-            reference->run(objects, expected);
+            Result r;
+            const Comparison c = runAndCompare(*culler, *reference, objects, r);
             EXPECT_EQ(r.stats.gpuFallbacks, 0u) << r.stats.gpuError;
-            const Comparison c = compare(expected, r);
             EXPECT_EQ(c.missed, 0u) << "frame " << frame << ": " << c.firstMissed;
             EXPECT_GT(c.expected, 0u);
             if (frame == 0) {
