@@ -226,15 +226,28 @@ TEST(GpuCuller, AGpuTrialFramePastItsBudgetIsFinishedOnTheCpuPath) {
     // plus 1 ms) and are finished on the CPU path, the frames stay what the CPU path gives, and the CPU path wins.
     Settings s = reliable(64);
     s.gpuLevels = GpuLevels::Auto;
-    s.exactThreshold = 0;  // levels for every cluster: several, so that the budget is looked at between them
+    s.exactThreshold = 0;  // levels for every cluster
     CULLIDE_GPU_CULLER_OR_SKIP(probe, s);
     GlBackendOptions slow;
     slow.readBackDelayMs = 40.0;
     const auto culler = createGpuCuller(s, [&](const Settings& settings) { return createGlPruningBackend(settings, slow); });
-    const auto meshes = randomSoups(91, 24, 120, 0.25);
+    // Three clusters far apart: the budget is looked at as each cluster's levels start, so a trial frame whose CPU
+    // work stays inside the budget is still abandoned after the first cluster's read-back.
+    std::vector<TriangleMesh> meshes;
+    for (int c = 0; c < 3; ++c)
+        for (TriangleMesh& m : randomSoups(91 + static_cast<std::uint64_t>(c), 8, 120, 0.25)) {
+            for (Vec3& p : m.vertices) p.x() += 10.0 * c;
+            meshes.push_back(std::move(m));
+        }
     const auto objects = asObjects(meshes);
     Result reference, r;
     createReferenceCuller(s)->run(objects, reference);
+    Settings always = s;
+    always.gpuLevels = GpuLevels::Always;
+    CULLIDE_GPU_CULLER_OR_SKIP(levels, always);
+    Result clusters;
+    levels->run(objects, clusters);
+    ASSERT_EQ(clusters.stats.clusters, 3u);
     std::size_t abandoned = 0;
     double worstGpuTrialMs = 0.0, cpuFrameMs = 0.0;
     for (int frame = 0; frame < 4; ++frame) {
@@ -246,8 +259,9 @@ TEST(GpuCuller, AGpuTrialFramePastItsBudgetIsFinishedOnTheCpuPath) {
     }
     EXPECT_EQ(abandoned, 2u) << "both GPU trial frames";
     EXPECT_EQ(r.stats.autoDecision, "cpu");
-    // Abandoned at the first level's end: one level's read-backs (a few), not the whole frame's.
-    EXPECT_LT(worstGpuTrialMs, cpuFrameMs + 1.0 + 8 * 40.0) << cpuFrameMs;
+    // Abandoned at the latest as the second cluster starts: one cluster's read-back (two if its levels ran again),
+    // not the whole frame's three.
+    EXPECT_LT(worstGpuTrialMs, cpuFrameMs + 1.0 + 2.5 * 40.0) << cpuFrameMs;
 }
 
 TEST(GpuCuller, RasterBackendAgreesWithCompute) {
