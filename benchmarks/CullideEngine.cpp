@@ -33,7 +33,17 @@ void CullideEngine::setup(const BenchFrame& first) {
 
 void CullideEngine::run(const BenchFrame& frame, FrameOutput& out) {
     out.clear();
-    for (std::size_t i = 0; i < m_objects.size(); ++i) m_objects[i].mesh = &(*frame.world)[i];
+    // A rigid object goes as Bullet's does: its mesh in its own frame and its pose (Object::transform).
+    m_transforms.resize(m_objects.size());
+    for (std::size_t i = 0; i < m_objects.size(); ++i) {
+        const bool rigid = (*frame.motion)[i] == Motion::Rigid;
+        m_objects[i].mesh = rigid ? &(*frame.local)[i] : &(*frame.world)[i];
+        m_objects[i].transform = rigid ? &m_transforms[i] : nullptr;
+        if (rigid) {
+            m_transforms[i].linear = frame.poses[i].linear();
+            m_transforms[i].translation = frame.poses[i].translation();
+        }
+    }
     const Timer timer;
     m_culler->run(m_objects, m_result);
     out.totalMs = timer.ms();

@@ -29,6 +29,7 @@ private:
     Kind m_kind;
     std::unique_ptr<Culler> m_culler;
     std::vector<Object> m_objects;
+    std::vector<Transform> m_transforms;  ///< the rigid objects' poses this frame
     Result m_result;
 };
 

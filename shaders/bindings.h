@@ -32,6 +32,9 @@
 #define CULLIDE_SSBO_PARENT_ALIVE 17 /* uint[last level's itemCount]: that level's alive set (a copy) */
 #define CULLIDE_SSBO_PARENT_OWNER 18 /* uint[last level's itemCount]: that level's owners (a copy), where the items'
                                       * owners are their parents' (CULLIDE_LOC_INHERIT_OWNERS) */
+/* The mapped meshes (map.comp): a rigid mesh's own vertices stay on the device, its transform is sent per upload. */
+#define CULLIDE_SSBO_LOCAL 19      /* double[3 * local vertices]: the mapped meshes' vertices in their own frames */
+#define CULLIDE_SSBO_MAPPED 20     /* MappedRecord[mapped meshes] (map.comp): transform, where its vertices are */
 
 /* Counters, reset before every iteration. */
 #define CULLIDE_COUNTER_OVERFLOWS 0 /* compute invocations that would exceed CULLIDE_MAX_LOOP_ITERATIONS */
@@ -132,6 +135,8 @@
 #define CULLIDE_LOC_ONE_PRIM_EACH 25 /* int: build.comp: 1 = item i is primitive i (CULLIDE_SSBO_PRIM_BEGIN not sent) */
 #define CULLIDE_LOC_INHERIT_OWNERS 26 /* int: build.comp: 1 = the items' owners are their parents' (not sent: the
                                        * first build writes them) */
+#define CULLIDE_LOC_ORIGIN 27       /* dvec3: map.comp: the upload origin (world) */
+#define CULLIDE_LOC_MESH_BASE 28    /* uint: map.comp: the mesh of work group row 0 (split at the group-count limit) */
 
 #define CULLIDE_BANDS_NONE 0        /* one record per primitive (raster back-end) */
 #define CULLIDE_BANDS_LONG 1        /* bands of CULLIDE_PIXELS_PER_INVOCATION pixels (software renderers) */

@@ -16,14 +16,23 @@ void ClusterGeometry::upload(const FrameState& frame, const Cluster& cluster, Pr
     // a mesh at rest its positions.
     m_changed.assign(m_written.size(), Changed{});
     pool.parallelFor(m_written.size(), 1, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i)
-            m_changed[i] = writeMesh(frame.meshOf(m_written[i].object), m_written[i]);
+        for (std::size_t i = begin; i < end; ++i) m_changed[i] = writeMesh(frame, m_written[i]);
     });
     m_geometry.keptPositions = m_geometry.positions.size();
     m_geometry.keptIndices = m_geometry.indices.size();
+    m_geometry.keptLocal = m_localStartedOver ? 0 : m_geometry.local.size();
     for (const Changed& c : m_changed) {
         m_geometry.keptPositions = std::min(m_geometry.keptPositions, c.firstPosition);
         m_geometry.keptIndices = std::min(m_geometry.keptIndices, c.firstIndex);
+        m_geometry.keptLocal = std::min(m_geometry.keptLocal, c.firstLocal);
+    }
+    m_geometry.origin = m_origin;
+    m_geometry.mapped.clear();
+    for (const MeshSlot& slot : m_written) {
+        if (!slot.mapped) continue;
+        const Object& input = (*frame.inputs)[slot.object];
+        m_geometry.mapped.push_back(MappedMesh{*input.transform, slot.localBase, slot.baseVertex,
+                                               static_cast<std::uint32_t>(input.mesh->vertices.size())});
     }
     m_geometry.boxes.clear();
     m_geometry.coordinateBound = 0.0;
@@ -34,8 +43,19 @@ void ClusterGeometry::upload(const FrameState& frame, const Cluster& cluster, Pr
     backend.upload(m_geometry, stats);
 }
 
-/// The origin (ResidentRegion::fit), then static meshes where the region holds them (or appended to it) and every
-/// other mesh after the region, in object order; m_written lists what must be written this upload.
+namespace {
+
+/// Whether object o's mesh goes in its own frame, mapped by the backend: it came with a transform and is not static
+/// (a static mesh is written once in world space).
+bool isMapped(const FrameState& frame, std::uint32_t o) {
+    return frame.inputs != nullptr && (*frame.inputs)[o].transform != nullptr && frame.statics.entry[o] == nullptr;
+}
+
+}  // namespace
+
+/// The origin (ResidentRegion::fit), then static meshes where the region holds them (or appended to it), every other
+/// mesh after the region in object order, and the mapped meshes after those; m_written lists what must be written
+/// this upload.
 void ClusterGeometry::placeMeshes(const FrameState& frame, const Cluster& cluster) {
     Aabb all;
     std::size_t staticTriangles = 0;
@@ -58,32 +78,39 @@ void ClusterGeometry::placeMeshes(const FrameState& frame, const Cluster& cluste
     }
     std::size_t vertices = m_region.vertices();
     std::size_t triangles = m_region.triangles();
-    for (std::uint32_t o : cluster.objects) {
-        if (!frame.isMesh(o) || frame.statics.entry[o] != nullptr) continue;
-        m_written.push_back({o, static_cast<std::uint32_t>(vertices), static_cast<std::uint32_t>(triangles)});
-        m_baseTriangle[o] = static_cast<std::uint32_t>(triangles);
-        vertices += frame.meshOf(o).vertices.size();
-        triangles += frame.meshOf(o).triangles.size();
+    m_localStartedOver = m_mappedVertices.beginUpload(m_geometry.local);
+    for (const bool mapped : {false, true}) {
+        if (mapped) resizeKeeping(m_geometry.positions, 3 * vertices);  // the region's front is kept as it is
+        for (std::uint32_t o : cluster.objects) {
+            if (!frame.isMesh(o) || frame.statics.entry[o] != nullptr || isMapped(frame, o) != mapped) continue;
+            MeshSlot slot{o, static_cast<std::uint32_t>(vertices), static_cast<std::uint32_t>(triangles), mapped};
+            if (mapped) {
+                const MappedVertices::Slot local = m_mappedVertices.place(*(*frame.inputs)[o].mesh, m_geometry.local);
+                slot.localBase = local.base;
+                slot.writeLocal = !local.placedBefore;
+            }
+            m_written.push_back(slot);
+            m_baseTriangle[o] = static_cast<std::uint32_t>(triangles);
+            vertices += frame.meshOf(o).vertices.size();
+            triangles += frame.meshOf(o).triangles.size();
+        }
     }
-    resizeKeeping(m_geometry.positions, 3 * vertices);  // the region's front is kept as it is
     resizeKeeping(m_geometry.indices, 3 * triangles);
 }
 
-/// A mesh's vertices (relative to the origin, as floats) and its triangles' global vertex indices, each compared
-/// with what the arrays held (bit for bit: -0 and +0 differ) before it is written.
-ClusterGeometry::Changed ClusterGeometry::writeMesh(const TriangleMesh& mesh, const MeshSlot& slot) {
+/// A mesh's vertices (world positions as the device holds them, or a mapped mesh's own) and its triangles' global
+/// vertex indices, each compared with what the arrays held (bit for bit: -0 and +0 differ) before it is written.
+ClusterGeometry::Changed ClusterGeometry::writeMesh(const FrameState& frame, const MeshSlot& slot) {
     Changed changed;
-    std::size_t at = 3 * std::size_t{slot.baseVertex};
-    for (const Vec3& v : mesh.vertices) {
-        const Vec3 r = v.allFinite() ? Vec3(v - m_origin) : Vec3::Zero();  // unused vertices may be NaN
-        for (int a = 0; a < 3; ++a, ++at) {
-            const float f = static_cast<float>(r[a]);
-            if (changed.firstPosition == Changed::kNone && std::memcmp(&m_geometry.positions[at], &f, sizeof f) != 0)
-                changed.firstPosition = at;
-            m_geometry.positions[at] = f;
-        }
+    const TriangleMesh& mesh = frame.meshOf(slot.object);
+    if (!slot.mapped) {
+        writePositions(mesh, slot, changed);
+    } else if (slot.writeLocal) {
+        const std::size_t first = MappedVertices::write(*(*frame.inputs)[slot.object].mesh, slot.localBase,
+                                                        m_geometry.local);
+        if (first < m_geometry.local.size()) changed.firstLocal = first;
     }
-    at = 3 * std::size_t{slot.baseTriangle};
+    std::size_t at = 3 * std::size_t{slot.baseTriangle};
     for (const auto& t : mesh.triangles) {
         for (std::uint32_t k : t) {
             const std::uint32_t global = slot.baseVertex + k;
@@ -92,6 +119,32 @@ ClusterGeometry::Changed ClusterGeometry::writeMesh(const TriangleMesh& mesh, co
         }
     }
     return changed;
+}
+
+void ClusterGeometry::writePositions(const TriangleMesh& world, const MeshSlot& slot, Changed& changed) {
+    std::size_t at = 3 * std::size_t{slot.baseVertex};
+    for (const Vec3& v : world.vertices) {
+        float f[3];
+        devicePosition(v, m_origin, f);
+        for (int a = 0; a < 3; ++a, ++at) {
+            if (changed.firstPosition == Changed::kNone && std::memcmp(&m_geometry.positions[at], &f[a], 4) != 0)
+                changed.firstPosition = at;
+            m_geometry.positions[at] = f[a];
+        }
+    }
+}
+
+std::vector<float> allPositions(const GpuGeometry& geometry) {
+    std::vector<float> all = geometry.positions;
+    all.resize(3 * geometry.vertexCount(), 0.0f);
+    for (const MappedMesh& m : geometry.mapped) {
+        for (std::uint32_t v = 0; v < m.count; ++v) {
+            const double* p = &geometry.local[3 * (std::size_t{m.localBase} + v)];
+            devicePosition(transformPoint(m.transform, Vec3(p[0], p[1], p[2])), geometry.origin,
+                           &all[3 * (std::size_t{m.baseVertex} + v)]);
+        }
+    }
+    return all;
 }
 
 std::uint32_t ClusterGeometry::appendBox(const Aabb& worldBox) {

@@ -1,10 +1,12 @@
 // The device's copy of one cluster (FrameState.h): positions and indices of its meshes and the boxes of its objects
 // and groups, relative to an origin near the cluster's centre, in float. Static meshes sit in the resident region at
 // the front of the buffers and are sent once (MeshCache.h); of the other meshes, only what changed since the last
-// upload is sent again (a deforming mesh's positions, not its indices).
+// upload is sent again (a deforming mesh's positions, not its indices). A mesh that came with a transform goes in
+// its own frame, mapped by the backend (MappedMesh): while it moves rigidly only its transform is sent.
 #pragma once
 
 #include "FrameState.h"
+#include "MappedVertices.h"
 #include "MeshCache.h"
 #include "PruningBackend.h"
 #include "cullide/TaskPool.h"
@@ -31,23 +33,30 @@ public:
     Aabb relative(const Aabb& worldBox) const { return {worldBox.min - m_origin, worldBox.max - m_origin}; }
 
 private:
-    /// Where a mesh goes in the position and index arrays.
+    /// Where a mesh goes in the position (or, mapped, the local) and index arrays.
     struct MeshSlot {
         std::uint32_t object;
         std::uint32_t baseVertex;
         std::uint32_t baseTriangle;
+        bool mapped = false;
+        std::uint32_t localBase = 0;  ///< mapped: its first vertex in the local array
+        bool writeLocal = false;      ///< mapped: the first object of the upload with its mesh (it writes the slot)
     };
     /// Where a written mesh first differs from what the arrays held (kNone: nowhere).
     struct Changed {
         static constexpr std::size_t kNone = static_cast<std::size_t>(-1);
         std::size_t firstPosition = kNone;  ///< in floats
         std::size_t firstIndex = kNone;
+        std::size_t firstLocal = kNone;  ///< in doubles
     };
     void placeMeshes(const FrameState& frame, const Cluster& cluster);
-    Changed writeMesh(const TriangleMesh& mesh, const MeshSlot& slot);
+    Changed writeMesh(const FrameState& frame, const MeshSlot& slot);
+    void writePositions(const TriangleMesh& world, const MeshSlot& slot, Changed& changed);
     std::uint32_t appendBox(const Aabb& worldBox);
 
     ResidentRegion m_region;
+    MappedVertices m_mappedVertices;  ///< the slots of m_geometry.local
+    bool m_localStartedOver = false;  ///< this upload: nothing of m_geometry.local is on the device
     GpuGeometry m_geometry;  ///< the backend reads it until the next upload
     Vec3 m_origin = Vec3::Zero();
     std::vector<std::uint32_t> m_baseTriangle;

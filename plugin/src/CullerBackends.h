@@ -8,6 +8,7 @@
 
 #include <functional>
 #include <memory>
+#include <vector>
 
 namespace cullide {
 
@@ -22,6 +23,9 @@ struct GlBackendOptions {
     /// Added to every read-back's wait (and counted in LevelStats::waitMs like it): a device whose round trips are
     /// slow, so that tests can check how the level's CPU time is split between its set-up and its waits.
     double readBackDelayMs = 0.0;
+    /// Where set: after every upload, every position the device holds (the mapped meshes' as map.comp wrote them) is
+    /// read back into it, so that tests can hold them to allPositions bit for bit: a read-back that no stat counts.
+    std::shared_ptr<std::vector<float>> positionsAfterUpload;
 };
 
 /// The GL visibility test (gl/VisibilityPass). Throws GlUnavailableError without a usable GL device.

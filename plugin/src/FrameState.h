@@ -32,6 +32,9 @@ struct FrameTriangle {
 struct FrameState {
     /// The frame's objects, with world-space meshes for the active objects that came with a transform.
     const std::vector<Object>* objects = nullptr;
+    /// The frame's objects as given: a mesh that came with a transform in its own frame (ClusterGeometry has such a
+    /// mesh mapped on the device).
+    const std::vector<Object>* inputs = nullptr;
     std::vector<ValidatedObject> valid;
     StaticLookup statics;
     /// Object pairs whose boxes overlap (sorted, a < b) and, per object, the other object of each.

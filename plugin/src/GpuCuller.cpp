@@ -76,6 +76,7 @@ private:
             stats.abandoned = true;
             result.stats = std::move(stats);
             m_frame.objects = nullptr;
+            m_frame.inputs = nullptr;
         }
     }
 
@@ -131,6 +132,7 @@ private:
         stats.totalMs = total.ms();
         if (autoActive) recordAutoFrame(stats);
         frame.objects = nullptr;
+        frame.inputs = nullptr;
     }
 
     void countPool(const TaskPool::Counters& before, Stats& stats) const {
@@ -167,6 +169,7 @@ private:
             frame.active[i] = frame.partners[i].empty() ? 0 : 1;
             stats.prepassObjectsOut += frame.active[i];
         }
+        frame.inputs = &objects;
         frame.objects = &m_world.resolve(objects, frame.active, &m_pool);
         clearLists(frame.surviving, objects.size());
     }

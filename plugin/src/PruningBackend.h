@@ -17,19 +17,53 @@
 
 namespace cullide {
 
+/// A mesh given in its own frame (Object::transform) whose world positions the backend maps itself: its vertices
+/// local[3 * localBase ..] (count of them) go to vertices baseVertex .. of the cluster as devicePosition(
+/// transformPoint(transform, v), origin) would write them, bit for bit.
+struct MappedMesh {
+    Transform transform;
+    std::uint32_t localBase = 0;
+    std::uint32_t baseVertex = 0;
+    std::uint32_t count = 0;
+};
+
 /// Geometry of the frame's active cluster, uploaded once per cluster: positions and boxes relative to the upload
 /// origin, in float (what the visibility test rasterises).
 struct GpuGeometry {
-    std::vector<float> positions;       ///< xyz per vertex
+    /// xyz per vertex, of every vertex before the mapped meshes' (which follow: vertexCount() in all).
+    std::vector<float> positions;
     std::vector<std::uint32_t> indices;  ///< 3 global vertex indices per triangle
-    /// The first keptPositions floats of `positions` and keptIndices of `indices` are the same as in the previous
-    /// upload (static geometry, and meshes that did not change: a deforming mesh's indices, a mesh at rest): what the
-    /// device already holds of them is not sent again.
+    /// The first keptPositions floats of `positions`, keptIndices of `indices` and keptLocal of `local` are the same
+    /// as in the previous upload (static geometry, and meshes that did not change: a deforming mesh's indices, a mesh
+    /// at rest, a rigid mesh's own vertices): what the device already holds of them is not sent again.
     std::size_t keptPositions = 0;
     std::size_t keptIndices = 0;
+    /// The vertices of the mapped meshes in their own frames (xyz per vertex) and the meshes: a rigid mesh's
+    /// vertices stay on the device, its transform is all that is sent while it moves.
+    std::vector<double> local;
+    std::size_t keptLocal = 0;
+    std::vector<MappedMesh> mapped;
+    Vec3 origin = Vec3::Zero();         ///< of the upload, in world space
     std::vector<float> boxes;           ///< min xyz, max xyz per box (rounded outwards)
     double coordinateBound = 0.0;       ///< max |coordinate| over positions and boxes (for error bounds)
+
+    std::size_t vertexCount() const {
+        std::size_t n = positions.size() / 3;
+        for (const MappedMesh& m : mapped) n = std::max<std::size_t>(n, std::size_t{m.baseVertex} + m.count);
+        return n;
+    }
 };
+
+/// A world position as the device holds it: relative to the upload origin, rounded to float (0 where the position
+/// is not finite: a vertex no triangle uses may be NaN).
+inline void devicePosition(const Vec3& world, const Vec3& origin, float out[3]) {
+    const Vec3 r = world.allFinite() ? Vec3(world - origin) : Vec3::Zero();
+    for (int a = 0; a < 3; ++a) out[a] = static_cast<float>(r[a]);
+}
+
+/// Every vertex of `geometry` as the device holds it: `positions`, then the mapped meshes' vertices mapped on the CPU
+/// (the reference backend's copy of what the GL one maps on the device).
+std::vector<float> allPositions(const GpuGeometry& geometry);
 
 /// The items of one level. Item i belongs to owner[i] (a compact object id) and is drawn as the primitives
 /// prims[primBegin[i] .. primBegin[i + 1]) (a triangle index, or a box index | CULLIDE_PRIM_BOX_BIT).

@@ -181,7 +181,14 @@ std::uint32_t quantizeUp(float z, float maxQ) {
 
 ReferenceVisibility::ReferenceVisibility(const Settings& settings) : m_settings(settings) {}
 
-void ReferenceVisibility::upload(const GpuGeometry& geometry, Stats&) { m_geometry = &geometry; }
+void ReferenceVisibility::upload(const GpuGeometry& geometry, Stats&) {
+    m_geometry = &geometry;
+    if (geometry.mapped.empty()) return;
+    m_mapped = geometry;  // with the mapped meshes' vertices mapped here, as the GL backend maps them on the device
+    m_mapped.positions = allPositions(geometry);
+    m_mapped.mapped.clear();
+    m_geometry = &m_mapped;
+}
 
 void ReferenceVisibility::pruneLevel(const LevelItems& items, const LevelStart& start,
                                      std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats,

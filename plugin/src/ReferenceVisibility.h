@@ -41,6 +41,7 @@ private:
 
     Settings m_settings;
     const GpuGeometry* m_geometry = nullptr;
+    GpuGeometry m_mapped;  ///< the upload with its mapped meshes' positions, where it has some
     const LevelItems* m_items = nullptr;
     std::vector<std::uint8_t> m_alive;        ///< of the level being run; after it, of the last level
     std::vector<std::uint8_t> m_parentAlive;  ///< the last level's, while a level inherits it

@@ -42,12 +42,17 @@ InstanceScene randomInstances(std::uint64_t seed, int count, bool affine, int fa
         scene.transforms.push_back(t);
         scene.meshOf.push_back(mesh);
     }
-    for (std::size_t i = 0; i < scene.transforms.size(); ++i) {
-        TriangleMesh world = scene.meshes[scene.meshOf[i]];
-        for (Vec3& p : world.vertices) p = transformPoint(scene.transforms[i], p);
-        scene.worldMeshes.push_back(std::move(world));
-    }
+    scene.refreshWorldMeshes();
     return scene;
+}
+
+void InstanceScene::refreshWorldMeshes() {
+    worldMeshes.clear();
+    for (std::size_t i = 0; i < transforms.size(); ++i) {
+        TriangleMesh world = meshes[meshOf[i]];
+        for (Vec3& p : world.vertices) p = transformPoint(transforms[i], p);
+        worldMeshes.push_back(std::move(world));
+    }
 }
 
 }  // namespace cullide::test

@@ -18,6 +18,7 @@ struct InstanceScene {
 
     std::vector<Object> instances() const;   ///< mesh + transform (pointers into this scene)
     std::vector<Object> worldObjects() const;  ///< the world-space twins
+    void refreshWorldMeshes();                 ///< the twins after the transforms changed
 };
 InstanceScene randomInstances(std::uint64_t seed, int count, bool affine, int farEvery = 0);
 

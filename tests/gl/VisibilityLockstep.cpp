@@ -15,12 +15,24 @@ namespace {
 class LockstepBackend final : public PruningBackend {
 public:
     LockstepBackend(std::unique_ptr<PruningBackend> tested, std::unique_ptr<PruningBackend> reference,
-                    std::shared_ptr<LockstepLog> log)
-        : m_tested(std::move(tested)), m_reference(std::move(reference)), m_log(std::move(log)) {}
+                    std::shared_ptr<LockstepLog> log, std::shared_ptr<std::vector<float>> devicePositions)
+        : m_tested(std::move(tested)), m_reference(std::move(reference)), m_log(std::move(log)),
+          m_devicePositions(std::move(devicePositions)) {}
 
+    /// Every upload: the positions the device holds against allPositions, bit for bit (the mapped meshes' are
+    /// mapped there by map.comp).
     void upload(const GpuGeometry& geometry, Stats& stats) override {
         m_tested->upload(geometry, stats);
         m_reference->upload(geometry, m_scratch);
+        const std::vector<float> expected = allPositions(geometry);
+        ++m_log->uploads;
+        m_log->mappedVertices += expected.size() / 3 - geometry.positions.size() / 3;
+        std::size_t differing = 0;
+        for (std::size_t i = 0; i < expected.size() && i < m_devicePositions->size(); ++i)
+            differing += std::memcmp(&expected[i], &(*m_devicePositions)[i], 4) != 0 ? 1 : 0;
+        if (differing != 0 || expected.size() != m_devicePositions->size())
+            note(0, "upload " + std::to_string(m_log->uploads) + ": " + std::to_string(differing) + " of " +
+                        std::to_string(expected.size()) + " position floats differ on the device");
     }
     void forgetUploads() override {
         m_tested->forgetUploads();
@@ -159,6 +171,7 @@ private:
     std::unique_ptr<PruningBackend> m_tested;
     std::unique_ptr<PruningBackend> m_reference;
     std::shared_ptr<LockstepLog> m_log;
+    std::shared_ptr<std::vector<float>> m_devicePositions;  ///< GlBackendOptions::positionsAfterUpload
     Stats m_scratch;  ///< what the checks cost is not the culler's
     LevelStats m_scratchLevel;
     std::vector<IterationTrace> m_got;
@@ -175,15 +188,18 @@ private:
 std::string LockstepLog::summary() const {
     std::ostringstream s;
     s << levels << " levels, " << iterations << " iterations, " << itemsIn << " items in, " << itemsPruned
-      << " pruned, " << mismatches << " iterations differ (" << itemsDiffering << " items)";
+      << " pruned, " << uploads << " uploads (" << mappedVertices << " vertices mapped on the device), "
+      << mismatches << " differences (" << itemsDiffering << " items)";
     for (const std::string& d : details) s << "\n  " << d;
     return s.str();
 }
 
 PruningBackendFactory lockstepFactory(std::shared_ptr<LockstepLog> log, GlBackendOptions options) {
     return [log, options](const Settings& settings) -> std::unique_ptr<PruningBackend> {
-        return std::make_unique<LockstepBackend>(createGlPruningBackend(settings, options),
-                                                 createReferencePruningBackend(settings), log);
+        GlBackendOptions o = options;
+        o.positionsAfterUpload = std::make_shared<std::vector<float>>();
+        return std::make_unique<LockstepBackend>(createGlPruningBackend(settings, o),
+                                                 createReferencePruningBackend(settings), log, o.positionsAfterUpload);
     };
 }
 

@@ -22,7 +22,10 @@ struct LockstepLog {
     std::size_t itemsIn = 0;      ///< items entering the compared iterations, summed
     std::size_t itemsPruned = 0;  ///< items the GL backend pruned in them, summed
     std::size_t levelsAhead = 0;  ///< of the levels, run ahead (their survivors compared through the next level's)
-    std::size_t mismatches = 0;   ///< differences found (an iteration's view or result, a level's survivors)
+    std::size_t uploads = 0;         ///< geometry uploads, each checked: the device's positions bit for bit
+    std::size_t mappedVertices = 0;  ///< of their vertices, mapped on the device (MappedMesh), summed
+    std::size_t mismatches = 0;   ///< differences found (an iteration's view or result, a level's survivors, an
+                                  ///< upload's positions)
     std::size_t itemsDiffering = 0;
     std::vector<std::string> details;  ///< the first few differences, for the failure message
     std::string summary() const;

@@ -3,9 +3,13 @@
 #include "Compare.h"
 #include "GlTestSupport.h"
 #include "Instances.h"
+#include "VisibilityLockstep.h"
+
+#include <Eigen/Geometry>
 
 #include <gtest/gtest.h>
 
+#include <memory>
 #include <set>
 
 namespace cullide::test {
@@ -51,6 +55,50 @@ INSTANTIATE_TEST_SUITE_P(Pipelines, TransformedInstances,
                          ::testing::Values(Case{GpuLevels::Never, Pipeline::Auto},
                                            Case{GpuLevels::Always, Pipeline::Auto},
                                            Case{GpuLevels::Always, Pipeline::Paper}));
+
+// Moving instances (rigid and sheared, some far away: clusters of their own) go to the device in their own frames and
+// are mapped there (map.comp): every upload's positions are held to the CPU's bit for bit, every level to the
+// reference's (lockstep), the pairs to the exact reference's; a frame sends their transforms, not their vertices, and
+// a mesh's own vertices again only where they changed.
+TEST(TransformedInstances, MovingInstancesAreMappedOnTheDeviceBitForBit) {
+    const Settings settings = lockstepSettings({Pipeline::Auto, Mode::Reliable, Backend::Compute, 64});
+    CULLIDE_GPU_CULLER_OR_SKIP(twinCuller, settings);
+    auto log = std::make_shared<LockstepLog>();
+    std::unique_ptr<Culler> culler = createGpuCuller(settings, lockstepFactory(log));
+    std::unique_ptr<Culler> reference = createReferenceCuller(settings);
+    InstanceScene scene = randomInstances(11, 24, true, 6);
+    std::size_t pairs = 0, mappedBytes = 0, twinBytes = 0, firstFrameMapped = 0;
+    for (int frame = 0; frame < 4; ++frame) {
+        Result got, twins;
+        const Comparison c = runAndCompare(*culler, *reference, scene.instances(), got);
+        EXPECT_EQ(got.stats.gpuFallbacks, 0u) << got.stats.gpuError;
+        EXPECT_EQ(c.missed, 0u) << "frame " << frame << ": " << c.firstMissed;
+        EXPECT_EQ(c.spurious, 0u) << frame;
+        twinCuller->run(scene.worldObjects(), twins);
+        EXPECT_EQ(trianglePairs(got), trianglePairs(twins)) << frame;
+        pairs += c.expected;
+        if (frame > 0) {  // every instance moved since the last frame
+            mappedBytes += got.stats.bytesUploaded;
+            twinBytes += twins.stats.bytesUploaded;
+        } else {
+            firstFrameMapped = log->mappedVertices;
+        }
+        for (Transform& t : scene.transforms) {
+            t.translation += Vec3(0.011, -0.007, 0.005);
+            t.linear = Eigen::AngleAxisd(0.03, Vec3(0.3, 1.0, -0.2).normalized()).toRotationMatrix() * t.linear;
+        }
+        if (frame == 1)  // a shared mesh deforms in its own frame (same address, same counts): sent again
+            for (Vec3& v : scene.meshes[0].vertices) v = Vec3(1.2 * v.x(), v.y(), 0.8 * v.z());
+        scene.refreshWorldMeshes();
+    }
+    EXPECT_EQ(log->mismatches, 0u) << log->summary();
+    EXPECT_GT(log->mappedVertices, 0u) << log->summary();
+    EXPECT_GT(log->itemsPruned, 0u) << log->summary();
+    EXPECT_GT(pairs, 20u) << "too sparse to test anything";
+    // The twins send their world vertices again (12 bytes each) where the instances send a transform (112 bytes).
+    const std::size_t moved = log->mappedVertices - firstFrameMapped;
+    EXPECT_LT(mappedBytes + 10 * moved, twinBytes) << moved << " vertices moved";
+}
 
 // A static key whose transform changes (same version) must not reuse the boxes of the old placement.
 TEST(TransformedInstances, StaticKeyFollowsTheTransform) {

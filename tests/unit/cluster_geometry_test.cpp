@@ -2,11 +2,14 @@
 // with every upload.
 #include "ClusterGeometry.h"
 #include "MeshCacheSupport.h"
+#include "WorldMeshes.h"
 #include "cullide/scenes/Procedural.h"
 
+#include <Eigen/Geometry>
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 
 #include <string>
 #include <vector>
@@ -119,6 +122,64 @@ TEST(ClusterGeometry, OnlyWhatChangedSinceTheLastUploadIsSent) {
     EXPECT_EQ(g.keptPositions, groundFloats) << "-0 was taken for the +0 the device holds";
     g = upload();
     EXPECT_EQ(g.keptPositions, g.positions.size());
+}
+
+/// A mesh that came with a transform (and is not static) goes in its own frame: its own vertices are sent when they
+/// change, its transform with every upload, and the positions mapped from them are its world twin's, bit for bit.
+TEST(ClusterGeometry, AMeshWithATransformGoesInItsOwnFrameAndMapsToItsWorldTwin) {
+    const TriangleMesh ground = makeBox(Vec3(4, 4, 0.5));
+    const TriangleMesh local = makeBox(Vec3(0.5, 0.3, 0.2));
+    Transform t;
+    t.linear = Eigen::AngleAxisd(0.7, Vec3(1, 2, 3).normalized()).toRotationMatrix();
+    t.translation = Vec3(0.1, -0.2, 0.9);
+    TriangleMesh world = local;
+    const std::vector<Object> inputs = {staticObject(ground, 1), Object{&local, &t, Aabb{}, 0, 0}};
+    const std::vector<Object> twins = {inputs[0], Object{&world, nullptr, Aabb{}, 0, 0}};
+    FrameState mappedFrame, twinFrame;
+    mappedFrame.inputs = &inputs;
+    mappedFrame.objects = &twins;  // the world meshes, as WorldMeshes resolves them
+    twinFrame.inputs = &twins;
+    twinFrame.objects = &twins;
+    Cluster cluster;
+    cluster.objects = {0, 1};
+    StaticMeshCache mappedCache, twinCache;
+    ClusterGeometry mappedGeometry, twinGeometry;
+    RecordingBackend mappedBackend, twinBackend;
+    TaskPool pool(2);
+    Stats stats;
+    for (int f = 0; f < 3; ++f) {
+        Aabb localBox;
+        for (std::size_t v = 0; v < local.vertices.size(); ++v) {
+            world.vertices[v] = transformPoint(t, local.vertices[v]);
+            localBox.grow(local.vertices[v]);
+        }
+        const std::vector<ValidatedObject> valid = {ValidatedObject{true, true, {Vec3(-4, -4, -0.5), Vec3(4, 4, 0.5)}},
+                                                    ValidatedObject{true, true, transformedBounds(t, localBox)}};
+        mappedFrame.valid = valid;
+        twinFrame.valid = valid;
+        mappedFrame.statics = lookUpAndCheck(mappedCache, inputs);
+        twinFrame.statics = lookUpAndCheck(twinCache, twins);
+        mappedGeometry.upload(mappedFrame, cluster, mappedBackend, pool, stats);
+        twinGeometry.upload(twinFrame, cluster, twinBackend, pool, stats);
+        const GpuGeometry& m = mappedBackend.uploads.back();
+        const GpuGeometry& w = twinBackend.uploads.back();
+        ASSERT_EQ(m.mapped.size(), 1u);
+        EXPECT_TRUE(w.mapped.empty());
+        EXPECT_EQ(m.positions.size(), 3 * ground.vertices.size()) << "only the static ground in world space";
+        EXPECT_EQ(m.local.size(), 3 * local.vertices.size());
+        EXPECT_EQ(m.mapped[0].transform.translation, t.translation);
+        EXPECT_EQ(m.indices, w.indices);
+        const std::vector<float> mapped = allPositions(m);
+        ASSERT_EQ(mapped.size(), w.positions.size());
+        EXPECT_EQ(std::memcmp(mapped.data(), w.positions.data(), 4 * mapped.size()), 0) << "frame " << f;
+        if (f > 0) {
+            EXPECT_EQ(m.keptLocal, m.local.size()) << "it moved rigidly: its own vertices stay on the device";
+            EXPECT_EQ(m.keptPositions, m.positions.size());
+            EXPECT_LT(w.keptPositions, w.positions.size()) << "its twin is sent again";
+        }
+        t.translation += Vec3(0.013, 0.021, -0.017);
+        t.linear = Eigen::AngleAxisd(0.05, Vec3::UnitZ()).toRotationMatrix() * t.linear;
+    }
 }
 
 }  // namespace

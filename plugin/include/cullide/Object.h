@@ -17,7 +17,8 @@ struct Object {
     /// exact for transformPoint's rounding) comes within the margin of another object, so far-apart instances cost
     /// a box each. nullptr: the mesh is already in world space. An object is rejected when its transform is not
     /// finite or maps the mesh box beyond the double range. Ignored for box-only proxies (their box is in world
-    /// space).
+    /// space). When GPU levels run, the mesh's own vertices stay on the device (sent again only when they change;
+    /// found by the mesh's address and vertex count, then compared) and each frame sends only the transform.
     const Transform* transform = nullptr;
     /// Box-only proxy (used when mesh == nullptr). Must be finite.
     Aabb box;

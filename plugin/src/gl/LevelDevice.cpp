@@ -28,6 +28,28 @@ constexpr std::size_t kMaxBuildGroups = 262144;
 
 constexpr std::size_t kRecordBytes = 7 * 16;  // PrimRecord in common.glsl
 
+/// map.comp's MappedRecord (std430).
+struct MappedRecord {
+    double m[12];  ///< the linear part row by row, then the translation
+    std::uint32_t localBase;
+    std::uint32_t baseVertex;
+    std::uint32_t count;
+    std::uint32_t unused;
+};
+static_assert(sizeof(MappedRecord) == 112, "map.comp's std430 layout");
+
+MappedRecord toMappedRecord(const MappedMesh& mesh) {
+    MappedRecord r{};
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) r.m[3 * i + j] = mesh.transform.linear(i, j);
+        r.m[9 + i] = mesh.transform.translation[i];
+    }
+    r.localBase = mesh.localBase;
+    r.baseVertex = mesh.baseVertex;
+    r.count = mesh.count;
+    return r;
+}
+
 }  // namespace
 
 double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
@@ -35,7 +57,8 @@ double msSince(Clock::time_point t0) { return std::chrono::duration<double, std:
 std::size_t counterWords(std::size_t items) { return CULLIDE_ALIVE_BITS + (items + 31) / 32; }
 
 LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const GlBackendOptions& options)
-    : ownContext(std::move(c)), context(*ownContext), settings(s), readBackDelayMs(options.readBackDelayMs) {
+    : ownContext(std::move(c)), context(*ownContext), settings(s), readBackDelayMs(options.readBackDelayMs),
+      positionsAfterUpload(options.positionsAfterUpload) {
     context.makeCurrent();
     if (settings.backend == Backend::Compute) {
         program = linkProgram(
@@ -60,6 +83,7 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
                                  "the survivor program");
     buildProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "passes.glsl", "build.comp"})},
                                "the record build program");
+    mapProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"map.comp"})}, "the mapped meshes' program");
     if (settings.backend == Backend::Compute)
         bands = context.isSoftware() && !options.shortBands ? CULLIDE_BANDS_LONG : CULLIDE_BANDS_SHORT;
     glCreateVertexArrays(1, &vao);
@@ -96,6 +120,7 @@ LevelDevice::~LevelDevice() {
     if (setupProgram) glDeleteProgram(setupProgram);
     glDeleteProgram(surviveProgram);
     glDeleteProgram(buildProgram);
+    glDeleteProgram(mapProgram);
 }
 
 void LevelDevice::dispatchAll(std::size_t count) const {
@@ -105,6 +130,51 @@ void LevelDevice::dispatchAll(std::size_t count) const {
         glDispatchCompute(static_cast<GLuint>(std::min<std::size_t>(maxGroups, groups - first)), 1, 1);
     }
     glUniform1ui(CULLIDE_LOC_PRIM_BASE, 0);
+}
+
+void LevelDevice::uploadPositions(const GpuGeometry& g, Stats& stats) {
+    const std::size_t allBytes = g.vertexCount() * 12;
+    if (allBytes > capacity[kPositions]) {  // a new store: nothing of the last upload is kept
+        reserveBuffer(buffers[kPositions], capacity[kPositions], allBytes);
+        valid[kPositions] = 0;
+    }
+    stats.bytesUploaded += uploadAfterPrefix(buffers[kPositions], capacity[kPositions], valid[kPositions],
+                                             g.positions.data(), g.positions.size() * 4, g.keptPositions * 4);
+    if (g.mapped.empty()) return readPositionsForTests(g);
+    stats.bytesUploaded += uploadAfterPrefix(buffers[kLocal], capacity[kLocal], valid[kLocal], g.local.data(),
+                                             g.local.size() * 8, g.keptLocal * 8);
+    std::vector<MappedRecord> records(g.mapped.size());
+    std::uint32_t most = 0;
+    for (std::size_t i = 0; i < records.size(); ++i) {
+        records[i] = toMappedRecord(g.mapped[i]);
+        most = std::max(most, g.mapped[i].count);
+    }
+    uploadBuffer(buffers[kMapped], capacity[kMapped], records.data(), records.size() * sizeof(MappedRecord));
+    stats.bytesUploaded += records.size() * sizeof(MappedRecord);
+    glUseProgram(mapProgram);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_POSITIONS, buffers[kPositions]);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_LOCAL, buffers[kLocal]);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_MAPPED, buffers[kMapped]);
+    glUniform3d(CULLIDE_LOC_ORIGIN, g.origin.x(), g.origin.y(), g.origin.z());
+    const std::size_t rowGroups = std::min<std::size_t>(maxGroups, (most + CULLIDE_COMPUTE_GROUP_SIZE - 1) /
+                                                                       CULLIDE_COMPUTE_GROUP_SIZE);
+    constexpr std::size_t kMaxRows = 65535;  // GL_MAX_COMPUTE_WORK_GROUP_COUNT[1] is at least this
+    for (std::size_t first = 0; first < records.size() && rowGroups > 0; first += kMaxRows) {
+        glUniform1ui(CULLIDE_LOC_MESH_BASE, static_cast<GLuint>(first));
+        glDispatchCompute(static_cast<GLuint>(rowGroups),
+                          static_cast<GLuint>(std::min(kMaxRows, records.size() - first)), 1);
+        stats.draws += 1;
+    }
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    readPositionsForTests(g);
+}
+
+void LevelDevice::readPositionsForTests(const GpuGeometry& g) const {
+    if (!positionsAfterUpload) return;
+    positionsAfterUpload->assign(3 * g.vertexCount(), 0.0f);
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    glGetNamedBufferSubData(buffers[kPositions], 0, static_cast<GLsizeiptr>(positionsAfterUpload->size() * 4),
+                            positionsAfterUpload->data());
 }
 
 void LevelDevice::draw(int pass, LevelStats& level, Stats& stats) const {

@@ -44,6 +44,8 @@ enum Buffer {
     kParentOwners,
     kStash,       ///< a level run ahead: words CULLIDE_DISPATCH_RECORDS .. CULLIDE_AHEAD of its counters
     kStashViews,  ///< ... and its views (where a trace is asked for)
+    kLocal,       ///< the mapped meshes' own vertices (double)
+    kMapped,      ///< their MappedRecords
     kBufferCount
 };
 
@@ -79,6 +81,7 @@ struct LevelDevice {
     GLuint setupProgram = 0;  // raster back-end only
     GLuint surviveProgram = 0;
     GLuint buildProgram = 0;
+    GLuint mapProgram = 0;
     int bands = CULLIDE_BANDS_NONE;  ///< build.comp's CULLIDE_BANDS_* for this back-end and device
     GLuint vao = 0;
     GLuint framebuffer = 0;
@@ -101,6 +104,7 @@ struct LevelDevice {
     bool timing = false;
     Clock::time_point timedSpan;
     double readBackDelayMs = 0.0;  ///< GlBackendOptions::readBackDelayMs (tests: a slow device's round trip)
+    std::shared_ptr<std::vector<float>> positionsAfterUpload;  ///< GlBackendOptions::positionsAfterUpload (tests)
 
     /// Builds the programs of Settings::backend in context `c` (made current, then released).
     LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const GlBackendOptions& options);
@@ -124,6 +128,12 @@ struct LevelDevice {
     /// and sets the alive set: every item alive, or (inheriting) none until the first build marks those whose parent
     /// survived (the last level's alive set is copied aside first).
     void uploadItems(const LevelItems& items, const LevelStart& start, LevelStats& level, Stats& stats);
+
+    /// Sends the upload's positions (those before the mapped meshes') and what changed of the mapped meshes' own
+    /// vertices, then maps those to the positions after them (map.comp: one dispatch, their transforms sent).
+    void uploadPositions(const GpuGeometry& geometry, Stats& stats);
+    /// GlBackendOptions::positionsAfterUpload: the device's positions read back into it (tests only).
+    void readPositionsForTests(const GpuGeometry& geometry) const;
 
     /// Binds the shader storage buffers every program reads and writes.
     void bindBuffers() const;

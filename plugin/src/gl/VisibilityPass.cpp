@@ -200,9 +200,7 @@ std::string VisibilityPass::device() const { return m_impl->context.device(); }
 void VisibilityPass::upload(const GpuGeometry& geometry, Stats& stats) {
     Impl& s = *m_impl;
     s.context.makeCurrent();
-    stats.bytesUploaded += uploadAfterPrefix(s.buffers[kPositions], s.capacity[kPositions], s.valid[kPositions],
-                                             geometry.positions.data(), geometry.positions.size() * 4,
-                                             geometry.keptPositions * 4);
+    s.uploadPositions(geometry, stats);
     stats.bytesUploaded += uploadAfterPrefix(s.buffers[kIndices], s.capacity[kIndices], s.valid[kIndices],
                                              geometry.indices.data(), geometry.indices.size() * 4,
                                              geometry.keptIndices * 4);

@@ -1,0 +1,46 @@
+// The mapped meshes' world positions (MappedMesh, plugin/src/PruningBackend.h): every vertex of a mesh given in its
+// own frame, mapped by its transform as transformPoint (plugin/src/WorldMeshes.cpp) maps it on the CPU — the same
+// double operations in the same order, none fused (precise) — then made relative to the upload origin and rounded to
+// float, 0 where not finite (devicePosition): the positions ClusterGeometry would have written, bit for bit. One
+// dispatch per upload: work group row y is a mesh, the invocations of the row stride over its vertices.
+layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
+layout(std430, binding = CULLIDE_SSBO_POSITIONS) writeonly buffer Positions { float positions[]; };
+layout(std430, binding = CULLIDE_SSBO_LOCAL) readonly buffer Local { double local[]; };
+// Mirrored by MappedRecord (plugin/src/gl/LevelDevice.cpp).
+struct MappedRecord {
+    double m[12];     // the linear part row by row (m[3 * i + j] = row i, column j), then the translation
+    uint localBase;   // its first vertex in local[] (3 doubles each)
+    uint baseVertex;  // its first vertex in positions[] (3 floats each)
+    uint count;
+    uint unused;
+};
+layout(std430, binding = CULLIDE_SSBO_MAPPED) readonly buffer Mapped { MappedRecord meshes[]; };
+layout(location = CULLIDE_LOC_ORIGIN) uniform dvec3 u_origin;
+layout(location = CULLIDE_LOC_MESH_BASE) uniform uint u_meshBase;
+
+// Row i of transformPoint: ((m_i0 * p0 + m_i1 * p1) + m_i2 * p2) + t_i, each operation rounded.
+double row(uint mesh, int i, dvec3 p) {
+    precise double x = meshes[mesh].m[3 * i] * p.x;
+    x = x + meshes[mesh].m[3 * i + 1] * p.y;
+    x = x + meshes[mesh].m[3 * i + 2] * p.z;
+    x = x + meshes[mesh].m[9 + i];
+    return x;
+}
+
+void main() {
+    uint mesh = u_meshBase + gl_WorkGroupID.y;
+    uint count = meshes[mesh].count;
+    uint stride = gl_NumWorkGroups.x * gl_WorkGroupSize.x;
+    for (uint v = gl_GlobalInvocationID.x; v < count; v += stride) {
+        uint l = 3u * (meshes[mesh].localBase + v);
+        dvec3 p = dvec3(local[l], local[l + 1u], local[l + 2u]);
+        // The three rows written out (NVIDIA's compiler and loops over indexed doubles: see survive.comp).
+        precise dvec3 w = dvec3(row(mesh, 0, p), row(mesh, 1, p), row(mesh, 2, p));
+        bool finite = !any(isnan(w)) && !any(isinf(w));
+        precise dvec3 r = finite ? w - u_origin : dvec3(0.0);
+        uint o = 3u * (meshes[mesh].baseVertex + v);
+        positions[o] = float(r.x);
+        positions[o + 1u] = float(r.y);
+        positions[o + 2u] = float(r.z);
+    }
+}
