@@ -26,15 +26,20 @@
 #define CULLIDE_SSBO_VIEWS 15      /* ViewRecord[CULLIDE_MAX_ITERATIONS + 1] (view.glsl): iteration i's view (the first
                                       * written by the C++ side, each next one by survive.comp's last work group) and
                                       * what the iteration left */
-#define CULLIDE_SSBO_PARENT 16     /* uint[parents + 1]: a level whose items inherit the last level's survivors (ordered
-                                      * by parent): items parentBegin[p] .. parentBegin[p + 1] start alive when item p
-                                      * of that level survived it */
-#define CULLIDE_SSBO_PARENT_ALIVE 17 /* uint[last level's itemCount]: that level's alive set (a copy) */
-#define CULLIDE_SSBO_PARENT_OWNER 18 /* uint[last level's itemCount]: that level's owners (a copy), where the items'
-                                      * owners are their parents' (CULLIDE_LOC_INHERIT_OWNERS) */
+#define CULLIDE_SSBO_PARENT 16     /* uint[]: a level whose items inherit the last level's survivors (ordered by
+                                      * parent): parentBegin[parents + 1] (items parentBegin[p] .. parentBegin[p + 1]
+                                      * start alive when item p of that level survived it), then parentFirst[parents]
+                                      * where the level generates its primitives (CULLIDE_LOC_GENERATE: parent p's
+                                      * first child's place in CULLIDE_SSBO_ORDERED, or a box reference with
+                                      * CULLIDE_PRIM_BOX_BIT for a parent with one child), then the start bits
+                                      * (CULLIDE_LOC_START_BITS) */
+#define CULLIDE_SSBO_PARENT_ALIVE 17 /* uint[2 * parents]: the last level's alive set, then its owners (copies; the
+                                      * owners where the items' are their parents', CULLIDE_LOC_INHERIT_OWNERS) */
 /* The mapped meshes (map.comp): a rigid mesh's own vertices stay on the device, its transform is sent per upload. */
 #define CULLIDE_SSBO_LOCAL 19      /* double[3 * local vertices]: the mapped meshes' vertices in their own frames */
 #define CULLIDE_SSBO_MAPPED 20     /* MappedRecord[mapped meshes] (map.comp): transform, where its vertices are */
+#define CULLIDE_SSBO_ORDERED 21    /* uint[triangleCount]: each mesh's triangles in its spatial order (global indices;
+                                      * GpuGeometry::ordered), kept between uploads like the indices */
 
 /* Counters, reset before every iteration. */
 #define CULLIDE_COUNTER_OVERFLOWS 0 /* compute invocations that would exceed CULLIDE_MAX_LOOP_ITERATIONS */
@@ -137,6 +142,10 @@
                                        * first build writes them) */
 #define CULLIDE_LOC_ORIGIN 27       /* dvec3: map.comp: the upload origin (world) */
 #define CULLIDE_LOC_MESH_BASE 28    /* uint: map.comp: the mesh of work group row 0 (split at the group-count limit) */
+#define CULLIDE_LOC_GENERATE 29     /* int: build.comp: 1 = the first build writes each item's primitive (one each)
+                                     * from its parent: ITEM_PRIMS[i] = ORDERED[PARENT_FIRST[p] + i - parentBegin[p]] */
+#define CULLIDE_LOC_START_BITS 30   /* uint: build.comp: 0, or where in CULLIDE_SSBO_PARENT the start bits begin: an
+                                     * inheriting item i starts alive only where bit i % 32 of word i / 32 is set */
 
 #define CULLIDE_BANDS_NONE 0        /* one record per primitive (raster back-end) */
 #define CULLIDE_BANDS_LONG 1        /* bands of CULLIDE_PIXELS_PER_INVOCATION pixels (software renderers) */

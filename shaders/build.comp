@@ -11,6 +11,9 @@
 //   APPEND      each primitive's records (none for a pruned item's), appended where its work group reserved room
 //               with one atomic add; the last work group to finish turns the total into the count and the indirect
 //               arguments of the iteration's record-sized passes (CULLIDE_DISPATCH_*): the C++ side never waits.
+// A level that inherits its parents' survivors starts in its first build's first pass: each item alive where its
+// parent survived (and its start bit allows), its owner its parent's (CULLIDE_LOC_INHERIT_OWNERS) and its primitive
+// generated from its parent's range of the mesh's spatial order (CULLIDE_LOC_GENERATE) — nothing per item is sent.
 // A work group whose records would not fit the buffers' capacity writes none: the build is then short, the iteration
 // runs over no record and prunes nothing, and the C++ side, which reads the needed total with the iteration's
 // counters, grows the buffers and builds again. The records come out in no particular order: every pass over them is
@@ -20,12 +23,12 @@ layout(std430, binding = CULLIDE_SSBO_POSITIONS) readonly buffer Positions { flo
 layout(std430, binding = CULLIDE_SSBO_INDICES) readonly buffer Indices { uint indices[]; };
 layout(std430, binding = CULLIDE_SSBO_BOXES) readonly buffer Boxes { float boxes[]; };
 layout(std430, binding = CULLIDE_SSBO_ALIVE) buffer Alive { uint alive[]; };
-layout(std430, binding = CULLIDE_SSBO_PARENT) readonly buffer ParentBegin { uint parentBegin[]; };
-layout(std430, binding = CULLIDE_SSBO_PARENT_ALIVE) readonly buffer ParentAlive { uint parentAlive[]; };
-layout(std430, binding = CULLIDE_SSBO_PARENT_OWNER) readonly buffer ParentOwners { uint parentOwners[]; };
+layout(std430, binding = CULLIDE_SSBO_PARENT) readonly buffer Parents { uint parents[]; };
+layout(std430, binding = CULLIDE_SSBO_PARENT_ALIVE) readonly buffer ParentState { uint parentState[]; };
 layout(std430, binding = CULLIDE_SSBO_ITEM_OWNER) writeonly buffer Owners { uint owners[]; };
 layout(std430, binding = CULLIDE_SSBO_PRIM_BEGIN) readonly buffer PrimBegin { uint primBegin[]; };
-layout(std430, binding = CULLIDE_SSBO_ITEM_PRIMS) readonly buffer ItemPrims { uint itemPrims[]; };
+layout(std430, binding = CULLIDE_SSBO_ITEM_PRIMS) buffer ItemPrims { uint itemPrims[]; };  // written: u_generate
+layout(std430, binding = CULLIDE_SSBO_ORDERED) readonly buffer Ordered { uint ordered[]; };
 layout(std430, binding = CULLIDE_SSBO_BANDS) buffer Bands { uint bands[]; };
 layout(std430, binding = CULLIDE_SSBO_BUILD) coherent buffer Build { uint build[]; };
 layout(std430, binding = CULLIDE_SSBO_PRIMS) writeonly buffer Prims { uvec4 prims[]; };
@@ -42,6 +45,8 @@ layout(location = CULLIDE_LOC_WITH_BOUNDS) uniform int u_withBounds;
 layout(location = CULLIDE_LOC_PARENTS) uniform uint u_parents;
 layout(location = CULLIDE_LOC_ONE_PRIM_EACH) uniform int u_onePrimEach;
 layout(location = CULLIDE_LOC_INHERIT_OWNERS) uniform int u_inheritOwners;
+layout(location = CULLIDE_LOC_GENERATE) uniform int u_generate;
+layout(location = CULLIDE_LOC_START_BITS) uniform uint u_startBits;
 
 const uint kLanes = uint(CULLIDE_COMPUTE_GROUP_SIZE);
 shared uint s_scan[CULLIDE_COMPUTE_GROUP_SIZE];
@@ -152,12 +157,12 @@ void writeDispatch(uint total, float approx) {
     counters[CULLIDE_DISPATCH_SHORT] = fits ? 0u : 1u;
 }
 
-// Primitive p's box into its item's, cleared by the C++ side (at the level's start). The axes are written out:
+// Primitive `prim`'s box into its item's, cleared by the C++ side (at the level's start). The axes are written out:
 // NVIDIA's compiler (driver 580.159) crashed on a loop of atomics indexed by the loop variable (survive.comp).
-void addToItemBounds(uint p, uint item) {
+void addToItemBounds(uint prim, uint item) {
     vec3 lo;
     vec3 hi;
-    primBox(itemPrims[p], lo, hi);
+    primBox(prim, lo, hi);
     uint at = 3u * item;
     uint top = 3u * (u_itemCount + item);
     atomicMin(bounds[at], orderedBits(lo.x));
@@ -186,16 +191,28 @@ uint parentOf(uint item) {
     uint hi = u_parents;  // parentBegin[lo] <= item < parentBegin[hi]
     while (hi - lo > 1u) {
         uint mid = lo + (hi - lo) / 2u;
-        if (parentBegin[mid] <= item) lo = mid; else hi = mid;
+        if (parents[mid] <= item) lo = mid; else hi = mid;
     }
     return lo;
+}
+
+// Item `item`'s primitive where the level generates them (u_generate): the j-th child of `parent` is the j-th
+// triangle of its group's range of ORDERED, or the parent's box.
+uint generatedPrim(uint item, uint parent) {
+    uint first = parents[u_parents + 1u + parent];
+    return (first & CULLIDE_PRIM_BOX_BIT) != 0u ? first : ordered[first + (item - parents[parent])];
+}
+
+// Whether an inheriting item may start alive at all (its parent's survival decides the rest).
+bool startsAlive(uint item) {
+    return u_startBits == 0u || ((parents[u_startBits + item / 32u] >> (item % 32u)) & 1u) != 0u;
 }
 
 // An item that inherits from its parent (the level's first build, by its first primitive): its owner where it is the
 // parent's, and its fate: alive when the parent survived the last level, counted and marked in the alive set (which
 // the C++ side cleared).
 void inherit(uint item, bool live) {
-    if (u_inheritOwners != 0) owners[item] = parentOwners[parentOf(item)];
+    if (u_inheritOwners != 0) owners[item] = parentState[u_parents + parentOf(item)];
     alive[item] = live ? 1u : 0u;
     if (!live) return;
     atomicOr(counters[CULLIDE_ALIVE_BITS + item / 32u], 1u << (item % 32u));
@@ -209,11 +226,22 @@ void main() {
     uint item = p < u_primCount ? itemOf(p) : 0u;
     // The level's first build, in its first pass (APPEND reads what it wrote): the items' start.
     bool inherits = u_withBounds != 0 && u_parents != 0u && u_pass != CULLIDE_BUILD_PASS_APPEND;
-    bool live = p < u_primCount && (inherits ? parentAlive[parentOf(item)] != 0u : alive[item] != 0u);
+    uint parent = inherits && p < u_primCount ? parentOf(item) : 0u;
+    bool live = p < u_primCount && (inherits ? parentState[parent] != 0u && startsAlive(item) : alive[item] != 0u);
     if (inherits && p < u_primCount && (u_onePrimEach != 0 || p == primBegin[item])) inherit(item, live);
+    // The primitive: generated once, in this first pass (the passes after it read it back), or as sent.
+    uint prim = 0u;
+    if (p < u_primCount) {
+        if (inherits && u_generate != 0) {
+            prim = generatedPrim(item, parent);
+            itemPrims[p] = prim;
+        } else {
+            prim = itemPrims[p];
+        }
+    }
     if (u_pass == CULLIDE_BUILD_PASS_FOOTPRINTS) {
-        if (u_withBounds != 0 && p < u_primCount) addToItemBounds(p, item);
-        float pixels = live ? footprintOf(primExtent(itemPrims[p])) : 0.0;
+        if (u_withBounds != 0 && p < u_primCount) addToItemBounds(prim, item);
+        float pixels = live ? footprintOf(primExtent(prim)) : 0.0;
         if (p < u_primCount) bands[p] = floatBitsToUint(pixels);
         float sum = groupSum(pixels);
         if (lane == 0u) build[CULLIDE_BUILD_GROUPS + group] = floatBitsToUint(sum);
@@ -226,7 +254,7 @@ void main() {
             perBand = clamp(ceil(total / CULLIDE_TARGET_INVOCATIONS), CULLIDE_MIN_PIXELS_PER_INVOCATION, perBand);
         if (lane == 0u) build[CULLIDE_BUILD_PER_BAND] = floatBitsToUint(perBand);
     } else if (u_pass == CULLIDE_BUILD_PASS_BOUNDS) {
-        if (p < u_primCount) addToItemBounds(p, item);
+        if (p < u_primCount) addToItemBounds(prim, item);
     } else if (u_pass == CULLIDE_BUILD_PASS_APPEND) {
         uint n = 0u;
         if (live) {
@@ -246,7 +274,7 @@ void main() {
         bool fits = base + groupTotal >= base && base + groupTotal <= u_capacity;  // no wrap-around, within capacity
         uint record = base + inclusive - n;
         if (fits)
-            for (uint band = 0u; band < n; ++band) prims[record + band] = uvec4(itemPrims[p], item, band, n);
+            for (uint band = 0u; band < n; ++band) prims[record + band] = uvec4(prim, item, band, n);
         if (!lastToFinish(CULLIDE_DISPATCH_BUILD_DONE, false)) return;
         if (lane == 0u) {
             uint total = atomicAdd(counters[CULLIDE_DISPATCH_NEEDED], 0u);

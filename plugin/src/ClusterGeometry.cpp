@@ -1,6 +1,7 @@
 #include "ClusterGeometry.h"
 
 #include "FloatRounding.h"
+#include "bindings.h"
 #include "KeptCapacity.h"
 
 #include <algorithm>
@@ -20,10 +21,12 @@ void ClusterGeometry::upload(const FrameState& frame, const Cluster& cluster, Pr
     });
     m_geometry.keptPositions = m_geometry.positions.size();
     m_geometry.keptIndices = m_geometry.indices.size();
+    m_geometry.keptOrdered = m_geometry.ordered.size();
     m_geometry.keptLocal = m_localStartedOver ? 0 : m_geometry.local.size();
     for (const Changed& c : m_changed) {
         m_geometry.keptPositions = std::min(m_geometry.keptPositions, c.firstPosition);
         m_geometry.keptIndices = std::min(m_geometry.keptIndices, c.firstIndex);
+        m_geometry.keptOrdered = std::min(m_geometry.keptOrdered, c.firstOrdered);
         m_geometry.keptLocal = std::min(m_geometry.keptLocal, c.firstLocal);
     }
     m_geometry.origin = m_origin;
@@ -96,6 +99,7 @@ void ClusterGeometry::placeMeshes(const FrameState& frame, const Cluster& cluste
         }
     }
     resizeKeeping(m_geometry.indices, 3 * triangles);
+    resizeKeeping(m_geometry.ordered, triangles);
 }
 
 /// A mesh's vertices (world positions as the device holds them, or a mapped mesh's own) and its triangles' global
@@ -117,6 +121,13 @@ ClusterGeometry::Changed ClusterGeometry::writeMesh(const FrameState& frame, con
             if (changed.firstIndex == Changed::kNone && m_geometry.indices[at] != global) changed.firstIndex = at;
             m_geometry.indices[at++] = global;
         }
+    }
+    const std::vector<std::uint32_t>* order = frame.order.empty() ? nullptr : frame.order[slot.object];
+    for (std::uint32_t k = 0; k < mesh.triangles.size(); ++k) {
+        const std::size_t i = std::size_t{slot.baseTriangle} + k;
+        const std::uint32_t global = slot.baseTriangle + (order != nullptr ? (*order)[k] : k);
+        if (changed.firstOrdered == Changed::kNone && m_geometry.ordered[i] != global) changed.firstOrdered = i;
+        m_geometry.ordered[i] = global;
     }
     return changed;
 }
@@ -145,6 +156,16 @@ std::vector<float> allPositions(const GpuGeometry& geometry) {
         }
     }
     return all;
+}
+
+std::vector<std::uint32_t> generatedPrims(const LevelItems& items, const std::vector<std::uint32_t>& ordered) {
+    std::vector<std::uint32_t> prims(items.size());
+    for (std::size_t p = 0; p + 1 < items.parentBegin.size(); ++p) {
+        const std::uint32_t first = items.parentFirst.at(p);
+        for (std::uint32_t i = items.parentBegin[p]; i < items.parentBegin[p + 1]; ++i)
+            prims.at(i) = (first & CULLIDE_PRIM_BOX_BIT) != 0 ? first : ordered.at(first + (i - items.parentBegin[p]));
+    }
+    return prims;
 }
 
 std::uint32_t ClusterGeometry::appendBox(const Aabb& worldBox) {

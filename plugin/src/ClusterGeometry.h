@@ -48,6 +48,7 @@ private:
         std::size_t firstPosition = kNone;  ///< in floats
         std::size_t firstIndex = kNone;
         std::size_t firstLocal = kNone;  ///< in doubles
+        std::size_t firstOrdered = kNone;
     };
     void placeMeshes(const FrameState& frame, const Cluster& cluster);
     Changed writeMesh(const FrameState& frame, const MeshSlot& slot);

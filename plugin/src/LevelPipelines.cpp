@@ -137,24 +137,39 @@ void keepSurvivors(const std::vector<std::uint8_t>& survivors, std::size_t first
     list.swap(kept);
 }
 
+/// The items of a triangle level that inherits the group level's survivors, beyond their list: a range of children
+/// per item of the group level (every triangle of each group in order, then one per proxy), each range's start in
+/// the upload's spatial orders (the device generates the primitives) and which triangles the box pre-pass keeps
+/// (the others start pruned).
+void describeInheritingItems(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
+    LevelItems& items = run.items;
+    const std::vector<Group>& groups = run.cluster.groups;
+    items.parentBegin.assign(groups.size() + proxies.size() + 1, 0);
+    items.parentFirst.resize(groups.size() + proxies.size());
+    for (std::size_t g = 0; g < groups.size(); ++g) {
+        items.parentBegin[g + 1] = items.parentBegin[g] + groups[g].count;
+        items.parentFirst[g] = run.geometry.baseTriangle(groups[g].object) + groups[g].first;
+    }
+    for (std::size_t j = 0; j < proxies.size(); ++j) {
+        const std::size_t p = groups.size() + j;
+        items.parentBegin[p + 1] = items.parentBegin[p] + 1;
+        items.parentFirst[p] = run.geometry.objectBox(proxies[j]) | CULLIDE_PRIM_BOX_BIT;
+    }
+    items.ownersFromParents = true;  // the group level's owner ids went on
+    items.startBits.assign((items.size() + 31) / 32, 0);
+    markPrepassTriangles(run.frame, run.triangles, run.pool, items.startBits);
+    for (std::size_t i = run.triangles.size(); i < items.size(); ++i) items.startBits[i / 32] |= 1u << (i % 32);
+}
+
 /// The triangles of run.triangles and the proxies (occluders only) as one level; the surviving triangles go to
-/// frame.surviving. `inherit`: the last level (groups, then the proxies) stayed on the backend; each triangle starts
-/// alive when its group survived it, each proxy when it did.
+/// frame.surviving. `inherit`: the last level (groups, then the proxies) stayed on the backend and run.triangles are
+/// every triangle of every group: each triangle starts alive when its group survived it and the box pre-pass keeps
+/// it, each proxy when it survived.
 void runTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies, bool inherit) {
     beginLevel(run, inherit);
     addTriangleItems(run, run.triangles);
     for (std::uint32_t o : proxies) addObjectBoxItem(run, o);
-    if (inherit) {
-        // The triangles in the order of their groups, then the proxies: a range of children per item of the last
-        // level (its groups, then its proxies).
-        std::vector<std::uint32_t>& begin = run.items.parentBegin;
-        const std::size_t groups = run.cluster.groups.size();
-        begin.assign(groups + proxies.size() + 1, 0);
-        for (const FrameTriangle& t : run.triangles) ++begin[t.group + 1];
-        for (std::size_t j = 0; j < proxies.size(); ++j) begin[groups + j + 1] = 1;
-        for (std::size_t p = 1; p < begin.size(); ++p) begin[p] += begin[p - 1];
-        run.items.ownersFromParents = true;  // the group level's owner ids went on
-    }
+    if (inherit) describeInheritingItems(run, proxies);
     prune(run, "triangles");
     run.backend.settle(run.stats);  // a level run ahead that the triangle level did not wait for (no two owners)
     addSurvivingTriangles(run.frame, run.triangles, run.survivors);
@@ -178,8 +193,8 @@ void runAutoPipeline(LevelRun& run) {
         for (std::uint32_t o : proxies) addObjectBoxItem(run, o);
         if (pruneAhead(run, "groups")) {
             // The device goes on with the groups while every group's triangles are gathered here: a triangle
-            // starts the next level alive where its group survived.
-            collectTriangles(run.frame, groups, true, run.pool, run.scratch, run.triangles);
+            // starts the next level alive where its group survived and the box pre-pass keeps it.
+            collectTriangles(run.frame, groups, false, run.pool, run.scratch, run.triangles);
             runTriangleLevel(run, proxies, true);
             return;
         }

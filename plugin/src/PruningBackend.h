@@ -33,11 +33,17 @@ struct GpuGeometry {
     /// xyz per vertex, of every vertex before the mapped meshes' (which follow: vertexCount() in all).
     std::vector<float> positions;
     std::vector<std::uint32_t> indices;  ///< 3 global vertex indices per triangle
-    /// The first keptPositions floats of `positions`, keptIndices of `indices` and keptLocal of `local` are the same
-    /// as in the previous upload (static geometry, and meshes that did not change: a deforming mesh's indices, a mesh
-    /// at rest, a rigid mesh's own vertices): what the device already holds of them is not sent again.
+    /// Per triangle: each mesh's triangles in its spatial order (FrameState::order), as global triangle indices —
+    /// ordered[b + k] = b + order[k] for a mesh whose triangles start at b — so that a group's triangles are a range
+    /// of it (LevelItems::parentFirst).
+    std::vector<std::uint32_t> ordered;
+    /// The first keptPositions floats of `positions`, keptIndices of `indices`, keptOrdered of `ordered` and
+    /// keptLocal of `local` are the same as in the previous upload (static geometry, and meshes that did not change: a
+    /// deforming mesh's indices, a mesh at rest, a rigid mesh's own vertices, an order kept between frames): what the
+    /// device already holds of them is not sent again.
     std::size_t keptPositions = 0;
     std::size_t keptIndices = 0;
+    std::size_t keptOrdered = 0;
     /// The vertices of the mapped meshes in their own frames (xyz per vertex) and the meshes: a rigid mesh's
     /// vertices stay on the device, its transform is all that is sent while it moves.
     std::vector<double> local;
@@ -80,6 +86,15 @@ struct LevelItems {
     /// With parentBegin: owner[i] is the owner of item i's parent (its ids are the last level's), so a backend may take
     /// the owners from there instead of sending them.
     bool ownersFromParents = false;
+    /// With parentBegin, one primitive per item: where the backend may generate the items' primitives instead of
+    /// sending `prims` (which says the same): item i, the j-th child of parent p, is ordered[parentFirst[p] + j] of
+    /// the upload (GpuGeometry::ordered: a group's triangles), or parentFirst[p] itself where that names a box
+    /// (CULLIDE_PRIM_BOX_BIT; such a parent has one child). Empty: the backend reads `prims`.
+    std::vector<std::uint32_t> parentFirst;
+    /// Empty: every item starts as its parent ended. Otherwise item i may start alive only where bit i % 32 of word
+    /// i / 32 is set (the triangles whose box meets no partner object's box start pruned).
+    std::vector<std::uint32_t> startBits;
+    bool startsAlive(std::size_t i) const { return startBits.empty() || ((startBits[i / 32] >> (i % 32)) & 1u) != 0; }
     /// The parent of item i (parentBegin non-empty): the last p with parentBegin[p] <= i.
     std::uint32_t parentOf(std::size_t i) const {
         const auto after = std::upper_bound(parentBegin.begin(), parentBegin.end(), static_cast<std::uint32_t>(i));
@@ -99,8 +114,14 @@ struct LevelItems {
         bounds.clear();
         parentBegin.clear();
         ownersFromParents = false;
+        parentFirst.clear();
+        startBits.clear();
     }
 };
+
+/// The primitives of `items` as LevelItems::parentFirst generates them from `ordered` (GpuGeometry::ordered): what the
+/// GL back-end's first build writes on the device, and what `items.prims` must say.
+std::vector<std::uint32_t> generatedPrims(const LevelItems& items, const std::vector<std::uint32_t>& ordered);
 
 /// The orthographic view box of one iteration and the float parameters every view of it uses (the shaders'
 /// uniforms), per world axis. Made by fitView (VisibilityLevel.h).

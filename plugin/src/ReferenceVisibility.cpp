@@ -5,6 +5,7 @@
 #include "bindings.h"
 
 #include <algorithm>
+#include <stdexcept>
 #include <cmath>
 
 // Every function below mirrors the GLSL function of the same name, operation for operation, in float (the library is
@@ -199,11 +200,15 @@ void ReferenceVisibility::pruneLevel(const LevelItems& items, const LevelStart& 
     } else {
         m_parentAlive.swap(m_alive);
         m_alive.resize(items.size());
-        for (std::size_t i = 0; i < items.size(); ++i) m_alive[i] = m_parentAlive.at(items.parentOf(i));
+        for (std::size_t i = 0; i < items.size(); ++i)
+            m_alive[i] = m_parentAlive.at(items.parentOf(i)) != 0 && items.startsAlive(i) ? 1 : 0;
+        if (!items.parentFirst.empty() && generatedPrims(items, m_geometry->ordered) != items.prims)
+            throw std::logic_error("LevelItems: prims differ from the primitives parentFirst generates");
     }
     View view = start.view;
     std::uint32_t idBits = start.idBits;
     std::size_t alive = static_cast<std::size_t>(std::count(m_alive.begin(), m_alive.end(), 1));
+    if (!level.itemsPerIteration.empty()) level.itemsPerIteration.front() = alive;  // those that start alive
     for (int iteration = 0;; ++iteration) {
         const IterationResult r = iterate(view, idBits, level, stats);
         if (trace) trace->push_back({view, idBits, r});

@@ -92,6 +92,31 @@ void buildTriangleBoxesAndGroups(FrameState& frame, std::uint32_t groupSize, dou
     if (frame.gpuLevels) buildGroups(frame, groupSize, prepass, pool, scratch, stats);
 }
 
+namespace {
+
+/// Whether the box pre-pass keeps triangle t of `object`: its box overlaps a partner object's box (tested where the
+/// object has at most 16 partners; with more, every triangle is kept).
+bool keptByPrepass(const FrameState& frame, std::uint32_t object, std::uint32_t t) {
+    return frame.partners[object].size() > 16 || frame.overlapsPartner(object, (*frame.boxesOf[object])[t]);
+}
+
+}  // namespace
+
+void markPrepassTriangles(const FrameState& frame, const std::vector<FrameTriangle>& triangles, TaskPool& pool,
+                          std::vector<std::uint32_t>& bits) {
+    const std::size_t words = (triangles.size() + 31) / 32;
+    if (bits.size() < words) bits.resize(words);
+    pool.parallelFor(words, 64, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t w = begin; w < end; ++w) {
+            std::uint32_t word = 0;
+            const std::size_t last = std::min(triangles.size(), 32 * (w + 1));
+            for (std::size_t i = 32 * w; i < last; ++i)
+                if (keptByPrepass(frame, triangles[i].object, triangles[i].triangle)) word |= 1u << (i % 32);
+            bits[w] = word;
+        }
+    });
+}
+
 void collectTriangles(const FrameState& frame, const std::vector<Group>& groups, bool prepass, TaskPool& pool,
                       TriangleScratch& scratch, std::vector<FrameTriangle>& triangles) {
     constexpr std::size_t kGroupsPerTask = 256;
@@ -104,11 +129,9 @@ void collectTriangles(const FrameState& frame, const std::vector<Group>& groups,
             const std::size_t last = std::min(groups.size(), (task + 1) * kGroupsPerTask);
             for (std::size_t i = task * kGroupsPerTask; i < last; ++i) {
                 const Group& g = groups[i];
-                const std::vector<Aabb>& boxes = *frame.boxesOf[g.object];
-                const bool test = prepass && frame.partners[g.object].size() <= 16;
                 for (std::uint32_t k = g.first; k < g.first + g.count; ++k) {
                     const std::uint32_t t = (*frame.order[g.object])[k];
-                    if (test && !frame.overlapsPartner(g.object, boxes[t])) continue;
+                    if (prepass && !keptByPrepass(frame, g.object, t)) continue;
                     kept.push_back({g.object, t, static_cast<std::uint32_t>(i)});
                 }
             }

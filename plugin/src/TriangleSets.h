@@ -41,6 +41,11 @@ void buildTriangleBoxesAndGroups(FrameState& frame, std::uint32_t groupSize, dou
 void collectTriangles(const FrameState& frame, const std::vector<Group>& groups, bool prepass, TaskPool& pool,
                       TriangleScratch& scratch, std::vector<FrameTriangle>& triangles);
 
+/// Bit i % 32 of bits[i / 32] set where the box pre-pass keeps triangles[i] (as collectTriangles with `prepass`
+/// does); bits holds at least (triangles.size() + 31) / 32 words, the last one's bits past the end clear.
+void markPrepassTriangles(const FrameState& frame, const std::vector<FrameTriangle>& triangles, TaskPool& pool,
+                          std::vector<std::uint32_t>& bits);
+
 /// The CPU path (no GPU levels), in one pass on every worker: each active mesh's triangle boxes (those not kept from
 /// an earlier frame) and its surviving triangles into frame.surviving — those whose box overlaps a partner's box
 /// (with more than 16 partners, every triangle of a run of `groupSize` whose joint box does, as the group filter

@@ -11,7 +11,10 @@ namespace cullide {
 /// One GPU pruning level (objects, groups or triangles).
 struct LevelStats {
     std::string name;                       ///< "objects-box", "objects", "groups", "triangles"
-    std::vector<std::size_t> itemsPerIteration;  ///< items entering each iteration; last entry = survivors
+    /// Items entering each iteration (the first: those alive at the level's start — all of them, or, in a level that
+    /// inherits the last one's survivors, those whose parent survived and that the box pre-pass keeps); last entry =
+    /// survivors.
+    std::vector<std::size_t> itemsPerIteration;
     std::size_t iterations = 0;             ///< visibility iterations run (the last may have changed nothing)
     std::size_t primitivesDrawn = 0;        ///< records the visibility passes ran over (all passes, all views)
     std::size_t draws = 0;

@@ -101,7 +101,7 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
     maxGroups = static_cast<std::size_t>(std::max(1, limit));
     reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * CULLIDE_ALIVE_BITS);
     reserveBuffer(buffers[kViews], capacity[kViews], sizeof(ViewRecord) * (CULLIDE_MAX_ITERATIONS + 1));
-    for (Buffer b : {kParent, kParentAlive, kParentOwners, kPrimBegin, kStash, kStashViews})
+    for (Buffer b : {kParent, kParentAlive, kPrimBegin, kStash, kStashViews, kOrdered})
         reserveBuffer(buffers[b], capacity[b], 4);
     checkGlError("creating the visibility pass");
     // Every call makes the context current on its own thread: the culler may be used from another thread than
@@ -210,25 +210,34 @@ void LevelDevice::setLevelUniforms(double coordinateBound) const {
     glProgramUniform1d(s, CULLIDE_LOC_MIN_PRUNE_FRACTION, settings.minPruneFraction);
 }
 
+void LevelDevice::sendParents(const LevelItems& items, Stats& stats) {
+    const std::size_t parents = lastItemCount;
+    if (items.parentBegin.size() != parents + 1)
+        throw BackendError("a level's parents are not the items of the level before it");
+    // The last level's alive set and owners, before this level's replace them.
+    reserveBuffer(buffers[kParentAlive], capacity[kParentAlive], std::max<std::size_t>(1, 2 * parents) * 4);
+    glCopyNamedBufferSubData(buffers[kAlive], buffers[kParentAlive], 0, 0, static_cast<GLsizeiptr>(parents * 4));
+    if (items.ownersFromParents)
+        glCopyNamedBufferSubData(buffers[kOwners], buffers[kParentAlive], 0, static_cast<GLintptr>(parents * 4),
+                                 static_cast<GLsizeiptr>(parents * 4));
+    parentWords.assign(items.parentBegin.begin(), items.parentBegin.end());
+    if (generatePrims) parentWords.insert(parentWords.end(), items.parentFirst.begin(), items.parentFirst.end());
+    startBitsAt = withStartBits ? static_cast<std::uint32_t>(parentWords.size()) : 0u;
+    if (withStartBits) parentWords.insert(parentWords.end(), items.startBits.begin(), items.startBits.end());
+    uploadBuffer(buffers[kParent], capacity[kParent], parentWords.data(), parentWords.size() * 4);
+    stats.bytesUploaded += parentWords.size() * 4;
+}
+
 void LevelDevice::uploadItems(const LevelItems& items, const LevelStart& start, LevelStats& level, Stats& stats) {
     const std::size_t n = items.size();
     const bool inherits = !items.parentBegin.empty();
     const auto send = Clock::now();
-    if (inherits) {  // the last level's alive set, before this level's replaces it
-        reserveBuffer(buffers[kParentAlive], capacity[kParentAlive], lastItemCount * 4);
-        glCopyNamedBufferSubData(buffers[kAlive], buffers[kParentAlive], 0, 0,
-                                 static_cast<GLsizeiptr>(lastItemCount * 4));
-        uploadBuffer(buffers[kParent], capacity[kParent], items.parentBegin.data(), items.parentBegin.size() * 4);
-        stats.bytesUploaded += items.parentBegin.size() * 4;
-        if (items.ownersFromParents) {  // the last level's owners, which the first build hands down
-            reserveBuffer(buffers[kParentOwners], capacity[kParentOwners], lastItemCount * 4);
-            glCopyNamedBufferSubData(buffers[kOwners], buffers[kParentOwners], 0, 0,
-                                     static_cast<GLsizeiptr>(lastItemCount * 4));
-        }
-    }
-    lastItemCount = n;
-    inheritOwners = inherits && items.ownersFromParents;
     onePrimEach = items.onePrimitiveEach();
+    inheritOwners = inherits && items.ownersFromParents;
+    generatePrims = inherits && onePrimEach && !items.parentFirst.empty();
+    withStartBits = inherits && !items.startBits.empty();
+    if (inherits) sendParents(items, stats);
+    lastItemCount = n;
     if (inheritOwners) {
         reserveBuffer(buffers[kOwners], capacity[kOwners], n * 4);
     } else {
@@ -239,10 +248,15 @@ void LevelDevice::uploadItems(const LevelItems& items, const LevelStart& start, 
         uploadBuffer(buffers[kPrimBegin], capacity[kPrimBegin], items.primBegin.data(), items.primBegin.size() * 4);
         stats.bytesUploaded += items.primBegin.size() * 4;
     }
-    uploadBuffer(buffers[kItemPrims], capacity[kItemPrims], items.prims.data(), items.prims.size() * 4);
+    if (generatePrims) {  // the first build writes them
+        reserveBuffer(buffers[kItemPrims], capacity[kItemPrims], n * 4);
+    } else {
+        uploadBuffer(buffers[kItemPrims], capacity[kItemPrims], items.prims.data(), items.prims.size() * 4);
+        stats.bytesUploaded += items.prims.size() * 4;
+    }
     const ViewRecord first = toViewRecord(start.view, start.idBits);
     glNamedBufferSubData(buffers[kViews], 0, sizeof first, &first);
-    stats.bytesUploaded += items.prims.size() * 4 + sizeof first;
+    stats.bytesUploaded += sizeof first;
     reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * counterWords(n));
     // Every item alive, or (inheriting) none until build.comp's first pass marks those whose parent survived.
     const GLuint zero = 0, startAlive = inherits ? 0u : static_cast<GLuint>(n);
@@ -276,7 +290,7 @@ void LevelDevice::bindBuffers() const {
         {CULLIDE_SSBO_ITEM_PRIMS, kItemPrims},  {CULLIDE_SSBO_BANDS, kBands},
         {CULLIDE_SSBO_BUILD, kBuild},           {CULLIDE_SSBO_VIEWS, kViews},
         {CULLIDE_SSBO_PARENT, kParent},         {CULLIDE_SSBO_PARENT_ALIVE, kParentAlive},
-        {CULLIDE_SSBO_PARENT_OWNER, kParentOwners}};
+        {CULLIDE_SSBO_ORDERED, kOrdered}};
     for (const auto& [binding, buffer] : bindings)
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffers[buffer]);
 }
@@ -320,6 +334,8 @@ void LevelDevice::buildRecords(int iteration, bool withBounds, LevelStats& level
     glUniform1ui(CULLIDE_LOC_PARENTS, static_cast<GLuint>(parents));
     glUniform1i(CULLIDE_LOC_ONE_PRIM_EACH, onePrimEach ? 1 : 0);
     glUniform1i(CULLIDE_LOC_INHERIT_OWNERS, inheritOwners ? 1 : 0);
+    glUniform1i(CULLIDE_LOC_GENERATE, generatePrims ? 1 : 0);
+    glUniform1ui(CULLIDE_LOC_START_BITS, startBitsAt);
     startTiming();
     if (withBounds && bands == CULLIDE_BANDS_NONE) buildPass(CULLIDE_BUILD_PASS_BOUNDS, primCount, level, stats);
     if (bands != CULLIDE_BANDS_NONE) buildPass(CULLIDE_BUILD_PASS_FOOTPRINTS, primCount, level, stats);

@@ -39,13 +39,13 @@ enum Buffer {
     kBands,
     kBuild,
     kViews,
-    kParent,
-    kParentAlive,
-    kParentOwners,
+    kParent,       ///< parentBegin, then parentFirst (a level that generates its primitives), then startBits
+    kParentAlive,  ///< the last level's alive set, then its owners (copied on the device)
     kStash,       ///< a level run ahead: words CULLIDE_DISPATCH_RECORDS .. CULLIDE_AHEAD of its counters
     kStashViews,  ///< ... and its views (where a trace is asked for)
     kLocal,       ///< the mapped meshes' own vertices (double)
     kMapped,      ///< their MappedRecords
+    kOrdered,     ///< GpuGeometry::ordered
     kBufferCount
 };
 
@@ -97,6 +97,10 @@ struct LevelDevice {
     std::size_t lastItemCount = 0;  ///< of the last level (what the next level's items may inherit)
     bool onePrimEach = false;       ///< the level's item i is primitive i: its primBegin is not sent
     bool inheritOwners = false;     ///< the level's owners are its items' parents': not sent, the first build writes them
+    bool generatePrims = false;     ///< the level's primitives come from its parents (LevelItems::parentFirst): not sent
+    bool withStartBits = false;     ///< LevelItems::startBits sent
+    std::uint32_t startBitsAt = 0;  ///< where they start in kParent (0: none)
+    std::vector<std::uint32_t> parentWords;  ///< kParent's words, gathered before they are sent
     /// Records the record buffers (kPrims, kPrimsNext; kRecords on the raster back-end) hold: kept between levels and
     /// frames, grown when a build needs more (the iteration then runs again).
     std::size_t recordCapacity = 0;
@@ -134,6 +138,10 @@ struct LevelDevice {
     void uploadPositions(const GpuGeometry& geometry, Stats& stats);
     /// GlBackendOptions::positionsAfterUpload: the device's positions read back into it (tests only).
     void readPositionsForTests(const GpuGeometry& geometry) const;
+
+    /// An inheriting level's view of the last level: its alive set and owners copied aside on the device, and
+    /// parentBegin, parentFirst and startBits sent as one buffer (kParent).
+    void sendParents(const LevelItems& items, Stats& stats);
 
     /// Binds the shader storage buffers every program reads and writes.
     void bindBuffers() const;

@@ -175,6 +175,7 @@ struct VisibilityPass::Impl : LevelDevice {
     /// survived) and after each iteration.
     static void noteIterations(const Chain& chain, LevelStats& level) {
         std::size_t before = chain[CULLIDE_CHAIN_ALIVE_START];
+        if (!level.itemsPerIteration.empty()) level.itemsPerIteration.front() = before;
         const int ran = chain.ran();
         for (int i = 0; i < ran; ++i) {
             const bool last = i + 1 == ran;
@@ -204,6 +205,9 @@ void VisibilityPass::upload(const GpuGeometry& geometry, Stats& stats) {
     stats.bytesUploaded += uploadAfterPrefix(s.buffers[kIndices], s.capacity[kIndices], s.valid[kIndices],
                                              geometry.indices.data(), geometry.indices.size() * 4,
                                              geometry.keptIndices * 4);
+    stats.bytesUploaded += uploadAfterPrefix(s.buffers[kOrdered], s.capacity[kOrdered], s.valid[kOrdered],
+                                             geometry.ordered.data(), geometry.ordered.size() * 4,
+                                             geometry.keptOrdered * 4);
     uploadBuffer(s.buffers[kBoxes], s.capacity[kBoxes], geometry.boxes.data(), geometry.boxes.size() * 4);
     stats.bytesUploaded += geometry.boxes.size() * 4;
     s.geometry = &geometry;
