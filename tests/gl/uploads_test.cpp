@@ -43,5 +43,33 @@ TEST(Uploads, TheDeviceHoldsEachFramesGeometryWhenOnlyPartOfItIsSent) {
     EXPECT_LT(restingFrameBytes, firstFrameBytes);
 }
 
+// A frame at rest sends no geometry and nothing per triangle but the triangle level's start bit: the boxes (objects
+// and groups), the group level's items, and per group where its triangles begin and where their range of the
+// mesh's spatial order starts (the device generates the triangle items from them).
+TEST(Uploads, AFrameAtRestSendsNothingPerTriangleButAStartBit) {
+    Settings settings = lockstepSettings({Pipeline::Auto, Mode::Reliable, Backend::Compute, 64});
+    CULLIDE_GPU_CULLER_OR_SKIP(culler, settings);
+    const std::vector<TriangleMesh> meshes = randomSoups(17, 8, 600, 0.3);
+    const std::vector<Object> objects = asObjects(meshes);
+    Result first, rest;
+    culler->run(objects, first);
+    culler->run(objects, rest);
+    const Stats& s = rest.stats;
+    ASSERT_EQ(s.levels.size(), 2u);
+    ASSERT_EQ(s.levels[1].name, "triangles");
+    const std::size_t groups = s.prepassGroupsOut, clusterObjects = s.prepassObjectsOut;
+    std::size_t triangles = 0;
+    for (const TriangleMesh& m : meshes) triangles += m.triangles.size();
+    const std::size_t boxes = 24 * (clusterObjects + groups);
+    const std::size_t groupItems = 8 * groups;               // owner and primitive
+    const std::size_t parents = 4 * (2 * groups + 1);        // where each group's triangles begin, its range's start
+    const std::size_t startBits = 4 * ((triangles + 31) / 32);
+    const std::size_t views = 2 * 160;                       // each level's first view
+    const std::size_t expected = boxes + groupItems + parents + startBits + views;
+    ASSERT_LT(expected, 4 * triangles) << "a scene where a word per triangle would show";
+    EXPECT_LE(s.bytesUploaded, expected) << groups << " groups, " << triangles << " triangles";
+    EXPECT_GT(first.stats.bytesUploaded, 12 * triangles) << "the first frame sends the geometry";
+}
+
 }  // namespace
 }  // namespace cullide::test
