@@ -137,28 +137,36 @@ void keepSurvivors(const std::vector<std::uint8_t>& survivors, std::size_t first
     list.swap(kept);
 }
 
-/// The items of a triangle level that inherits the group level's survivors, beyond their list: a range of children
-/// per item of the group level (every triangle of each group in order, then one per proxy), each range's start in
-/// the upload's spatial orders (the device generates the primitives) and which triangles the box pre-pass keeps
-/// (the others start pruned).
-void describeInheritingItems(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
+/// The items of a triangle level that inherits the group level's survivors, described by their parents: every
+/// triangle of each group in order, then one item per proxy (a range of children per item of the group level), with
+/// each range's start in the upload's spatial orders (the backend generates the primitives), the owners (the group
+/// level's ids), which triangles the box pre-pass keeps (the others start pruned) and the box of those that may start
+/// alive. Nothing per triangle but its owner and start bit is built here.
+void addInheritingItems(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
     LevelItems& items = run.items;
     const std::vector<Group>& groups = run.cluster.groups;
+    const std::vector<FrameTriangle>& triangles = run.triangles;
+    resizeKeeping(items.owner, triangles.size() + proxies.size());
+    run.pool.parallelFor(triangles.size(), 4096, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t k = begin; k < end; ++k) items.owner[k] = run.ownerId[triangles[k].object];
+    });
     items.parentBegin.assign(groups.size() + proxies.size() + 1, 0);
     items.parentFirst.resize(groups.size() + proxies.size());
     for (std::size_t g = 0; g < groups.size(); ++g) {
         items.parentBegin[g + 1] = items.parentBegin[g] + groups[g].count;
         items.parentFirst[g] = run.geometry.baseTriangle(groups[g].object) + groups[g].first;
     }
-    for (std::size_t j = 0; j < proxies.size(); ++j) {
-        const std::size_t p = groups.size() + j;
+    items.startBits.assign((items.size() + 31) / 32, 0);
+    items.startBounds = run.geometry.relative(markPrepassTriangles(run.frame, triangles, run.pool, items.startBits));
+    for (std::size_t j = 0; j < proxies.size(); ++j) {  // each starts as it ended the group level
+        const std::size_t p = groups.size() + j, i = triangles.size() + j;
+        items.owner[i] = run.ownerId[proxies[j]];
         items.parentBegin[p + 1] = items.parentBegin[p] + 1;
         items.parentFirst[p] = run.geometry.objectBox(proxies[j]) | CULLIDE_PRIM_BOX_BIT;
+        items.startBits[i / 32] |= 1u << (i % 32);
+        items.startBounds.grow(run.geometry.relative(run.frame.valid[proxies[j]].box));
     }
     items.ownersFromParents = true;  // the group level's owner ids went on
-    items.startBits.assign((items.size() + 31) / 32, 0);
-    markPrepassTriangles(run.frame, run.triangles, run.pool, items.startBits);
-    for (std::size_t i = run.triangles.size(); i < items.size(); ++i) items.startBits[i / 32] |= 1u << (i % 32);
 }
 
 /// The triangles of run.triangles and the proxies (occluders only) as one level; the surviving triangles go to
@@ -167,9 +175,12 @@ void describeInheritingItems(LevelRun& run, const std::vector<std::uint32_t>& pr
 /// it, each proxy when it survived.
 void runTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies, bool inherit) {
     beginLevel(run, inherit);
-    addTriangleItems(run, run.triangles);
-    for (std::uint32_t o : proxies) addObjectBoxItem(run, o);
-    if (inherit) describeInheritingItems(run, proxies);
+    if (inherit) {
+        addInheritingItems(run, proxies);
+    } else {
+        addTriangleItems(run, run.triangles);
+        for (std::uint32_t o : proxies) addObjectBoxItem(run, o);
+    }
     prune(run, "triangles");
     run.backend.settle(run.stats);  // a level run ahead that the triangle level did not wait for (no two owners)
     addSurvivingTriangles(run.frame, run.triangles, run.survivors);

@@ -94,6 +94,12 @@ struct LevelItems {
     /// Empty: every item starts as its parent ended. Otherwise item i may start alive only where bit i % 32 of word
     /// i / 32 is set (the triangles whose box meets no partner object's box start pruned).
     std::vector<std::uint32_t> startBits;
+    /// With parentFirst, `prims` and `bounds` may be left empty (primBegin {0}): a level described by its parents
+    /// (described()), whose primitives the backend generates (generatedPrims), one per item, and which starts with
+    /// the view fitted to startBounds, the box of the items that may start alive. Its owners are still listed.
+    Aabb startBounds;
+    bool described() const { return !parentFirst.empty() && prims.empty(); }
+    std::size_t primitiveCount() const { return described() ? size() : prims.size(); }
     bool startsAlive(std::size_t i) const { return startBits.empty() || ((startBits[i / 32] >> (i % 32)) & 1u) != 0; }
     /// The parent of item i (parentBegin non-empty): the last p with parentBegin[p] <= i.
     std::uint32_t parentOf(std::size_t i) const {
@@ -116,6 +122,7 @@ struct LevelItems {
         ownersFromParents = false;
         parentFirst.clear();
         startBits.clear();
+        startBounds = Aabb{};
     }
 };
 

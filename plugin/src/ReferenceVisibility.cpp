@@ -202,8 +202,16 @@ void ReferenceVisibility::pruneLevel(const LevelItems& items, const LevelStart& 
         m_alive.resize(items.size());
         for (std::size_t i = 0; i < items.size(); ++i)
             m_alive[i] = m_parentAlive.at(items.parentOf(i)) != 0 && items.startsAlive(i) ? 1 : 0;
-        if (!items.parentFirst.empty() && generatedPrims(items, m_geometry->ordered) != items.prims)
+        if (items.described()) {  // its primitives, as the GL back-end generates them on the device
+            m_expanded = items;
+            m_expanded.prims = generatedPrims(items, m_geometry->ordered);
+            m_expanded.primBegin.resize(items.size() + 1);
+            for (std::size_t i = 0; i <= items.size(); ++i) m_expanded.primBegin[i] = static_cast<std::uint32_t>(i);
+            m_items = &m_expanded;
+            checkStartBounds(m_expanded, start.coordinateBound);
+        } else if (!items.parentFirst.empty() && generatedPrims(items, m_geometry->ordered) != items.prims) {
             throw std::logic_error("LevelItems: prims differ from the primitives parentFirst generates");
+        }
     }
     View view = start.view;
     std::uint32_t idBits = start.idBits;
@@ -221,6 +229,23 @@ void ReferenceVisibility::pruneLevel(const LevelItems& items, const LevelStart& 
         idBits = idBitsFor(r.ownerMax);
     }
     survivors = m_alive;
+}
+
+void ReferenceVisibility::checkStartBounds(const LevelItems& items, double coordinateBound) const {
+    // The box of the start-alive items as rasterised (float vertices, boxes rounded outwards) and the one the CPU
+    // gave (its triangle boxes, inflated by margin / 2) differ by that inflation and float rounding only.
+    Aabb device;
+    for (std::size_t i = 0; i < items.size(); ++i)
+        if (items.startsAlive(i)) device.grow(deviceBoundsOf(*m_geometry, items, i));
+    if (device.isEmpty()) return;
+    const double tolerance = std::ldexp(std::max(1.0, coordinateBound), -21);
+    const Aabb inner = items.startBounds.inflated(tolerance);
+    const Aabb outer = device.inflated(0.5 * m_settings.margin + tolerance);
+    const bool holds = (inner.min.array() <= device.min.array()).all() && (device.max.array() <= inner.max.array()).all();
+    const bool tight = (outer.min.array() <= items.startBounds.min.array()).all() &&
+                       (items.startBounds.max.array() <= outer.max.array()).all();
+    if (!holds || !tight)
+        throw std::logic_error("LevelItems: startBounds is not the box of the items that may start alive");
 }
 
 void ReferenceVisibility::pruneLevelAhead(const LevelItems& items, const LevelStart& start, std::size_t levelIndex,

@@ -40,8 +40,13 @@ private:
     IterationResult iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats);
 
     Settings m_settings;
+    /// A level described by its parents: its startBounds against the box of its start-alive items as uploaded
+    /// (throws std::logic_error where the CPU's box misses one or is larger than the margin explains).
+    void checkStartBounds(const LevelItems& items, double coordinateBound) const;
+
     const GpuGeometry* m_geometry = nullptr;
     GpuGeometry m_mapped;  ///< the upload with its mapped meshes' positions, where it has some
+    LevelItems m_expanded;  ///< a level described by its parents (LevelItems::described), with its primitives
     const LevelItems* m_items = nullptr;
     std::vector<std::uint8_t> m_alive;        ///< of the level being run; after it, of the last level
     std::vector<std::uint8_t> m_parentAlive;  ///< the last level's, while a level inherits it

@@ -102,19 +102,30 @@ bool keptByPrepass(const FrameState& frame, std::uint32_t object, std::uint32_t 
 
 }  // namespace
 
-void markPrepassTriangles(const FrameState& frame, const std::vector<FrameTriangle>& triangles, TaskPool& pool,
+Aabb markPrepassTriangles(const FrameState& frame, const std::vector<FrameTriangle>& triangles, TaskPool& pool,
                           std::vector<std::uint32_t>& bits) {
+    constexpr std::size_t kWordsPerTask = 64;
     const std::size_t words = (triangles.size() + 31) / 32;
     if (bits.size() < words) bits.resize(words);
-    pool.parallelFor(words, 64, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t w = begin; w < end; ++w) {
-            std::uint32_t word = 0;
-            const std::size_t last = std::min(triangles.size(), 32 * (w + 1));
-            for (std::size_t i = 32 * w; i < last; ++i)
-                if (keptByPrepass(frame, triangles[i].object, triangles[i].triangle)) word |= 1u << (i % 32);
-            bits[w] = word;
+    std::vector<Aabb> kept((words + kWordsPerTask - 1) / kWordsPerTask);
+    pool.parallelFor(kept.size(), 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t task = begin; task < end; ++task) {
+            for (std::size_t w = task * kWordsPerTask; w < std::min(words, (task + 1) * kWordsPerTask); ++w) {
+                std::uint32_t word = 0;
+                const std::size_t last = std::min(triangles.size(), 32 * (w + 1));
+                for (std::size_t i = 32 * w; i < last; ++i) {
+                    const FrameTriangle& t = triangles[i];
+                    if (!keptByPrepass(frame, t.object, t.triangle)) continue;
+                    word |= 1u << (i % 32);
+                    kept[task].grow((*frame.boxesOf[t.object])[t.triangle]);
+                }
+                bits[w] = word;
+            }
         }
     });
+    Aabb all;
+    for (const Aabb& b : kept) all.grow(b);
+    return all;
 }
 
 void collectTriangles(const FrameState& frame, const std::vector<Group>& groups, bool prepass, TaskPool& pool,

@@ -42,8 +42,9 @@ void collectTriangles(const FrameState& frame, const std::vector<Group>& groups,
                       TriangleScratch& scratch, std::vector<FrameTriangle>& triangles);
 
 /// Bit i % 32 of bits[i / 32] set where the box pre-pass keeps triangles[i] (as collectTriangles with `prepass`
-/// does); bits holds at least (triangles.size() + 31) / 32 words, the last one's bits past the end clear.
-void markPrepassTriangles(const FrameState& frame, const std::vector<FrameTriangle>& triangles, TaskPool& pool,
+/// does); bits holds at least (triangles.size() + 31) / 32 words, the last one's bits past the end clear. Returns the
+/// box of the kept triangles' boxes.
+Aabb markPrepassTriangles(const FrameState& frame, const std::vector<FrameTriangle>& triangles, TaskPool& pool,
                           std::vector<std::uint32_t>& bits);
 
 /// The CPU path (no GPU levels), in one pass on every worker: each active mesh's triangle boxes (those not kept from

@@ -119,9 +119,10 @@ bool startLevel(const LevelItems& items, const Settings& settings, double coordi
         level.itemsPerIteration.push_back(0);
         return false;
     }
-    Aabb bounds;  // of the items that may start alive (an item with its start bit clear never takes part)
-    for (std::size_t i = 0; i < n; ++i)
-        if (items.startsAlive(i)) bounds.grow(items.bounds[i]);
+    Aabb bounds = items.startBounds;  // of the items that may start alive (a clear start bit: it never takes part)
+    if (!items.described())
+        for (std::size_t i = 0; i < n; ++i)
+            if (items.startsAlive(i)) bounds.grow(items.bounds[i]);
     start.view = fitView(bounds, settings, coordinateBound);
     start.idBits = idBitsFor(*std::max_element(items.owner.begin(), items.owner.end()));
     start.coordinateBound = coordinateBound;

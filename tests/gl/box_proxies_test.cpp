@@ -3,10 +3,12 @@
 // the proxy box), with few and with many (> 16) partners, touching, near and far boxes, with and without margin.
 #include "Compare.h"
 #include "GlTestSupport.h"
+#include "VisibilityLockstep.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <memory>
 #include <random>
 
 namespace cullide::test {
@@ -80,6 +82,37 @@ TEST(BoxProxies, SameMeshProxyPairsAsTheReference) {
             EXPECT_EQ(got, expected) << proxies << " proxies, margin " << margin;
         }
     }
+}
+
+// The same kind of scene with every level run (GPU levels forced) and held to the CPU reference iteration by
+// iteration: the proxies are items of both levels (boxes), tall ones standing out of the landscape, so that the
+// triangle level's first view must hold them as well as the triangles.
+TEST(BoxProxies, TheLevelsHoldToTheReferenceInLockstep) {
+    const Settings settings = lockstepSettings({Pipeline::Auto, Mode::Reliable, Backend::Compute, 64});
+    CULLIDE_GPU_CULLER_OR_SKIP(probe, settings);
+    auto log = std::make_shared<LockstepLog>();
+    std::unique_ptr<Culler> culler = createGpuCuller(settings, lockstepFactory(log));
+    std::unique_ptr<Culler> reference = createReferenceCuller(settings);
+    const std::vector<TriangleMesh> meshes = {landscape(32, 10.0)};
+    std::vector<Object> objects = asObjects(meshes);
+    std::mt19937 rng(29);
+    std::uniform_real_distribution<double> xz(-0.5, 10.5);
+    std::uniform_real_distribution<double> height(0.2, 3.0);
+    for (int i = 0; i < 12; ++i) {
+        Object box;
+        const Vec3 c(xz(rng), 0.0, xz(rng));
+        box.box.min = c - Vec3(0.3, 0.2, 0.3);
+        box.box.max = c + Vec3(0.3, height(rng), 0.3);
+        objects.push_back(box);
+    }
+    Result got;
+    const Comparison c = runAndCompare(*culler, *reference, objects, got);
+    EXPECT_EQ(got.stats.gpuFallbacks, 0u) << got.stats.gpuError;
+    EXPECT_EQ(c.missed, 0u) << c.firstMissed;
+    EXPECT_TRUE(c.objectPairsEqual);
+    EXPECT_EQ(log->mismatches, 0u) << log->summary();
+    EXPECT_GE(log->levelsAhead, 1u) << log->summary();
+    EXPECT_FALSE(got.pairs.empty()) << "proxies on the landscape";
 }
 
 }  // namespace

@@ -235,6 +235,7 @@ void LevelDevice::uploadItems(const LevelItems& items, const LevelStart& start, 
     onePrimEach = items.onePrimitiveEach();
     inheritOwners = inherits && items.ownersFromParents;
     generatePrims = inherits && onePrimEach && !items.parentFirst.empty();
+    if (items.described() && !generatePrims) throw BackendError("a level described by its parents that inherits none");
     withStartBits = inherits && !items.startBits.empty();
     if (inherits) sendParents(items, stats);
     lastItemCount = n;
@@ -304,7 +305,7 @@ void LevelDevice::buildPass(int pass, std::size_t invocations, LevelStats& level
 }
 
 void LevelDevice::buildRecords(int iteration, bool withBounds, LevelStats& level, Stats& stats) {
-    const std::size_t primCount = levelItems->prims.size();
+    const std::size_t primCount = levelItems->primitiveCount();
     const std::size_t groups = (primCount + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
     if (groups > kMaxBuildGroups)
         throw BackendError("a level of " + std::to_string(primCount) + " primitives is over the limit of " +
