@@ -145,21 +145,23 @@ void keepSurvivors(const std::vector<std::uint8_t>& survivors, std::size_t first
 void addInheritingItems(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
     LevelItems& items = run.items;
     const std::vector<Group>& groups = run.cluster.groups;
-    const std::vector<FrameTriangle>& triangles = run.triangles;
-    resizeKeeping(items.owner, triangles.size() + proxies.size());
-    run.pool.parallelFor(triangles.size(), 4096, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t k = begin; k < end; ++k) items.owner[k] = run.ownerId[triangles[k].object];
-    });
     items.parentBegin.assign(groups.size() + proxies.size() + 1, 0);
     items.parentFirst.resize(groups.size() + proxies.size());
     for (std::size_t g = 0; g < groups.size(); ++g) {
         items.parentBegin[g + 1] = items.parentBegin[g] + groups[g].count;
         items.parentFirst[g] = run.geometry.baseTriangle(groups[g].object) + groups[g].first;
     }
+    const std::size_t triangles = items.parentBegin[groups.size()];
+    resizeKeeping(items.owner, triangles + proxies.size());
+    run.pool.parallelFor(groups.size(), 256, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t g = begin; g < end; ++g)
+            std::fill(items.owner.begin() + items.parentBegin[g], items.owner.begin() + items.parentBegin[g + 1],
+                      run.ownerId[groups[g].object]);
+    });
     items.startBits.assign((items.size() + 31) / 32, 0);
-    items.startBounds = run.geometry.relative(markPrepassTriangles(run.frame, triangles, run.pool, items.startBits));
+    items.startBounds = run.geometry.relative(markPrepassTriangles(run.frame, groups, run.pool, items.startBits));
     for (std::size_t j = 0; j < proxies.size(); ++j) {  // each starts as it ended the group level
-        const std::size_t p = groups.size() + j, i = triangles.size() + j;
+        const std::size_t p = groups.size() + j, i = triangles + j;
         items.owner[i] = run.ownerId[proxies[j]];
         items.parentBegin[p + 1] = items.parentBegin[p] + 1;
         items.parentFirst[p] = run.geometry.objectBox(proxies[j]) | CULLIDE_PRIM_BOX_BIT;
@@ -170,20 +172,25 @@ void addInheritingItems(LevelRun& run, const std::vector<std::uint32_t>& proxies
 }
 
 /// The triangles of run.triangles and the proxies (occluders only) as one level; the surviving triangles go to
-/// frame.surviving. `inherit`: the last level (groups, then the proxies) stayed on the backend and run.triangles are
-/// every triangle of every group: each triangle starts alive when its group survived it and the box pre-pass keeps
-/// it, each proxy when it survived.
-void runTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies, bool inherit) {
-    beginLevel(run, inherit);
-    if (inherit) {
-        addInheritingItems(run, proxies);
-    } else {
-        addTriangleItems(run, run.triangles);
-        for (std::uint32_t o : proxies) addObjectBoxItem(run, o);
-    }
+/// frame.surviving.
+void runTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
+    beginLevel(run);
+    addTriangleItems(run, run.triangles);
+    for (std::uint32_t o : proxies) addObjectBoxItem(run, o);
+    prune(run, "triangles");
+    run.backend.settle(run.stats);  // nothing pending unless a level run ahead found no level after it
+    addSurvivingTriangles(run.frame, run.triangles, run.survivors);
+}
+
+/// Every triangle of every group of the cluster and the proxies as one level, which inherits the group level's
+/// survivors on the backend: a triangle starts alive when its group survived and the box pre-pass keeps it, a proxy
+/// when it survived. The surviving triangles go to frame.surviving.
+void runInheritingTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
+    beginLevel(run, true);
+    addInheritingItems(run, proxies);
     prune(run, "triangles");
     run.backend.settle(run.stats);  // a level run ahead that the triangle level did not wait for (no two owners)
-    addSurvivingTriangles(run.frame, run.triangles, run.survivors);
+    addSurvivingGroupTriangles(run.frame, run.cluster.groups, run.survivors);
 }
 
 std::size_t triangleCount(const std::vector<Group>& groups) {
@@ -203,10 +210,8 @@ void runAutoPipeline(LevelRun& run) {
             addBoxItem(run, groups[g].object, run.geometry.groupBox(g), groups[g].box);
         for (std::uint32_t o : proxies) addObjectBoxItem(run, o);
         if (pruneAhead(run, "groups")) {
-            // The device goes on with the groups while every group's triangles are gathered here: a triangle
-            // starts the next level alive where its group survived and the box pre-pass keeps it.
-            collectTriangles(run.frame, groups, false, run.pool, run.scratch, run.triangles);
-            runTriangleLevel(run, proxies, true);
+            // The device goes on with the groups while the triangle level is described here.
+            runInheritingTriangleLevel(run, proxies);
             return;
         }
         keepSurvivors(run.survivors, 0, groups);
@@ -214,7 +219,7 @@ void runAutoPipeline(LevelRun& run) {
     }
     collectTriangles(run.frame, groups, true, run.pool, run.scratch, run.triangles);
     if (run.triangles.size() > run.settings.exactThreshold)
-        runTriangleLevel(run, proxies, false);
+        runTriangleLevel(run, proxies);
     else
         addSurvivingTriangles(run.frame, run.triangles, {});
 }
@@ -255,7 +260,7 @@ void runPaperPipeline(LevelRun& run) {
     keepSurvivors(run.survivors, 0, groups);
     keepSurvivors(run.survivors, groupItems, proxies);
     collectTriangles(run.frame, groups, false, run.pool, run.scratch, run.triangles);
-    runTriangleLevel(run, proxies, false);
+    runTriangleLevel(run, proxies);
 }
 
 bool rasterisable(const FrameState& frame, const Cluster& cluster) {

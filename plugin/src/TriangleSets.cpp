@@ -102,24 +102,35 @@ bool keptByPrepass(const FrameState& frame, std::uint32_t object, std::uint32_t 
 
 }  // namespace
 
-Aabb markPrepassTriangles(const FrameState& frame, const std::vector<FrameTriangle>& triangles, TaskPool& pool,
+Aabb markPrepassTriangles(const FrameState& frame, const std::vector<Group>& groups, TaskPool& pool,
                           std::vector<std::uint32_t>& bits) {
     constexpr std::size_t kWordsPerTask = 64;
-    const std::size_t words = (triangles.size() + 31) / 32;
+    std::vector<std::uint32_t> begin(groups.size() + 1, 0);  // item index of each group's first triangle
+    for (std::size_t g = 0; g < groups.size(); ++g) begin[g + 1] = begin[g] + groups[g].count;
+    const std::size_t items = begin.back();
+    const std::size_t words = (items + 31) / 32;
     if (bits.size() < words) bits.resize(words);
     std::vector<Aabb> kept((words + kWordsPerTask - 1) / kWordsPerTask);
-    pool.parallelFor(kept.size(), 1, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t task = begin; task < end; ++task) {
-            for (std::size_t w = task * kWordsPerTask; w < std::min(words, (task + 1) * kWordsPerTask); ++w) {
-                std::uint32_t word = 0;
-                const std::size_t last = std::min(triangles.size(), 32 * (w + 1));
-                for (std::size_t i = 32 * w; i < last; ++i) {
-                    const FrameTriangle& t = triangles[i];
-                    if (!keptByPrepass(frame, t.object, t.triangle)) continue;
+    pool.parallelFor(kept.size(), 1, [&](std::size_t first, std::size_t last) {
+        for (std::size_t task = first; task < last; ++task) {
+            const std::size_t from = 32 * kWordsPerTask * task;
+            const std::size_t to = std::min(items, from + 32 * kWordsPerTask);
+            // The group of item `from`: the last g with begin[g] <= from.
+            std::size_t g = static_cast<std::size_t>(
+                std::upper_bound(begin.begin(), begin.end(), static_cast<std::uint32_t>(from)) - begin.begin() - 1);
+            std::uint32_t word = 0;
+            for (std::size_t i = from; i < to; ++i) {
+                while (i >= begin[g + 1]) ++g;
+                const Group& group = groups[g];
+                const std::uint32_t t = (*frame.order[group.object])[group.first + (i - begin[g])];
+                if (keptByPrepass(frame, group.object, t)) {
                     word |= 1u << (i % 32);
-                    kept[task].grow((*frame.boxesOf[t.object])[t.triangle]);
+                    kept[task].grow((*frame.boxesOf[group.object])[t]);
                 }
-                bits[w] = word;
+                if (i % 32 == 31 || i + 1 == to) {
+                    bits[i / 32] = word;
+                    word = 0;
+                }
             }
         }
     });
@@ -210,12 +221,31 @@ void collectDirect(FrameState& frame, std::uint32_t groupSize, double margin, Ta
     }
 }
 
+namespace {
+
+void sortSurviving(FrameState& frame) {
+    for (auto& list : frame.surviving)
+        if (!std::is_sorted(list.begin(), list.end())) std::sort(list.begin(), list.end());
+}
+
+}  // namespace
+
 void addSurvivingTriangles(FrameState& frame, const std::vector<FrameTriangle>& triangles,
                            const std::vector<std::uint8_t>& alive) {
     for (std::size_t i = 0; i < triangles.size(); ++i)
         if (alive.empty() || alive[i]) frame.surviving[triangles[i].object].push_back(triangles[i].triangle);
-    for (auto& list : frame.surviving)
-        if (!std::is_sorted(list.begin(), list.end())) std::sort(list.begin(), list.end());
+    sortSurviving(frame);
+}
+
+void addSurvivingGroupTriangles(FrameState& frame, const std::vector<Group>& groups,
+                                const std::vector<std::uint8_t>& alive) {
+    std::size_t i = 0;
+    for (const Group& g : groups) {
+        const std::vector<std::uint32_t>& order = *frame.order[g.object];
+        for (std::uint32_t k = g.first; k < g.first + g.count; ++k, ++i)
+            if (alive[i]) frame.surviving[g.object].push_back(order[k]);
+    }
+    sortSurviving(frame);
 }
 
 }  // namespace cullide
