@@ -23,6 +23,9 @@ public:
     void upload(const FrameState& frame, const Cluster& cluster, PruningBackend& backend, TaskPool& pool,
                 Stats& stats);
 
+    /// Starts a frame: what the device keeps between frames ages by frames, not by uploads (one per cluster).
+    void beginFrame() { m_mappedVertices.beginFrame(); }
+
     /// Of the last upload: where object o's triangles start in the index buffer, its box's index and group g's.
     std::uint32_t baseTriangle(std::uint32_t object) const { return m_baseTriangle[object]; }
     std::uint32_t objectBox(std::uint32_t object) const { return m_objectBox[object]; }

@@ -273,6 +273,7 @@ bool rasterisable(const FrameState& frame, const Cluster& cluster) {
 
 void LevelPipelines::run(FrameState& frame, const Settings& settings, PruningBackend& backend, TaskPool& pool,
                          TriangleScratch& scratch, Stats& stats) {
+    m_geometry.beginFrame();
     const std::vector<std::vector<std::uint32_t>> clusters = clustersOf(frame.active, frame.pairs, frame.valid);
     stats.clusters += clusters.size();
     std::size_t place = 0;  // the frame's levels so far

@@ -12,7 +12,7 @@ bool MappedVertices::beginUpload(std::vector<double>& values) {
     ++m_upload;
     std::size_t live = 0;
     for (auto it = m_slots.begin(); it != m_slots.end();) {
-        if (m_upload - it->second.lastUpload > kKeepUploads) {
+        if (m_frame - it->second.lastFrame > kKeepFrames) {
             it = m_slots.erase(it);
         } else {
             live += it->second.count;
@@ -46,6 +46,7 @@ MappedVertices::Slot MappedVertices::place(const TriangleMesh& mesh, std::vector
     slot.base = e.base;
     slot.placedBefore = !added && e.lastUpload == m_upload;
     e.lastUpload = m_upload;
+    e.lastFrame = m_frame;
     return slot;
 }
 

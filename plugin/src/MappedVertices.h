@@ -16,8 +16,12 @@ namespace cullide {
 /// The slots of `values` (xyz per vertex, GpuGeometry::local), which the caller keeps.
 class MappedVertices {
 public:
-    /// Starts an upload: drops the slots no upload used for a while, and starts over (`values` cleared, every slot
-    /// placed and sent again) when those dropped hold more than the slots in use. Returns whether it started over.
+    /// Starts a frame (of any number of uploads, one per cluster): slots age by frames.
+    void beginFrame() { ++m_frame; }
+
+    /// Starts an upload: drops the slots no upload used for kKeepFrames frames, and starts over (`values` cleared,
+    /// every slot placed and sent again) when those dropped hold more than the slots in use. Returns whether it
+    /// started over.
     bool beginUpload(std::vector<double>& values);
 
     /// The slot of `mesh` (found by its address and vertex count: its content is compared by write()): where its
@@ -38,11 +42,13 @@ private:
         std::uint32_t base = 0;
         std::uint32_t count = 0;
         std::uint64_t lastUpload = 0;
+        std::uint64_t lastFrame = 0;
     };
-    static constexpr std::uint64_t kKeepUploads = 64;
+    static constexpr std::uint64_t kKeepFrames = 64;
 
     std::unordered_map<const TriangleMesh*, Entry> m_slots;
     std::uint64_t m_upload = 0;
+    std::uint64_t m_frame = 0;
 };
 
 }  // namespace cullide

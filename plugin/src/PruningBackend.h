@@ -72,7 +72,8 @@ inline void devicePosition(const Vec3& world, const Vec3& origin, float out[3]) 
 std::vector<float> allPositions(const GpuGeometry& geometry);
 
 /// The items of one level. Item i belongs to owner[i] (a compact object id) and is drawn as the primitives
-/// prims[primBegin[i] .. primBegin[i + 1]) (a triangle index, or a box index | CULLIDE_PRIM_BOX_BIT).
+/// prims[primBegin[i] .. primBegin[i + 1]) (a triangle index, or a box index | CULLIDE_PRIM_BOX_BIT) — or, in a level
+/// described by its parents (described()), as the one primitive parentFirst generates for it.
 struct LevelItems {
     std::vector<std::uint32_t> owner;
     std::vector<std::uint32_t> primBegin{0};

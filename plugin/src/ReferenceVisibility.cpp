@@ -210,7 +210,7 @@ void ReferenceVisibility::pruneLevel(const LevelItems& items, const LevelStart& 
             m_items = &m_expanded;
             checkStartBounds(m_expanded, start.coordinateBound);
         } else if (!items.parentFirst.empty() && generatedPrims(items, m_geometry->ordered) != items.prims) {
-            throw std::logic_error("LevelItems: prims differ from the primitives parentFirst generates");
+            throw BackendError("LevelItems: prims differ from the primitives parentFirst generates");
         }
     }
     View view = start.view;
@@ -245,7 +245,7 @@ void ReferenceVisibility::checkStartBounds(const LevelItems& items, double coord
     const bool tight = (outer.min.array() <= items.startBounds.min.array()).all() &&
                        (items.startBounds.max.array() <= outer.max.array()).all();
     if (!holds || !tight)
-        throw std::logic_error("LevelItems: startBounds is not the box of the items that may start alive");
+        throw BackendError("LevelItems: startBounds is not the box of the items that may start alive");
 }
 
 void ReferenceVisibility::pruneLevelAhead(const LevelItems& items, const LevelStart& start, std::size_t levelIndex,

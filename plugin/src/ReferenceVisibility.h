@@ -41,7 +41,8 @@ private:
 
     Settings m_settings;
     /// A level described by its parents: its startBounds against the box of its start-alive items as uploaded
-    /// (throws std::logic_error where the CPU's box misses one or is larger than the margin explains).
+    /// (throws BackendError where the CPU's box misses one or is larger than the margin explains: the frame then
+    /// prunes nothing).
     void checkStartBounds(const LevelItems& items, double coordinateBound) const;
 
     const GpuGeometry* m_geometry = nullptr;

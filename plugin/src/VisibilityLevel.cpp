@@ -123,6 +123,11 @@ bool startLevel(const LevelItems& items, const Settings& settings, double coordi
     if (!items.described())
         for (std::size_t i = 0; i < n; ++i)
             if (items.startsAlive(i)) bounds.grow(items.bounds[i]);
+    if (bounds.isEmpty()) {  // no item may start alive: nothing to run
+        std::fill(survivors.begin(), survivors.end(), 0);
+        level.itemsPerIteration.push_back(0);
+        return false;
+    }
     start.view = fitView(bounds, settings, coordinateBound);
     start.idBits = idBitsFor(*std::max_element(items.owner.begin(), items.owner.end()));
     start.coordinateBound = coordinateBound;

@@ -12,8 +12,8 @@ namespace cullide {
 struct LevelStats {
     std::string name;                       ///< "objects-box", "objects", "groups", "triangles"
     /// Items entering each iteration (the first: those alive at the level's start — all of them, or, in a level that
-    /// inherits the last one's survivors, those whose parent survived and that the box pre-pass keeps); last entry =
-    /// survivors.
+    /// inherits the last one's survivors and ran, those whose parent survived and that the box pre-pass keeps; a level
+    /// that ends on the CPU before it runs, with fewer than two owners, lists all its items); last entry = survivors.
     std::vector<std::size_t> itemsPerIteration;
     std::size_t iterations = 0;             ///< visibility iterations run (the last may have changed nothing)
     std::size_t primitivesDrawn = 0;        ///< records the visibility passes ran over (all passes, all views)

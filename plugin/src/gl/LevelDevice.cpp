@@ -140,9 +140,11 @@ void LevelDevice::uploadPositions(const GpuGeometry& g, Stats& stats) {
     }
     stats.bytesUploaded += uploadAfterPrefix(buffers[kPositions], capacity[kPositions], valid[kPositions],
                                              g.positions.data(), g.positions.size() * 4, g.keptPositions * 4);
-    if (g.mapped.empty()) return readPositionsForTests(g);
+    // The local vertices even without mapped meshes (nothing is sent then unless they changed): what the device
+    // holds of them must always be the last upload's, or a store that started over could keep stale slots there.
     stats.bytesUploaded += uploadAfterPrefix(buffers[kLocal], capacity[kLocal], valid[kLocal], g.local.data(),
                                              g.local.size() * 8, g.keptLocal * 8);
+    if (g.mapped.empty()) return readPositionsForTests(g);
     std::vector<MappedRecord> records(g.mapped.size());
     std::uint32_t most = 0;
     for (std::size_t i = 0; i < records.size(); ++i) {
@@ -165,7 +167,8 @@ void LevelDevice::uploadPositions(const GpuGeometry& g, Stats& stats) {
                           static_cast<GLuint>(std::min(kMaxRows, records.size() - first)), 1);
         stats.draws += 1;
     }
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    // Read by the passes after it, and overwritten by the next upload's glNamedBufferSubData only after it.
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     readPositionsForTests(g);
 }
 
