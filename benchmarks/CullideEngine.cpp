@@ -73,7 +73,8 @@ void CullideEngine::run(const BenchFrame& frame, FrameOutput& out) {
                                 {"iterations", l.iterations}, {"records", l.records},
                                 {"record_builds", l.recordBuilds}, {"short_builds", l.shortBuilds},
                                 {"idle_iterations", l.idleIterations},
-                                {"blocking_read_backs", l.blockingReadBacks}, {"wait_ms", l.waitMs}};
+                                {"blocking_read_backs", l.blockingReadBacks}, {"deferred", l.deferred},
+                                {"wait_ms", l.waitMs}};
         if (l.gpuTimingValid) level["gpu_ms"] = l.gpuMs;
         out.levels.push_back(level);
     }

@@ -20,7 +20,15 @@ public:
                                  std::chrono::duration<double, std::milli>(ms));
         return d;
     }
+    /// The earlier of two deadlines (either may be none).
+    static Deadline earlier(const Deadline& a, const Deadline& b) {
+        if (!a.m_at) return b;
+        if (!b.m_at) return a;
+        return *a.m_at <= *b.m_at ? a : b;
+    }
     bool expired() const { return m_at && std::chrono::steady_clock::now() > *m_at; }
+    /// The moment itself (none: never).
+    const std::optional<std::chrono::steady_clock::time_point>& at() const { return m_at; }
     explicit operator bool() const { return m_at.has_value(); }
 
 private:

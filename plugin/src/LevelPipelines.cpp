@@ -4,6 +4,7 @@
 #include "VisibilityLevel.h"
 #include "bindings.h"
 #include "cullide/Timer.h"
+#include "Deadline.h"
 
 #include <algorithm>
 
@@ -199,9 +200,24 @@ std::size_t triangleCount(const std::vector<Group>& groups) {
     return n;
 }
 
+/// runInheritingTriangleLevel with the level's read-back deferred to the end of the frame (collectDeferred): returns
+/// true where it reached the backend, whose survivors then come from PruningBackend::collect.
+bool deferInheritingTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
+    beginLevel(run, true);
+    addInheritingItems(run, proxies);
+    addLevel(run, "triangles");
+    if (pruneLevelDeferred(run.backend, run.items, run.settings, run.geometry.coordinateBound(), run.place++,
+                           run.survivors, run.stats.levels.size() - 1, run.stats))
+        return true;
+    run.backend.settle(run.stats);
+    addSurvivingGroupTriangles(run.frame, run.cluster.groups, run.survivors);
+    return false;
+}
+
 /// CPU pre-pass (done in buildTriangleBoxesAndGroups), group boxes, then the triangles of the surviving groups; a
-/// level whose input is at most Settings::exactThreshold triangles goes straight to the exact stage.
-void runAutoPipeline(LevelRun& run) {
+/// level whose input is at most Settings::exactThreshold triangles goes straight to the exact stage. `defer`: the
+/// triangle level's read-back may wait for the end of the frame; returns true where it does.
+bool runAutoPipeline(LevelRun& run, bool defer) {
     std::vector<std::uint32_t> proxies = clusterProxies(run);
     std::vector<Group> groups = run.cluster.groups;
     if (triangleCount(groups) > run.settings.exactThreshold) {
@@ -211,8 +227,9 @@ void runAutoPipeline(LevelRun& run) {
         for (std::uint32_t o : proxies) addObjectBoxItem(run, o);
         if (pruneAhead(run, "groups")) {
             // The device goes on with the groups while the triangle level is described here.
+            if (defer) return deferInheritingTriangleLevel(run, proxies);
             runInheritingTriangleLevel(run, proxies);
-            return;
+            return false;
         }
         keepSurvivors(run.survivors, 0, groups);
         keepSurvivors(run.survivors, run.cluster.groups.size(), proxies);
@@ -222,6 +239,7 @@ void runAutoPipeline(LevelRun& run) {
         runTriangleLevel(run, proxies);
     else
         addSurvivingTriangles(run.frame, run.triangles, {});
+    return false;
 }
 
 /// The paper's pipeline: objects as boxes, objects as triangles, groups as triangles, triangles.
@@ -273,6 +291,8 @@ bool rasterisable(const FrameState& frame, const Cluster& cluster) {
 
 void LevelPipelines::run(FrameState& frame, const Settings& settings, PruningBackend& backend, TaskPool& pool,
                          TriangleScratch& scratch, Stats& stats) {
+    backend.beginFrame();
+    m_deferred.clear();
     m_geometry.beginFrame();
     const std::vector<std::vector<std::uint32_t>> clusters = clustersOf(frame.active, frame.pairs, frame.valid);
     stats.clusters += clusters.size();
@@ -293,24 +313,65 @@ void LevelPipelines::run(FrameState& frame, const Settings& settings, PruningBac
             addSurvivingTriangles(frame, m_triangles, {});
             continue;
         }
-        LevelRun run{frame, cluster, settings, backend, pool, scratch, stats, m_geometry, m_items,
-                     m_survivors, m_ownerId, m_triangles, place};
-        const std::size_t firstPlace = place;
-        const std::size_t firstLevel = stats.levels.size();
-        for (int attempt = 0;; ++attempt) {
-            try {
-                if (settings.pipeline == Pipeline::Paper)
-                    runPaperPipeline(run);
-                else
-                    runAutoPipeline(run);
-                break;
-            } catch (const LevelsRerun&) {  // the backend now waits for the level it ran ahead
-                if (attempt == 1) throw BackendError("a level run ahead stopped early twice");
-                ++stats.levelReruns;  // the frame's totals keep what the first attempt cost; its levels go
-                place = firstPlace;
-                stats.levels.resize(firstLevel);
+        const std::size_t firstPlace = place, firstLevel = stats.levels.size();
+        if (runCluster(frame, cluster, settings, backend, pool, scratch, stats, place, true))
+            m_deferred.push_back(DeferredCluster{cluster, firstPlace, firstLevel, stats.levels.size()});
+    }
+    collectDeferred(frame, settings, backend, pool, scratch, stats);
+}
+
+bool LevelPipelines::runCluster(FrameState& frame, const Cluster& cluster, const Settings& settings,
+                                PruningBackend& backend, TaskPool& pool, TriangleScratch& scratch, Stats& stats,
+                                std::size_t& place, bool defer) {
+    LevelRun run{frame, cluster, settings, backend, pool, scratch, stats, m_geometry, m_items,
+                 m_survivors, m_ownerId, m_triangles, place};
+    const std::size_t firstPlace = place;
+    const std::size_t firstLevel = stats.levels.size();
+    for (int attempt = 0;; ++attempt) {
+        try {
+            if (settings.pipeline == Pipeline::Paper) {
+                runPaperPipeline(run);
+                return false;
             }
+            return runAutoPipeline(run, defer);
+        } catch (const LevelsRerun&) {  // the backend now waits for the level it ran ahead
+            if (attempt == 1) throw BackendError("a level run ahead stopped early twice");
+            ++stats.levelReruns;  // the frame's totals keep what the first attempt cost; its levels go
+            place = firstPlace;
+            stats.levels.resize(firstLevel);
         }
+    }
+}
+
+void LevelPipelines::collectDeferred(FrameState& frame, const Settings& settings, PruningBackend& backend,
+                                     TaskPool& pool, TriangleScratch& scratch, Stats& stats) {
+    if (m_deferred.empty()) return;
+    // One wait for every cluster; a trial frame (or a run with a budget) waits no longer than its deadline.
+    if (!backend.collect(Deadline::earlier(frame.levelsDeadline, frame.runDeadline), m_results, stats)) {
+        if (frame.runDeadline.expired()) throw RunAbandoned{};
+        throw LevelsAbandoned{};
+    }
+    if (m_results.size() != m_deferred.size()) throw BackendError("the deferred levels were not all collected");
+    std::ptrdiff_t shift = 0;  // levels that reruns added, less those they replaced: where later clusters' now are
+    for (std::size_t k = 0; k < m_deferred.size(); ++k) {
+        const DeferredCluster& d = m_deferred[k];
+        if (m_results[k].complete) {
+            addSurvivingGroupTriangles(frame, d.cluster.groups, m_results[k].survivors);
+            continue;
+        }
+        // A chain stopped early on the device (records to build again, more iterations than were issued): the
+        // cluster runs again, waited for, and its levels replace the first attempt's (the frame's totals keep what
+        // that cost).
+        ++stats.levelReruns;
+        const auto first = stats.levels.begin() + static_cast<std::ptrdiff_t>(d.firstLevel) + shift;
+        stats.levels.erase(first, first + static_cast<std::ptrdiff_t>(d.endLevel - d.firstLevel));
+        const std::size_t rerunFrom = stats.levels.size();
+        std::size_t place = d.firstPlace;
+        runCluster(frame, d.cluster, settings, backend, pool, scratch, stats, place, false);
+        const std::size_t added = stats.levels.size() - rerunFrom;
+        std::rotate(stats.levels.begin() + static_cast<std::ptrdiff_t>(d.firstLevel) + shift,
+                    stats.levels.begin() + static_cast<std::ptrdiff_t>(rerunFrom), stats.levels.end());
+        shift += static_cast<std::ptrdiff_t>(added) - static_cast<std::ptrdiff_t>(d.endLevel - d.firstLevel);
     }
 }
 

@@ -26,21 +26,44 @@ struct LevelsAbandoned {};
 
 /// Runs the levels over every cluster of frame.active (clustersOf): each cluster goes to the device relative to its
 /// own centre and each level's views are fitted to it, so objects far from each other cost what near ones cost.
-/// Expects buildTriangleBoxesAndGroups to have run with frame.gpuLevels set. Throws BackendError (from the backend)
-/// or LevelsAbandoned (past frame.levelsDeadline) with frame.surviving partly filled: the caller starts over without
-/// the levels.
+/// The Auto pipeline's triangle levels are read back together at the end of the frame: one wait per frame. Expects
+/// buildTriangleBoxesAndGroups to have run with frame.gpuLevels set. Throws BackendError (from the backend),
+/// LevelsAbandoned (past frame.levelsDeadline) or RunAbandoned (past frame.runDeadline) with frame.surviving partly
+/// filled: the caller starts over without the levels.
 class LevelPipelines {
 public:
     void run(FrameState& frame, const Settings& settings, PruningBackend& backend, TaskPool& pool,
              TriangleScratch& scratch, Stats& stats);
 
 private:
+    /// A cluster whose triangle level is read back with the frame's others: its levels are
+    /// stats.levels[firstLevel .. endLevel), its places from firstPlace on.
+    struct DeferredCluster {
+        Cluster cluster;
+        std::size_t firstPlace = 0;
+        std::size_t firstLevel = 0;
+        std::size_t endLevel = 0;
+    };
+
+    /// The levels of one cluster (the Auto or the paper pipeline; a level run ahead that stopped early runs again
+    /// with its cluster, waited for). `defer`: the Auto triangle level's read-back may wait for collectDeferred;
+    /// returns true where it does.
+    bool runCluster(FrameState& frame, const Cluster& cluster, const Settings& settings, PruningBackend& backend,
+                    TaskPool& pool, TriangleScratch& scratch, Stats& stats, std::size_t& place, bool defer);
+
+    /// One read-back for every deferred cluster (PruningBackend::collect, bounded by the frame's deadlines), then
+    /// each one's surviving triangles; a cluster whose chain stopped early on the device runs again, waited for.
+    void collectDeferred(FrameState& frame, const Settings& settings, PruningBackend& backend, TaskPool& pool,
+                         TriangleScratch& scratch, Stats& stats);
+
     // Kept between frames: the device's copy of the geometry (and its resident region) and allocations.
     ClusterGeometry m_geometry;
     LevelItems m_items;
     std::vector<std::uint8_t> m_survivors;
     std::vector<std::uint32_t> m_ownerId;
     std::vector<FrameTriangle> m_triangles;
+    std::vector<DeferredCluster> m_deferred;
+    std::vector<DeferredLevel> m_results;
 };
 
 }  // namespace cullide

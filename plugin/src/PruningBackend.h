@@ -5,6 +5,7 @@
 // device, without waiting between iterations.
 #pragma once
 
+#include "Deadline.h"
 #include "cullide/Stats.h"
 #include "cullide/Types.h"
 
@@ -175,6 +176,15 @@ struct LevelStart {
 /// waited for (Stats::levelReruns). Nothing of the frame is lost.
 struct LevelsRerun {};
 
+/// A level run with its read-back deferred (PruningBackend::pruneLevelDeferred), as collect() finds it.
+struct DeferredLevel {
+    /// The level ran as one chain, and so did the level run ahead before it: `survivors` is its alive set, as
+    /// pruneLevel gives it. Otherwise one of them stopped early on the device (records to build again, more
+    /// iterations needed than were issued): nothing of the level is known, and it runs again, waited for.
+    bool complete = false;
+    std::vector<std::uint8_t> survivors;
+};
+
 /// A backend failure in the middle of a frame (a GL error). The culler finishes that frame without pruning: every
 /// triangle the CPU pre-pass keeps goes to the exact stage, so no contact is lost.
 class BackendError : public std::runtime_error {
@@ -189,6 +199,9 @@ public:
     PruningBackend(const PruningBackend&) = delete;
     PruningBackend& operator=(const PruningBackend&) = delete;
 
+    /// A frame starts: what a frame abandoned half way left behind (levels deferred or run ahead and never read back)
+    /// is dropped.
+    virtual void beginFrame() = 0;
     /// Takes the cluster's geometry; `geometry` must stay alive (unchanged) until the next upload.
     virtual void upload(const GpuGeometry& geometry, Stats& stats) = 0;
     /// Forgets what was uploaded (after a GL error): the next upload sends everything.
@@ -215,6 +228,18 @@ public:
                                  Stats& stats, std::vector<IterationTrace>* trace) = 0;
     /// Waits for a level run ahead that no level followed, and completes its stats.
     virtual void settle(Stats& stats) = 0;
+    /// Runs a level as pruneLevel does (it may inherit the level run ahead before it), whose result is read back
+    /// with every other level deferred since the last collect(): the GL back-end issues it and returns at once, so a
+    /// frame of several clusters waits once. Its stats (stats.levels[levelIndex], and the level run ahead's) and trace
+    /// are complete after collect(); `trace` must stay alive until then. Where the level in its place stopped early
+    /// last time it is waited for at once (as pruneLevel), and collect() hands its survivors over.
+    virtual void pruneLevelDeferred(const LevelItems& items, const LevelStart& start, std::size_t levelIndex,
+                                    Stats& stats, std::vector<IterationTrace>* trace) = 0;
+    /// Waits, at most until `until`, for the levels deferred since the last collect(): one blocking read-back for all
+    /// of them. Returns false where `until` came first (the deferred levels are dropped, nothing is collected);
+    /// otherwise results[k] is what the k-th deferred level left. The read-back is the last deferred level's that was
+    /// not waited for at once: its stats count it (blockingReadBacks, waitMs, and the wait in cpuMs).
+    virtual bool collect(const Deadline& until, std::vector<DeferredLevel>& results, Stats& stats) = 0;
 };
 
 }  // namespace cullide

@@ -254,6 +254,20 @@ void ReferenceVisibility::pruneLevelAhead(const LevelItems& items, const LevelSt
     pruneLevel(items, start, survivors, stats.levels.at(levelIndex), stats, trace);
 }
 
+void ReferenceVisibility::pruneLevelDeferred(const LevelItems& items, const LevelStart& start, std::size_t levelIndex,
+                                             Stats& stats, std::vector<IterationTrace>* trace) {
+    DeferredLevel level;
+    level.complete = true;
+    pruneLevel(items, start, level.survivors, stats.levels.at(levelIndex), stats, trace);
+    m_deferred.push_back(std::move(level));
+}
+
+bool ReferenceVisibility::collect(const Deadline&, std::vector<DeferredLevel>& results, Stats&) {
+    results.swap(m_deferred);
+    m_deferred.clear();
+    return true;
+}
+
 IterationResult ReferenceVisibility::iterate(const View& view, std::uint32_t idBits, LevelStats& level,
                                              Stats& stats) {
     const LevelItems& items = *m_items;

@@ -20,6 +20,7 @@ class ReferenceVisibility final : public PruningBackend {
 public:
     explicit ReferenceVisibility(const Settings& settings);
 
+    void beginFrame() override { m_deferred.clear(); }
     void upload(const GpuGeometry& geometry, Stats& stats) override;
     void forgetUploads() override {}
     std::size_t deviceBytes() const override { return 0; }
@@ -33,6 +34,10 @@ public:
     void pruneLevelAhead(const LevelItems& items, const LevelStart& start, std::size_t levelIndex, Stats& stats,
                          std::vector<IterationTrace>* trace) override;
     void settle(Stats&) override {}
+    /// pruneLevel at once; collect() hands the survivors over (and never waits).
+    void pruneLevelDeferred(const LevelItems& items, const LevelStart& start, std::size_t levelIndex, Stats& stats,
+                            std::vector<IterationTrace>* trace) override;
+    bool collect(const Deadline& until, std::vector<DeferredLevel>& results, Stats& stats) override;
 
 private:
     /// One iteration: both views along every enabled axis over the alive items; an item stays alive when it is not
@@ -52,6 +57,7 @@ private:
     std::vector<std::uint8_t> m_alive;        ///< of the level being run; after it, of the last level
     std::vector<std::uint8_t> m_parentAlive;  ///< the last level's, while a level inherits it
     std::vector<std::uint32_t> m_flags;
+    std::vector<DeferredLevel> m_deferred;  ///< the levels run since the last collect()
     std::vector<std::uint32_t> m_near1, m_far1, m_near2, m_far2;  ///< one view's images
 };
 

@@ -157,4 +157,16 @@ bool pruneLevelAhead(PruningBackend& backend, const LevelItems& items, const Set
     return ahead;
 }
 
+bool pruneLevelDeferred(PruningBackend& backend, const LevelItems& items, const Settings& settings,
+                        double coordinateBound, std::size_t place, std::vector<std::uint8_t>& survivors,
+                        std::size_t levelIndex, Stats& stats) {
+    const Timer timer;
+    LevelStart start;
+    const bool deferred =
+        startLevel(items, settings, coordinateBound, place, survivors, stats.levels[levelIndex], start);
+    if (deferred) backend.pruneLevelDeferred(items, start, levelIndex, stats, nullptr);
+    stats.levels[levelIndex].cpuMs += timer.ms();
+    return deferred;
+}
+
 }  // namespace cullide

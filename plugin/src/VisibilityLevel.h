@@ -68,4 +68,11 @@ bool pruneLevelAhead(PruningBackend& backend, const LevelItems& items, const Set
                      double coordinateBound, std::size_t place, std::vector<std::uint8_t>& survivors,
                      std::size_t levelIndex, Stats& stats);
 
+/// pruneLevel with the read-back deferred (PruningBackend::pruneLevelDeferred; the level's stats are
+/// stats.levels[levelIndex], complete after PruningBackend::collect). Returns false where the level did not reach the
+/// backend (it ends at once): `survivors` then says which items survive.
+bool pruneLevelDeferred(PruningBackend& backend, const LevelItems& items, const Settings& settings,
+                        double coordinateBound, std::size_t place, std::vector<std::uint8_t>& survivors,
+                        std::size_t levelIndex, Stats& stats);
+
 }  // namespace cullide

@@ -188,6 +188,7 @@ nlohmann::ordered_json statsToJson(const cullide::Stats& s) {
         lj["idle_iterations"] = l.idleIterations;
         lj["blocking_read_backs"] = l.blockingReadBacks;
         lj["wait_ms"] = l.waitMs;
+        lj["deferred"] = l.deferred;
         lj["gpu_ms"] = gpuTime(l.gpuMs, l.gpuTimingValid);
         levels.push_back(std::move(lj));
     }

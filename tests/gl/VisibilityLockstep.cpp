@@ -34,6 +34,11 @@ public:
             note(0, "upload " + std::to_string(m_log->uploads) + ": " + std::to_string(differing) + " of " +
                         std::to_string(expected.size()) + " position floats differ on the device");
     }
+    void beginFrame() override {
+        m_tested->beginFrame();
+        m_reference->beginFrame();
+        m_deferred.clear();
+    }
     void forgetUploads() override {
         m_tested->forgetUploads();
         m_reference->forgetUploads();
@@ -50,12 +55,12 @@ public:
         try {
             m_tested->pruneLevel(items, start, survivors, level, stats, &m_got);
         } catch (const LevelsRerun&) {
-            m_aheadPending = false;  // both levels run again
+            m_ahead.reset();  // both levels run again
             throw;
         }
         compareAhead();
         ++m_log->levels;
-        compare(items.size(), &survivors);
+        compare(m_got, m_expected, items.size(), &survivors, m_expectedAlive);
         if (trace) trace->insert(trace->end(), m_got.begin(), m_got.end());
     }
 
@@ -63,13 +68,11 @@ public:
     /// compared through the next level's, which inherit them).
     void pruneLevelAhead(const LevelItems& items, const LevelStart& start, std::size_t levelIndex, Stats& stats,
                          std::vector<IterationTrace>* trace) override {
-        m_aheadGot.clear();
-        m_aheadExpected.clear();
-        m_aheadItems = items.size();
+        m_ahead = std::make_unique<Ahead>();  // the tested trace's address stays valid until a deferred level's collect
+        m_ahead->items = items.size();
         m_scratch.levels.assign(1, LevelStats{});
-        m_reference->pruneLevelAhead(items, start, 0, m_scratch, &m_aheadExpected);
-        m_tested->pruneLevelAhead(items, start, levelIndex, stats, &m_aheadGot);
-        m_aheadPending = true;
+        m_reference->pruneLevelAhead(items, start, 0, m_scratch, &m_ahead->expected);
+        m_tested->pruneLevelAhead(items, start, levelIndex, stats, &m_ahead->got);
         (void)trace;  // the culler asks for none (the tested trace comes with the next level)
     }
 
@@ -78,40 +81,94 @@ public:
         compareAhead();
     }
 
+    /// The reference runs the level now, the tested backend defers it: both are compared at collect().
+    void pruneLevelDeferred(const LevelItems& items, const LevelStart& start, std::size_t levelIndex, Stats& stats,
+                            std::vector<IterationTrace>* trace) override {
+        auto d = std::make_unique<Deferred>();
+        d->items = items.size();
+        m_scratch.levels.assign(1, LevelStats{});
+        m_reference->pruneLevel(items, start, d->expectedAlive, m_scratch.levels[0], m_scratch, &d->expected);
+        try {
+            m_tested->pruneLevelDeferred(items, start, levelIndex, stats, &d->got);
+        } catch (const LevelsRerun&) {
+            m_ahead.reset();  // both levels run again
+            throw;
+        }
+        d->ahead = std::move(m_ahead);
+        m_deferred.push_back(std::move(d));
+        (void)trace;  // the culler asks for none
+    }
+
+    /// Each deferred level that ran as one chain (and the level run ahead before it) against the reference: its
+    /// trace and its survivors item by item. One that stopped early runs again, waited for, and is compared then.
+    bool collect(const Deadline& until, std::vector<DeferredLevel>& results, Stats& stats) override {
+        std::vector<std::unique_ptr<Deferred>> deferred;
+        deferred.swap(m_deferred);
+        if (!m_tested->collect(until, results, stats)) return false;
+        if (results.size() != deferred.size()) note(0, "collect() returned a result per deferred level");
+        for (std::size_t k = 0; k < results.size() && k < deferred.size(); ++k) {
+            Deferred& d = *deferred[k];
+            ++m_log->levelsDeferred;
+            if (!results[k].complete) continue;
+            if (d.ahead) compareAheadOf(*d.ahead);
+            ++m_log->levels;
+            compare(d.got, d.expected, d.items, &results[k].survivors, d.expectedAlive);
+        }
+        return true;
+    }
+
 private:
+    /// A level run ahead: its traces (the tested one complete after the next level's read-back).
+    struct Ahead {
+        std::size_t items = 0;
+        std::vector<IterationTrace> got;
+        std::vector<IterationTrace> expected;
+    };
+    /// A deferred level: the reference's result, and the tested trace filled at collect().
+    struct Deferred {
+        std::size_t items = 0;
+        std::vector<IterationTrace> got;
+        std::vector<IterationTrace> expected;
+        std::vector<std::uint8_t> expectedAlive;
+        std::unique_ptr<Ahead> ahead;
+    };
+
     void compareAhead() {
-        if (!m_aheadPending) return;
-        m_aheadPending = false;
+        if (!m_ahead) return;
+        const std::unique_ptr<Ahead> ahead = std::move(m_ahead);
+        compareAheadOf(*ahead);
+    }
+
+    void compareAheadOf(const Ahead& ahead) {
         ++m_log->levels;
         ++m_log->levelsAhead;
-        m_got.swap(m_aheadGot);
-        m_expected.swap(m_aheadExpected);
-        compare(m_aheadItems, nullptr);
-        m_got.swap(m_aheadGot);
-        m_expected.swap(m_aheadExpected);
+        compare(ahead.got, ahead.expected, ahead.items, nullptr, {});
     }
 
     /// Iteration by iteration: the view the tested backend used (fitted on the device after the first) and what it
     /// left, against the reference's; then the alive sets at the level's end, item by item (`gotAlive`, where the
     /// level was waited for).
-    void compare(std::size_t itemCount, const std::vector<std::uint8_t>* gotAliveOrNull) {
+    void compare(const std::vector<IterationTrace>& got, const std::vector<IterationTrace>& expected,
+                 std::size_t itemCount, const std::vector<std::uint8_t>* gotAliveOrNull,
+                 const std::vector<std::uint8_t>& expectedAlive) {
         LockstepLog& log = *m_log;
         std::size_t aliveBefore = itemCount;
-        const std::size_t iterations = std::max(m_got.size(), m_expected.size());
+        const std::size_t iterations = std::max(got.size(), expected.size());
         for (std::size_t i = 0; i < iterations; ++i) {
             ++log.iterations;
-            if (i >= m_got.size() || i >= m_expected.size()) {
-                note(i, "GL ran " + std::to_string(m_got.size()) + " iterations, the reference " +
-                            std::to_string(m_expected.size()));
+            if (i >= got.size() || i >= expected.size()) {
+                note(i, "GL ran " + std::to_string(got.size()) + " iterations, the reference " +
+                            std::to_string(expected.size()));
                 break;
             }
-            const IterationTrace& got = m_got[i];
-            const IterationTrace& expected = m_expected[i];
+            const IterationTrace& gotTrace = got[i];
+            const IterationTrace& expectedTrace = expected[i];
             log.itemsIn += aliveBefore;
-            log.itemsPruned += aliveBefore - std::min<std::size_t>(aliveBefore, got.result.alive);
-            if (!sameView(got, expected)) note(i, "the views differ" + viewDifference(got, expected));
-            const IterationResult& g = got.result;
-            const IterationResult& e = expected.result;
+            log.itemsPruned += aliveBefore - std::min<std::size_t>(aliveBefore, gotTrace.result.alive);
+            if (!sameView(gotTrace, expectedTrace))
+                note(i, "the views differ" + viewDifference(gotTrace, expectedTrace));
+            const IterationResult& g = gotTrace.result;
+            const IterationResult& e = expectedTrace.result;
             const bool sameRange = g.ownerMin == e.ownerMin && g.ownerMax == e.ownerMax;
             const bool sameBounds = g.bounds.min == e.bounds.min && g.bounds.max == e.bounds.max;
             if (g.overflows != 0 || g.alive != e.alive || (e.alive != 0 && !(sameRange && sameBounds)))
@@ -124,18 +181,18 @@ private:
         const std::vector<std::uint8_t>& gotAlive = *gotAliveOrNull;
         std::size_t differing = 0;
         std::size_t firstDiffering = gotAlive.size();
-        for (std::size_t i = 0; i < gotAlive.size() && i < m_expectedAlive.size(); ++i) {
-            if (gotAlive[i] == m_expectedAlive[i]) continue;
+        for (std::size_t i = 0; i < gotAlive.size() && i < expectedAlive.size(); ++i) {
+            if (gotAlive[i] == expectedAlive[i]) continue;
             if (differing++ == 0) firstDiffering = i;
         }
-        if (differing != 0 || gotAlive.size() != m_expectedAlive.size()) {
+        if (differing != 0 || gotAlive.size() != expectedAlive.size()) {
             log.itemsDiffering += differing;
             std::ostringstream s;
             s << "the survivors differ in " << differing << " items";
             if (differing != 0)
                 s << " (first: item " << firstDiffering << ", GL " << int(gotAlive[firstDiffering]) << ", reference "
-                  << int(m_expectedAlive[firstDiffering]) << ")";
-            note(m_got.size(), s.str());
+                  << int(expectedAlive[firstDiffering]) << ")";
+            note(got.size(), s.str());
         }
     }
 
@@ -176,10 +233,8 @@ private:
     LevelStats m_scratchLevel;
     std::vector<IterationTrace> m_got;
     std::vector<IterationTrace> m_expected;
-    bool m_aheadPending = false;  ///< a level run ahead whose comparison waits for the next level
-    std::size_t m_aheadItems = 0;
-    std::vector<IterationTrace> m_aheadGot;
-    std::vector<IterationTrace> m_aheadExpected;
+    std::unique_ptr<Ahead> m_ahead;  ///< a level run ahead whose comparison waits for the next level
+    std::vector<std::unique_ptr<Deferred>> m_deferred;  ///< since the last collect()
     std::vector<std::uint8_t> m_expectedAlive;
 };
 

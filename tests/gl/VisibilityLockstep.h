@@ -21,6 +21,7 @@ struct LockstepLog {
     std::size_t iterations = 0;
     std::size_t itemsIn = 0;      ///< items entering the compared iterations, summed
     std::size_t itemsPruned = 0;  ///< items the GL backend pruned in them, summed
+    std::size_t levelsDeferred = 0;  ///< levels whose read-back waited for the frame's collect()
     std::size_t levelsAhead = 0;  ///< of the levels, run ahead (their survivors compared through the next level's)
     std::size_t uploads = 0;         ///< geometry uploads, each checked: the device's positions bit for bit
     std::size_t mappedVertices = 0;  ///< of their vertices, mapped on the device (MappedMesh), summed

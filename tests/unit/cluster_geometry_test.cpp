@@ -24,6 +24,8 @@ using scenes::transformMesh;
 class RecordingBackend final : public PruningBackend {
 public:
     std::vector<GpuGeometry> uploads;
+    std::vector<DeferredLevel> deferred;
+    void beginFrame() override { deferred.clear(); }
     void upload(const GpuGeometry& geometry, Stats&) override { uploads.push_back(geometry); }
     void forgetUploads() override {}
     std::size_t deviceBytes() const override { return 0; }
@@ -34,6 +36,15 @@ public:
     void pruneLevelAhead(const LevelItems&, const LevelStart&, std::size_t, Stats&,
                          std::vector<IterationTrace>*) override {}
     void settle(Stats&) override {}
+    void pruneLevelDeferred(const LevelItems& items, const LevelStart&, std::size_t, Stats&,
+                            std::vector<IterationTrace>*) override {
+        deferred.push_back(DeferredLevel{true, std::vector<std::uint8_t>(items.size(), 1)});
+    }
+    bool collect(const Deadline&, std::vector<DeferredLevel>& results, Stats&) override {
+        results.swap(deferred);
+        deferred.clear();
+        return true;
+    }
 };
 
 TEST(ClusterGeometry, StaticMeshesAreSentOnceAndOthersEveryUpload) {

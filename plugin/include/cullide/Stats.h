@@ -39,13 +39,18 @@ struct LevelStats {
     /// Of cpuMs, GL back-end: blocked in read-backs, i.e. waiting for the device to finish the work submitted
     /// before. The rest of cpuMs is issuing commands and the level loop.
     double waitMs = 0.0;
-    /// GL back-end: read-backs that blocked on the device: one per level (its counters, the chain of iterations and
-    /// the alive set), and one more for each time the chain stopped to have its records built again (a short build,
-    /// LevelStats::shortBuilds; a view that shrank to a quarter) or ran past the iterations issued.
+    /// GL back-end: read-backs that blocked on the device: one per level waited for (its counters, the chain of
+    /// iterations and the alive set), and one more for each time the chain stopped to have its records built again (a
+    /// short build, LevelStats::shortBuilds; a view that shrank to a quarter) or ran past the iterations issued. A
+    /// level run ahead has none (its chain comes with the next level's read-back); the deferred levels of a frame
+    /// share one, which the last of them counts (with its wait in waitMs and cpuMs).
     std::size_t blockingReadBacks = 0;
-    /// GPU time of the level's iterations and record builds from timer queries. Only meaningful with
-    /// gpuTimingValid; 0 otherwise, and 0 for a level run ahead (blockingReadBacks 0): its device time is in the span
-    /// of the level waited for after it, as its wait is in that level's waitMs.
+    /// GL back-end: the level was issued and read back with the frame's other deferred levels (the Auto pipeline's
+    /// triangle level of each cluster): one read-back per frame however many clusters it has.
+    bool deferred = false;
+    /// GPU time of the level's iterations and record builds from timer queries (one span from the level's first
+    /// pass to its read-back, or to the end of its issue where it is deferred). Only meaningful with gpuTimingValid;
+    /// 0 otherwise, and 0 for a level run ahead: no span is read for it alone.
     double gpuMs = 0.0;
     /// true when every iteration of the level was timed by an available, plausible timer-query result (at most
     /// the CPU wall time of the same span): false without timer queries and where a driver reports nonsense

@@ -10,6 +10,10 @@ namespace cullide::gl {
 /// Grows `buffer` to hold at least `bytes` (by half again at least; its contents are lost when it grows).
 void reserveBuffer(GLuint buffer, std::size_t& capacity, std::size_t bytes);
 
+/// Grows `buffer` to hold at least `bytes`, keeping its first `used` bytes (copied on the device into a new buffer
+/// object, which replaces `buffer`).
+void growKeeping(GLuint& buffer, std::size_t& capacity, std::size_t used, std::size_t bytes);
+
 /// Grows `buffer` to at least `bytes` and uploads `data`.
 void uploadBuffer(GLuint buffer, std::size_t& capacity, const void* data, std::size_t bytes);
 

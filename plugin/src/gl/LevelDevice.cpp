@@ -50,6 +50,31 @@ MappedRecord toMappedRecord(const MappedMesh& mesh) {
     return r;
 }
 
+/// Waits for the work submitted so far (a fence) and, in tests, for a slow device's round trip (`delayEnd`), until
+/// `until` at the latest: false where that came first.
+bool waitForDeviceUntil(Clock::time_point until, Clock::time_point delayEnd) {
+    const GLsync fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+    GLbitfield flags = GL_SYNC_FLUSH_COMMANDS_BIT;
+    for (;;) {
+        const auto left = std::chrono::duration_cast<std::chrono::nanoseconds>(until - Clock::now()).count();
+        const GLenum r = glClientWaitSync(fence, flags, static_cast<GLuint64>(std::max<long long>(0, left)));
+        flags = 0;
+        if (r == GL_ALREADY_SIGNALED || r == GL_CONDITION_SATISFIED) break;
+        if (r != GL_TIMEOUT_EXPIRED) {
+            glDeleteSync(fence);
+            throw BackendError("waiting for the device failed");
+        }
+        if (Clock::now() > until) {
+            glDeleteSync(fence);
+            return false;
+        }
+    }
+    glDeleteSync(fence);
+    if (delayEnd <= until) return true;
+    std::this_thread::sleep_until(until);
+    return false;
+}
+
 }  // namespace
 
 double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
@@ -95,7 +120,7 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
     glCreateFramebuffers(1, &framebuffer);
     glNamedFramebufferParameteri(framebuffer, GL_FRAMEBUFFER_DEFAULT_WIDTH, width);
     glNamedFramebufferParameteri(framebuffer, GL_FRAMEBUFFER_DEFAULT_HEIGHT, height);
-    if (context.hasTimerQueries()) glGenQueries(1, &timer);
+    hasTimers = context.hasTimerQueries();
     GLint limit = 65535;
     glGetIntegeri_v(GL_MAX_COMPUTE_WORK_GROUP_COUNT, 0, &limit);
     maxGroups = static_cast<std::size_t>(std::max(1, limit));
@@ -111,7 +136,7 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
 
 LevelDevice::~LevelDevice() {
     if (!context.tryMakeCurrent()) return;  // the context is gone: so are its objects
-    if (timer) glDeleteQueries(1, &timer);
+    if (!timers.empty()) glDeleteQueries(static_cast<GLsizei>(timers.size()), timers.data());
     glDeleteFramebuffers(1, &framebuffer);
     glDeleteTextures(4, images);
     glDeleteBuffers(kBufferCount, buffers);
@@ -369,13 +394,27 @@ void LevelDevice::startTiming() {
     if (timing) return;
     timing = true;
     timedSpan = Clock::now();
-    if (timer) glBeginQuery(GL_TIME_ELAPSED, timer);
+    if (!hasTimers) return;
+    if (spans == timers.size()) {
+        timers.push_back(0);
+        glGenQueries(1, &timers.back());
+    }
+    glBeginQuery(GL_TIME_ELAPSED, timers[spans++]);
 }
 
 void LevelDevice::endTiming() {
     if (!timing) return;
-    if (timer) glEndQuery(GL_TIME_ELAPSED);
+    if (hasTimers) glEndQuery(GL_TIME_ELAPSED);
     timing = false;
+}
+
+double LevelDevice::spanMs(std::size_t span, Clock::time_point opened) const {
+    return hasTimers && span < spans ? timerResultMs(timers[span], msSince(opened)) : -1.0;
+}
+
+void LevelDevice::forgetSpans() {
+    endTiming();
+    spans = 0;
 }
 
 void LevelDevice::prepareIteration(std::size_t itemCount) {
@@ -432,16 +471,22 @@ void LevelDevice::issueIteration(int iteration, LevelStats& level, Stats& stats)
     std::swap(capacity[kPrims], capacity[kPrimsNext]);
 }
 
-void LevelDevice::readBack(GLuint buffer, std::size_t offset, std::size_t bytes, void* to, LevelStats& level,
-                           Stats& stats) {
+bool LevelDevice::readBack(GLuint buffer, std::size_t offset, std::size_t bytes, void* to, LevelStats& level,
+                           Stats& stats, const Deadline& until) {
     const auto waitStart = Clock::now();
-    glGetNamedBufferSubData(buffer, static_cast<GLintptr>(offset), static_cast<GLsizeiptr>(bytes), to);
-    if (readBackDelayMs > 0.0)
-        std::this_thread::sleep_for(std::chrono::duration<double, std::milli>(readBackDelayMs));
-    level.waitMs += msSince(waitStart);
+    const auto delayEnd = waitStart + std::chrono::duration_cast<Clock::duration>(
+                                          std::chrono::duration<double, std::milli>(readBackDelayMs));
     level.blockingReadBacks += 1;
     stats.blockingReadBacks += 1;
+    if (until && !waitForDeviceUntil(*until.at(), delayEnd)) {
+        level.waitMs += msSince(waitStart);
+        return false;
+    }
+    glGetNamedBufferSubData(buffer, static_cast<GLintptr>(offset), static_cast<GLsizeiptr>(bytes), to);
+    if (readBackDelayMs > 0.0) std::this_thread::sleep_until(delayEnd);  // a slow device's round trip (tests)
+    level.waitMs += msSince(waitStart);
     stats.bytesReadBack += bytes;
+    return true;
 }
 
 void LevelDevice::waitForChain(bool withAhead, LevelStats& level, Stats& stats) {
@@ -451,13 +496,12 @@ void LevelDevice::waitForChain(bool withAhead, LevelStats& level, Stats& stats) 
         glCopyNamedBufferSubData(buffers[kStash], buffers[kCounters], 0, 4 * CULLIDE_AHEAD, 4 * kChainWords);
     readScratch.resize(words);
     readBack(buffers[kCounters], 0, 4 * words, readScratch.data(), level, stats);
-    recordGpuTime(timer ? timerResultMs(timer, msSince(timedSpan)) : -1.0, level, stats);
+    recordGpuTime(spans > 0 ? spanMs(spans - 1, timedSpan) : -1.0, level, stats);
     checkGlError("a level's visibility iterations");
 }
 
 int LevelDevice::issueLevel(const LevelItems& items, const LevelStart& start, int iterations, LevelStats& level,
                            Stats& stats) {
-    endTiming();  // a level abandoned by an error
     levelItems = &items;
     const auto send = Clock::now();
     uploadItems(items, start, level, stats);
@@ -469,19 +513,22 @@ int LevelDevice::issueLevel(const LevelItems& items, const LevelStart& start, in
     return issued;
 }
 
-void LevelDevice::readSurvivors(std::uint32_t stop, std::vector<std::uint8_t>& survivors) const {
-    const std::size_t n = levelItems->size();
-    const std::uint32_t* bits = readScratch.data() + CULLIDE_ALIVE_BITS;
-    survivors.resize(n);
+void survivorsFrom(const std::uint32_t* bits, std::size_t items, std::uint32_t stop,
+                   std::vector<std::uint8_t>& survivors) {
+    survivors.resize(items);
     const bool allPruned = stop == CULLIDE_STOP_ONE_OWNER;
-    for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t i = 0; i < items; ++i)
         survivors[i] = static_cast<std::uint8_t>(allPruned ? 0u : (bits[i / 32] >> (i % 32)) & 1u);
 }
 
-void LevelDevice::readTrace(GLuint views, int ran, std::vector<IterationTrace>& trace) {
+void LevelDevice::readSurvivors(std::uint32_t stop, std::vector<std::uint8_t>& survivors) const {
+    survivorsFrom(readScratch.data() + CULLIDE_ALIVE_BITS, levelItems->size(), stop, survivors);
+}
+
+void LevelDevice::readTrace(GLuint views, std::size_t first, int ran, std::vector<IterationTrace>& trace) {
     std::vector<ViewRecord> records(static_cast<std::size_t>(ran));
-    glGetNamedBufferSubData(views, 0, static_cast<GLsizeiptr>(records.size() * sizeof(ViewRecord)),
-                            records.data());
+    glGetNamedBufferSubData(views, static_cast<GLintptr>(first * sizeof(ViewRecord)),
+                            static_cast<GLsizeiptr>(records.size() * sizeof(ViewRecord)), records.data());
     for (const ViewRecord& r : records) trace.push_back(toTrace(r));
 }
 

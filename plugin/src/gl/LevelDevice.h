@@ -5,6 +5,7 @@
 #pragma once
 
 #include "CullerBackends.h"
+#include "Deadline.h"
 #include "PruningBackend.h"
 #include "bindings.h"
 #include "cullide/Settings.h"
@@ -46,6 +47,8 @@ enum Buffer {
     kLocal,       ///< the mapped meshes' own vertices (double)
     kMapped,      ///< their MappedRecords
     kOrdered,     ///< GpuGeometry::ordered
+    kFrameResults,  ///< the deferred levels' counter words (chain, the level run ahead's chain, alive bits), in turn
+    kFrameViews,    ///< ... and their views and those of the levels run ahead (where a trace is asked for)
     kBufferCount
 };
 
@@ -71,6 +74,11 @@ struct Chain {
     }
 };
 
+/// A level's alive set as 0/1 per item from its alive bits as read back (CULLIDE_ALIVE_BITS on; every item pruned
+/// where the chain stopped with one owner left).
+void survivorsFrom(const std::uint32_t* bits, std::size_t items, std::uint32_t stop,
+                   std::vector<std::uint8_t>& survivors);
+
 /// One GL context's programs and resources for the visibility levels, and the steps a level is made of. Every public
 /// step expects the context current on the calling thread.
 struct LevelDevice {
@@ -89,7 +97,8 @@ struct LevelDevice {
     GLuint buffers[kBufferCount] = {};
     std::size_t capacity[kBufferCount] = {};
     std::size_t valid[kBufferCount] = {};  ///< bytes of the buffer that hold the last upload (positions, indices)
-    GLuint timer = 0;
+    bool hasTimers = false;      ///< timer queries (GL_TIME_ELAPSED) are there
+    std::vector<GLuint> timers;  ///< one per span of the frame, made as needed
     std::size_t maxGroups = 65535;  ///< GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]
     std::vector<std::uint32_t> readScratch;  ///< a level's read-back: counters, dispatch block, chain, alive bits
     const GpuGeometry* geometry = nullptr;
@@ -104,9 +113,12 @@ struct LevelDevice {
     /// Records the record buffers (kPrims, kPrimsNext; kRecords on the raster back-end) hold: kept between levels and
     /// frames, grown when a build needs more (the iteration then runs again).
     std::size_t recordCapacity = 0;
-    /// The open timer query's span: from the first pass after the last read-back to the next read-back.
+    /// The timer query spans of the frame so far (timers[0 .. spans)); the last one is open while `timing`. A
+    /// span runs from a level's first pass to its read-back, or to the end of its issue where it is read back later
+    /// (a deferred level), or where nothing reads it (a level run ahead: its device time is not measured).
+    std::size_t spans = 0;
     bool timing = false;
-    Clock::time_point timedSpan;
+    Clock::time_point timedSpan;  ///< when the last span opened
     double readBackDelayMs = 0.0;  ///< GlBackendOptions::readBackDelayMs (tests: a slow device's round trip)
     std::shared_ptr<std::vector<float>> positionsAfterUpload;  ///< GlBackendOptions::positionsAfterUpload (tests)
 
@@ -163,10 +175,14 @@ struct LevelDevice {
     /// room for them and a quarter more, within the limit of one build.
     void growRecords(std::uint32_t needed, float approx);
 
-    /// Opens the timer query's span (unless open) / closes it: one span from the first pass after a read-back to the
-    /// next read-back.
+    /// Opens a timer query span (unless one is open) / closes it.
     void startTiming();
     void endTiming();
+    /// The device time of span `span`, opened at `opened`, once its work has been waited for (-1: none or implausible;
+    /// recordGpuTime).
+    double spanMs(std::size_t span, Clock::time_point opened) const;
+    /// A frame starts (or its deferred levels were collected): the spans' queries may be used again.
+    void forgetSpans();
 
     /// Clears the images, the flags and the counters of one iteration and binds what every pass reads and writes.
     void prepareIteration(std::size_t itemCount);
@@ -178,8 +194,10 @@ struct LevelDevice {
     void issueIteration(int iteration, LevelStats& level, Stats& stats);
 
     /// Reads `bytes` at `offset` of `buffer` back into `to`: blocks until the device has finished the work submitted
-    /// before, which the level's waitMs counts (with the tests' readBackDelayMs inside it).
-    void readBack(GLuint buffer, std::size_t offset, std::size_t bytes, void* to, LevelStats& level, Stats& stats);
+    /// before, which the level's waitMs counts (with the tests' readBackDelayMs inside it). With `until`, the wait
+    /// ends there at the latest (a fence polled): false, nothing read, where the device had not finished by then.
+    bool readBack(GLuint buffer, std::size_t offset, std::size_t bytes, void* to, LevelStats& level, Stats& stats,
+                  const Deadline& until = Deadline());
 
     /// Waits for the iterations issued: one read-back of the counters, the chain (and that of a level run ahead) and
     /// the alive set.
@@ -192,8 +210,9 @@ struct LevelDevice {
     /// The alive set as 0/1 per item, from the level's read-back (every item pruned where one owner is left).
     void readSurvivors(std::uint32_t stop, std::vector<std::uint8_t>& survivors) const;
 
-    /// The iterations as they ran on the device (tests only: a read-back that no stat counts).
-    static void readTrace(GLuint views, int ran, std::vector<IterationTrace>& trace);
+    /// The iterations as they ran on the device, from ViewRecord `first` of `views` on (tests only: a read-back that no
+    /// stat counts).
+    static void readTrace(GLuint views, std::size_t first, int ran, std::vector<IterationTrace>& trace);
 };
 
 }  // namespace cullide::gl

@@ -2,6 +2,7 @@
 
 #include "bindings.h"
 #include "gl/GlBuffers.h"
+#include "gl/GpuTimes.h"
 #include "gl/LevelDevice.h"
 #include "gl/ViewRecords.h"
 #include "CullerBackends.h"
@@ -26,6 +27,22 @@ struct AheadLevel {
     std::vector<IterationTrace>* trace = nullptr;
 };
 
+/// A level whose read-back is deferred to the frame's collect (pruneLevelDeferred): where its words are.
+struct DeferredEntry {
+    std::size_t levelIndex = 0;  ///< into Stats::levels
+    std::size_t place = 0;
+    std::size_t items = 0;
+    int issued = 0;
+    std::size_t firstWord = 0;  ///< its counter words (counterWords(items)) in kFrameResults
+    std::size_t firstView = 0;  ///< its views, then those of the level run ahead, in kFrameViews (with a trace)
+    std::optional<AheadLevel> ahead;  ///< the level run ahead before it: its chain in words CULLIDE_AHEAD ..
+    std::size_t span = 0;             ///< its timer query span (LevelDevice::spans), opened at `spanOpened`
+    Clock::time_point spanOpened;
+    std::vector<IterationTrace>* trace = nullptr;
+    bool waited = false;  ///< it ran waited for (its place stopped early last time): `survivors` holds its result
+    std::vector<std::uint8_t> survivors;
+};
+
 }  // namespace
 
 /// The policy over the device's steps (LevelDevice): how many iterations a level issues, when it waits, which level
@@ -39,10 +56,17 @@ struct VisibilityPass::Impl : LevelDevice {
     struct PlaceHistory {
         int guess = 0;       ///< 0: nothing ran there yet (all that are allowed)
         int sinceGuess = 0;  ///< levels there since one ran `guess` iterations
-        bool wait = false;   ///< the level run ahead there stopped early: waited for until it runs as one chain
+        bool wait = false;   ///< the level run ahead or deferred there stopped early: waited for until it runs as one
+                             ///< chain
     };
     std::vector<PlaceHistory> places;
     std::optional<AheadLevel> ahead;  ///< a level run ahead, not read back yet
+    std::vector<DeferredEntry> deferred;  ///< levels whose read-back waits for collect(), in order
+    std::size_t frameWords = 0;           ///< words of kFrameResults they fill
+    std::size_t frameViews = 0;           ///< ViewRecords of kFrameViews they fill
+    std::vector<std::uint32_t> frameScratch;  ///< collect()'s read-back
+
+    bool waitsAt(std::size_t place) const { return place < places.size() && places[place].wait; }
 
     int guessFor(std::size_t place) const {
         const int guess = place < places.size() ? places[place].guess : 0;
@@ -110,7 +134,7 @@ struct VisibilityPass::Impl : LevelDevice {
         remember(start.place, chain.ran(), oneChain);
         noteIterations(chain, level);
         readSurvivors(chain.stop(), survivors);
-        if (trace) readTrace(buffers[kViews], chain.ran(), *trace);
+        if (trace) readTrace(buffers[kViews], 0, chain.ran(), *trace);
     }
 
     /// A level run ahead: issued, its chain and views kept for the next level's read-back (nothing waits). Where the
@@ -118,7 +142,7 @@ struct VisibilityPass::Impl : LevelDevice {
     void runAhead(const LevelItems& items, const LevelStart& start, std::size_t levelIndex, Stats& stats,
                   std::vector<IterationTrace>* trace) {
         LevelStats& level = stats.levels[levelIndex];
-        if (start.place < places.size() && places[start.place].wait) {
+        if (waitsAt(start.place)) {
             std::vector<std::uint8_t> survivors;
             runLevel(items, start, survivors, level, stats, trace);
             return;
@@ -132,7 +156,7 @@ struct VisibilityPass::Impl : LevelDevice {
             reserveBuffer(buffers[kStashViews], capacity[kStashViews], bytes);
             glCopyNamedBufferSubData(buffers[kViews], buffers[kStashViews], 0, 0, static_cast<GLsizeiptr>(bytes));
         }
-        endTiming();  // its device time is in the next level's span
+        endTiming();  // its device time is not measured: no read-back waits for it alone
         ahead = AheadLevel{levelIndex, start.place, issued, trace};
         checkGlError("a level run ahead");
     }
@@ -152,7 +176,13 @@ struct VisibilityPass::Impl : LevelDevice {
             readBack(buffers[kStash], 0, 4 * kChainWords, own.data(), stats.levels[a.levelIndex], stats);
             words = own.data();
         }
-        const Chain chain{words};
+        const bool early = noteAhead(a, Chain{words}, buffers[kStashViews], 0, stats);
+        if (early && inReadBack) throw LevelsRerun{};
+    }
+
+    /// A level run ahead, from its chain: its stats and (from ViewRecord `firstView` of `views` on) its trace. Returns
+    /// whether it stopped early; its place then waits for it next time, which finds out how many it needs.
+    bool noteAhead(const AheadLevel& a, const Chain& chain, GLuint views, std::size_t firstView, Stats& stats) {
         LevelStats& level = stats.levels[a.levelIndex];
         const int ran = chain.ran();
         if (ran < 1 || ran > a.issued) throw BackendError("the device's chain of iterations did not run");
@@ -160,15 +190,141 @@ struct VisibilityPass::Impl : LevelDevice {
         level.idleIterations += static_cast<std::size_t>(a.issued - ran);
         if (chain.shortBuild()) level.shortBuilds += 1;
         else level.records += chain[CULLIDE_DISPATCH_NEEDED];
-        if (early) {  // how many it needs is not known: waited for next time, which finds out
+        if (early) {
             if (a.place >= places.size()) places.resize(a.place + 1);
             places[a.place].wait = true;
         } else {
             remember(a.place, ran, true);
         }
         noteIterations(chain, level);
-        if (a.trace) readTrace(buffers[kStashViews], ran, *a.trace);
-        if (early && inReadBack) throw LevelsRerun{};
+        if (a.trace) readTrace(views, firstView, ran, *a.trace);
+        return early;
+    }
+
+    /// A level whose read-back is deferred: issued, and its counter words (with the chain of the level run ahead
+    /// before it) and, for a trace, its views copied aside on the device for collect(). Where the level in its place
+    /// stopped early last time it is waited for at once instead.
+    void runDeferred(const LevelItems& items, const LevelStart& start, std::size_t levelIndex, Stats& stats,
+                     std::vector<IterationTrace>* trace) {
+        LevelStats& level = stats.levels[levelIndex];
+        DeferredEntry entry;
+        entry.levelIndex = levelIndex;
+        entry.place = start.place;
+        entry.items = items.size();
+        entry.trace = trace;
+        if (waitsAt(start.place)) {
+            runLevel(items, start, entry.survivors, level, stats, trace);
+            entry.waited = true;
+            deferred.push_back(std::move(entry));
+            return;
+        }
+        entry.issued = issueLevel(items, start, guessFor(start.place), level, stats);
+        level.deferred = true;
+        endTiming();  // the level's span: its device time is read after collect()'s read-back
+        entry.span = spans - 1;
+        entry.spanOpened = timedSpan;
+        const std::size_t words = counterWords(items.size());
+        if (ahead) {
+            glCopyNamedBufferSubData(buffers[kStash], buffers[kCounters], 0, 4 * CULLIDE_AHEAD, 4 * kChainWords);
+            entry.ahead = ahead;
+            ahead.reset();
+        }
+        entry.firstWord = frameWords;
+        growKeeping(buffers[kFrameResults], capacity[kFrameResults], 4 * frameWords, 4 * (frameWords + words));
+        glCopyNamedBufferSubData(buffers[kCounters], buffers[kFrameResults], 0,
+                                 static_cast<GLintptr>(4 * frameWords), static_cast<GLsizeiptr>(4 * words));
+        frameWords += words;
+        if (trace || (entry.ahead && entry.ahead->trace)) {
+            constexpr std::size_t kViewsEach = CULLIDE_MAX_ITERATIONS + 1;  // as kViews holds
+            const std::size_t firstView = frameViews;
+            entry.firstView = firstView;
+            frameViews += 2 * kViewsEach;
+            growKeeping(buffers[kFrameViews], capacity[kFrameViews], sizeof(ViewRecord) * firstView,
+                        sizeof(ViewRecord) * (firstView + 2 * kViewsEach));
+            glCopyNamedBufferSubData(buffers[kViews], buffers[kFrameViews], 0,
+                                     static_cast<GLintptr>(sizeof(ViewRecord) * firstView),
+                                     sizeof(ViewRecord) * kViewsEach);
+            if (entry.ahead && entry.ahead->trace)
+                glCopyNamedBufferSubData(buffers[kStashViews], buffers[kFrameViews], 0,
+                                         static_cast<GLintptr>(sizeof(ViewRecord) * (firstView + kViewsEach)),
+                                         static_cast<GLsizeiptr>(sizeof(ViewRecord) *
+                                                                 static_cast<std::size_t>(entry.ahead->issued)));
+        }
+        deferred.push_back(std::move(entry));
+        checkGlError("a deferred level");
+    }
+
+    /// One read-back for every deferred level (at most until `until`), then each one's stats, trace and result.
+    bool collect(const Deadline& until, std::vector<DeferredLevel>& results, Stats& stats) {
+        results.clear();
+        if (deferred.empty()) return true;
+        const DeferredEntry* lastIssued = nullptr;
+        for (const DeferredEntry& e : deferred)
+            if (!e.waited) lastIssued = &e;
+        if (lastIssued) {
+            // The read-back (its wait in its CPU time too) is the last issued level's: it is the one waited for.
+            const auto waitStart = Clock::now();
+            LevelStats& last = stats.levels[lastIssued->levelIndex];
+            frameScratch.resize(frameWords);
+            const bool done =
+                readBack(buffers[kFrameResults], 0, 4 * frameWords, frameScratch.data(), last, stats, until);
+            last.cpuMs += msSince(waitStart);
+            if (!done) {
+                dropDeferred();
+                forgetSpans();
+                return false;
+            }
+            checkGlError("the deferred levels");
+        }
+        results.resize(deferred.size());
+        for (std::size_t k = 0; k < deferred.size(); ++k) results[k] = noteDeferred(deferred[k], stats);
+        dropDeferred();
+        forgetSpans();
+        return true;
+    }
+
+    /// A deferred level from collect()'s read-back: its stats and trace, and its survivors where it (and the level
+    /// run ahead before it) ended as one chain; otherwise its place waits for it next time.
+    DeferredLevel noteDeferred(DeferredEntry& e, Stats& stats) {
+        DeferredLevel result;
+        if (e.waited) {
+            result.complete = true;
+            result.survivors = std::move(e.survivors);
+            return result;
+        }
+        constexpr std::size_t kViewsEach = CULLIDE_MAX_ITERATIONS + 1;
+        const std::uint32_t* words = frameScratch.data() + e.firstWord;
+        bool aheadEnded = true;
+        if (e.ahead) aheadEnded = !noteAhead(*e.ahead, Chain{words + CULLIDE_AHEAD}, buffers[kFrameViews],
+                                             e.firstView + kViewsEach, stats);
+        LevelStats& level = stats.levels[e.levelIndex];
+        const Chain chain{words + CULLIDE_DISPATCH_RECORDS};
+        const int ran = chain.ran();
+        if (ran < 1 || ran > e.issued) throw BackendError("the device's chain of iterations did not run");
+        level.idleIterations += static_cast<std::size_t>(e.issued - ran);
+        if (chain.shortBuild()) level.shortBuilds += 1;
+        else level.records += chain[CULLIDE_DISPATCH_NEEDED];
+        if (!chain.levelEnded()) {
+            if (e.place >= places.size()) places.resize(e.place + 1);
+            places[e.place].wait = true;
+            // It needed more iterations than were issued: the rerun issues all that are allowed.
+            if (!chain.shortBuild() && chain.stop() == CULLIDE_STOP_NONE) remember(e.place, settings.maxIterations, false);
+        } else {
+            remember(e.place, ran, true);
+        }
+        noteIterations(chain, level);
+        recordGpuTime(spanMs(e.span, e.spanOpened), level, stats);
+        if (e.trace) readTrace(buffers[kFrameViews], e.firstView, ran, *e.trace);
+        result.complete = aheadEnded && chain.levelEnded();
+        if (result.complete) survivorsFrom(words + CULLIDE_ALIVE_BITS, e.items, chain.stop(), result.survivors);
+        return result;
+    }
+
+    /// Forgets the deferred levels (no GL call).
+    void dropDeferred() {
+        deferred.clear();
+        frameWords = 0;
+        frameViews = 0;
     }
 
     /// The level's iterations into its stats, from the chain's items alive at its start (all, or those whose parent
@@ -197,6 +353,14 @@ VisibilityPass::~VisibilityPass() = default;
 
 std::string VisibilityPass::renderer() const { return m_impl->context.renderer(); }
 std::string VisibilityPass::device() const { return m_impl->context.device(); }
+
+void VisibilityPass::beginFrame() {
+    Impl& s = *m_impl;
+    s.ahead.reset();
+    s.context.makeCurrent();
+    s.dropDeferred();
+    s.forgetSpans();  // a span that a frame abandoned half way left open is closed
+}
 
 void VisibilityPass::upload(const GpuGeometry& geometry, Stats& stats) {
     Impl& s = *m_impl;
@@ -231,6 +395,9 @@ void VisibilityPass::forgetUploads() {
     s.recordCapacity = 0;
     s.places.clear();
     s.ahead.reset();
+    s.dropDeferred();
+    s.capacity[kFrameResults] = 0;
+    s.capacity[kFrameViews] = 0;
     s.lastItemCount = 0;
 }
 
@@ -247,6 +414,21 @@ void VisibilityPass::pruneLevelAhead(const LevelItems& items, const LevelStart& 
     s.context.makeCurrent();
     s.ahead.reset();  // one never waited for belongs to an abandoned frame
     s.runAhead(items, start, levelIndex, stats, trace);
+}
+
+void VisibilityPass::pruneLevelDeferred(const LevelItems& items, const LevelStart& start, std::size_t levelIndex,
+                                        Stats& stats, std::vector<IterationTrace>* trace) {
+    Impl& s = *m_impl;
+    s.context.makeCurrent();
+    s.runDeferred(items, start, levelIndex, stats, trace);
+}
+
+bool VisibilityPass::collect(const Deadline& until, std::vector<DeferredLevel>& results, Stats& stats) {
+    Impl& s = *m_impl;
+    results.clear();
+    if (s.deferred.empty()) return true;
+    s.context.makeCurrent();
+    return s.collect(until, results, stats);
 }
 
 void VisibilityPass::settle(Stats& stats) {

@@ -2,7 +2,8 @@
 // production runs. A level runs on the device as a chain: its records are built there (build.comp), the passes over
 // them are dispatched indirectly, and each iteration's last work group decides whether the next one runs, fits its
 // view and writes its arguments (survive.comp). The C++ side issues the level's iterations without waiting and reads
-// back once at the end: the counters, the chain and the alive set as bits.
+// back once at the end: the counters, the chain and the alive set as bits. A frame's deferred levels (one per cluster)
+// are read back together: one wait per frame.
 #pragma once
 
 #include "CullerBackends.h"
@@ -22,6 +23,7 @@ public:
     explicit VisibilityPass(const Settings& settings, const GlBackendOptions& options = {});
     ~VisibilityPass() override;
 
+    void beginFrame() override;
     void upload(const GpuGeometry& geometry, Stats& stats) override;
     void forgetUploads() override;
     /// Buffer capacities plus the view images.
@@ -34,6 +36,9 @@ public:
     void pruneLevelAhead(const LevelItems& items, const LevelStart& start, std::size_t levelIndex, Stats& stats,
                          std::vector<IterationTrace>* trace) override;
     void settle(Stats& stats) override;
+    void pruneLevelDeferred(const LevelItems& items, const LevelStart& start, std::size_t levelIndex, Stats& stats,
+                            std::vector<IterationTrace>* trace) override;
+    bool collect(const Deadline& until, std::vector<DeferredLevel>& results, Stats& stats) override;
 
 private:
     struct Impl;
