@@ -102,11 +102,11 @@
 #define CULLIDE_BUILD_GROUPS 4
 
 /* Passes of build.comp (CULLIDE_LOC_PASS). */
-#define CULLIDE_BUILD_PASS_FOOTPRINTS 0 /* per primitive: its largest footprint (compute back-end only); the last work
+#define CULLIDE_BUILD_PASS_FOOTPRINTS 0 /* per primitive: its largest footprint (short bands only); the last work
                                          * group: pixels per band */
 #define CULLIDE_BUILD_PASS_APPEND 1     /* per primitive: its records, appended; the last work group: the dispatch */
-#define CULLIDE_BUILD_PASS_BOUNDS 2     /* per primitive: its box into its item's (at the level's start, where there is
-                                         * no FOOTPRINTS pass to do it) */
+#define CULLIDE_BUILD_PASS_SINGLE 2     /* FOOTPRINTS' per-primitive work and APPEND in one pass, where the pixels per
+                                         * band need no sum over the primitives (long bands, no bands) */
 
 /* Per-pixel images (r32ui), three views side by side: width 3 * resolution, height resolution. */
 #define CULLIDE_IMAGE_NEAR1 0  /* min over items of (quantized nearest depth << idBits | owner) */
@@ -129,7 +129,7 @@
 #define CULLIDE_LOC_ITEM_COUNT 15   /* uint: build.comp: the level's items */
 #define CULLIDE_LOC_CAPACITY 16     /* uint: build.comp: records the record buffers hold */
 #define CULLIDE_LOC_MAX_GROUPS 17   /* uint: build.comp: GL_MAX_COMPUTE_WORK_GROUP_COUNT[0] (indirect arguments) */
-#define CULLIDE_LOC_WITH_BOUNDS 18  /* int: build.comp: 1 = the FOOTPRINTS pass also builds the items' boxes */
+#define CULLIDE_LOC_WITH_BOUNDS 18  /* int: build.comp: 1 = the first pass (FOOTPRINTS, SINGLE) builds the items' boxes */
 #define CULLIDE_LOC_ITERATION 19    /* uint: the iteration whose view the passes use (views[u_iteration]) */
 #define CULLIDE_LOC_MAX_ITERATIONS 20 /* uint: survive.comp: Settings::maxIterations */
 #define CULLIDE_LOC_MARGIN 21       /* double: survive.comp: Settings::margin (the next view's fit) */

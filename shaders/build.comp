@@ -5,12 +5,13 @@
 // (CULLIDE_LOC_PASS), one invocation per primitive of the level's items (alive or not; a primitive finds its item by
 // binary search: an item of a whole mesh has too many primitives for one invocation's loops):
 //   FOOTPRINTS  each primitive's footprint and each work group's sum; the last work group to finish turns the sum
-//               over all of them into the pixels per band (compute back-end only). At the level's start
-//               (CULLIDE_LOC_WITH_BOUNDS) also each primitive's box into its item's, for survive.comp.
-//   BOUNDS      each primitive's box into its item's, where there is no FOOTPRINTS pass (the raster back-end)
+//               over all of them into the pixels per band (short bands: a hardware GPU's load balance). At the
+//               level's start (CULLIDE_LOC_WITH_BOUNDS) also each primitive's box into its item's, for survive.comp.
 //   APPEND      each primitive's records (none for a pruned item's), appended where its work group reserved room
 //               with one atomic add; the last work group to finish turns the total into the count and the indirect
 //               arguments of the iteration's record-sized passes (CULLIDE_DISPATCH_*): the C++ side never waits.
+//   SINGLE      both in one pass where the pixels per band are a constant (long bands on a software renderer) or
+//               there are no bands (the raster back-end): a build is one dispatch there.
 // A level that inherits its parents' survivors starts in its first build's first pass: each item alive where its
 // parent survived (and its start bit allows), its owner its parent's (CULLIDE_LOC_INHERIT_OWNERS) and its primitive
 // generated from its parent's range of the mesh's spatial order (CULLIDE_LOC_GENERATE) — nothing per item is sent.
@@ -225,6 +226,7 @@ void main() {
     uint p = u_primBase + gl_GlobalInvocationID.x;
     uint item = p < u_primCount ? itemOf(p) : 0u;
     // The level's first build, in its first pass (APPEND reads what it wrote): the items' start.
+    bool single = u_pass == CULLIDE_BUILD_PASS_SINGLE;
     bool inherits = u_withBounds != 0 && u_parents != 0u && u_pass != CULLIDE_BUILD_PASS_APPEND;
     uint parent = inherits && p < u_primCount ? parentOf(item) : 0u;
     bool live = p < u_primCount && (inherits ? parentState[parent] != 0u && startsAlive(item) : alive[item] != 0u);
@@ -253,14 +255,15 @@ void main() {
         if (u_bands == CULLIDE_BANDS_SHORT)
             perBand = clamp(ceil(total / CULLIDE_TARGET_INVOCATIONS), CULLIDE_MIN_PIXELS_PER_INVOCATION, perBand);
         if (lane == 0u) build[CULLIDE_BUILD_PER_BAND] = floatBitsToUint(perBand);
-    } else if (u_pass == CULLIDE_BUILD_PASS_BOUNDS) {
-        if (p < u_primCount) addToItemBounds(prim, item);
-    } else if (u_pass == CULLIDE_BUILD_PASS_APPEND) {
+    } else {  // APPEND, SINGLE
+        if (single && u_withBounds != 0 && p < u_primCount) addToItemBounds(prim, item);
         uint n = 0u;
-        if (live) {
-            n = u_bands == CULLIDE_BANDS_NONE ? 1u
-                                              : bandsOf(uintBitsToFloat(bands[p]),
-                                                        uintBitsToFloat(build[CULLIDE_BUILD_PER_BAND]));
+        if (live && u_bands == CULLIDE_BANDS_NONE) {
+            n = 1u;
+        } else if (live && single) {  // long bands: FOOTPRINTS' pixels and pixels per band
+            n = bandsOf(footprintOf(primExtent(prim)), float(CULLIDE_PIXELS_PER_INVOCATION));
+        } else if (live) {
+            n = bandsOf(uintBitsToFloat(bands[p]), uintBitsToFloat(build[CULLIDE_BUILD_PER_BAND]));
         }
         uint inclusive = inclusiveScan(n);
         if (lane == kLanes - 1u) {  // the group's total: room for it, and an upper bound in units of 256

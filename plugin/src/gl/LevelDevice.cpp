@@ -366,9 +366,12 @@ void LevelDevice::buildRecords(int iteration, bool withBounds, LevelStats& level
     glUniform1i(CULLIDE_LOC_GENERATE, generatePrims ? 1 : 0);
     glUniform1ui(CULLIDE_LOC_START_BITS, startBitsAt);
     startTiming();
-    if (withBounds && bands == CULLIDE_BANDS_NONE) buildPass(CULLIDE_BUILD_PASS_BOUNDS, primCount, level, stats);
-    if (bands != CULLIDE_BANDS_NONE) buildPass(CULLIDE_BUILD_PASS_FOOTPRINTS, primCount, level, stats);
-    buildPass(CULLIDE_BUILD_PASS_APPEND, primCount, level, stats);
+    if (bands == CULLIDE_BANDS_SHORT) {  // the pixels per band come from every primitive's footprint
+        buildPass(CULLIDE_BUILD_PASS_FOOTPRINTS, primCount, level, stats);
+        buildPass(CULLIDE_BUILD_PASS_APPEND, primCount, level, stats);
+    } else {
+        buildPass(CULLIDE_BUILD_PASS_SINGLE, primCount, level, stats);
+    }
     checkGlError("building a level's records");
     level.recordBuilds += 1;
     level.setupMs += msSince(setUp);

@@ -1,0 +1,66 @@
+// What a level costs in draws and dispatches (Stats::draws, LevelStats::draws): its record build is one dispatch
+// where the pixels per band are a constant (long bands on a software renderer; the raster back-end has no bands) and
+// two where they come from every primitive's footprint (short bands: FOOTPRINTS, then APPEND); each iteration issued
+// is three passes and the survivor pass (the raster back-end: a set-up dispatch more). Nothing else is dispatched.
+#include "Compare.h"
+#include "CullerBackends.h"
+#include "GlTestSupport.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+#include <utility>
+
+namespace cullide::test {
+namespace {
+
+struct Case {
+    const char* name;
+    Backend backend;
+    bool shortBands;
+};
+
+/// Dispatches per record build and per iteration issued for a case on the renderer `renderer`.
+std::pair<std::size_t, std::size_t> costs(const Case& c, const std::string& renderer) {
+    if (c.backend == Backend::Raster) return {1, 5};
+    const bool software = renderer.find("llvmpipe") != std::string::npos;
+    return {c.shortBands || !software ? 2 : 1, 4};
+}
+
+TEST(DispatchCount, ABuildIsOneDispatchWhereItsBandsNeedNoSumAndAnIterationFour) {
+    const auto meshes = randomSoups(11, 40, 100, 0.08);
+    const auto objects = asObjects(meshes);
+    for (const Case& c : {Case{"compute", Backend::Compute, false}, Case{"compute, short bands", Backend::Compute, true},
+                          Case{"raster", Backend::Raster, false}}) {
+        Settings settings;
+        settings.gpuLevels = GpuLevels::Always;
+        settings.exactThreshold = 0;
+        settings.resolution = 64;
+        settings.backend = c.backend;
+        CULLIDE_GPU_CULLER_OR_SKIP(probe, settings);
+        GlBackendOptions options;
+        options.shortBands = c.shortBands;
+        auto culler =
+            createGpuCuller(settings, [options](const Settings& s) { return createGlPruningBackend(s, options); });
+        Result r;
+        for (int frame = 0; frame < 3; ++frame) culler->run(objects, r);  // steady: no short build, no rerun
+        ASSERT_EQ(r.stats.gpuFallbacks, 0u) << c.name << ": " << r.stats.gpuError;
+        const auto [perBuild, perIteration] = costs(c, r.stats.renderer);
+        std::size_t levelDraws = 0, levelsRun = 0;
+        for (const LevelStats& level : r.stats.levels) {
+            levelDraws += level.draws;
+            if (level.draws == 0) continue;  // ended on the CPU
+            ++levelsRun;
+            EXPECT_EQ(level.shortBuilds, 0u) << c.name << ", " << level.name;
+            const std::size_t issued = level.iterations + level.idleIterations;
+            EXPECT_EQ(level.draws, level.recordBuilds * perBuild + issued * perIteration)
+                << c.name << ", " << level.name << ": " << level.recordBuilds << " builds, " << level.iterations
+                << " iterations + " << level.idleIterations << " idle";
+        }
+        EXPECT_GE(levelsRun, 2u) << c.name;
+        EXPECT_EQ(r.stats.draws, levelDraws) << c.name << ": a dispatch outside the levels";
+    }
+}
+
+}  // namespace
+}  // namespace cullide::test
