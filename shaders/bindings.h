@@ -141,7 +141,10 @@
 #define CULLIDE_LOC_INHERIT_OWNERS 26 /* int: build.comp: 1 = the items' owners are their parents' (not sent: the
                                        * first build writes them) */
 #define CULLIDE_LOC_ORIGIN 27       /* dvec3: map.comp: the upload origin (world) */
-#define CULLIDE_LOC_MESH_BASE 28    /* uint: map.comp: the mesh of work group row 0 (split at the group-count limit) */
+#define CULLIDE_LOC_MAPPED_BASE 28  /* uint: map.comp: the first mapped vertex of this dispatch (split at the
+                                     * group-count limit) */
+#define CULLIDE_LOC_MAPPED_MESHES 31   /* uint: map.comp: the mapped meshes (records) */
+#define CULLIDE_LOC_MAPPED_VERTICES 32 /* uint: map.comp: their vertices, summed */
 #define CULLIDE_LOC_GENERATE 29     /* int: build.comp: 1 = the first build writes each item's primitive (one each)
                                      * from its parent: ITEM_PRIMS[i] = ORDERED[PARENT_FIRST[p] + i - parentBegin[p]] */
 #define CULLIDE_LOC_START_BITS 30   /* uint: build.comp: 0, or where in CULLIDE_SSBO_PARENT the start bits begin: an

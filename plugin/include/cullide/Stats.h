@@ -77,9 +77,10 @@ struct Stats {
     /// ... of which too large for float coordinates (extent above 1e30): their triangles went to the exact stage.
     std::size_t unrasterisedClusters = 0;
     /// GL back-end, Pipeline::Auto: clusters whose two levels ran again because the group level, run ahead without
-    /// waiting, stopped early on the device (its records needed building again, or it needed more iterations than
-    /// the level in its place ran the frame before); the second time it is waited for. The results are the same;
-    /// `levels` lists the second attempt, the frame's totals (draws, bytes, read-backs) both.
+    /// waiting, or the triangle level, deferred to the frame's read-back, stopped early on the device (its records
+    /// needed building again, or it needed more iterations than the level in its place ran before); the second time
+    /// they are waited for. The results are the same; `levels` lists the second attempt, the frame's totals (draws,
+    /// bytes, read-backs) both.
     std::size_t levelReruns = 0;
     std::size_t prepassGroupsIn = 0;   ///< groups of k triangles entering the pre-pass (0 without GPU levels:
     std::size_t prepassGroupsOut = 0;  ///< that path filters triangles directly)
@@ -132,8 +133,9 @@ struct Stats {
     /// What the culler holds on its GL device after the frame: buffer capacities plus the view images.
     std::size_t gpuDeviceBytes = 0;
     std::size_t bytesReadBack = 0;
-    /// Read-backs this frame that waited for the device to finish the work submitted before (the sum over levels):
-    /// each is a round trip that leaves the device idle until the CPU submits again.
+    /// Read-backs this frame that waited for the device to finish the work submitted before (the sum over levels,
+    /// unless a level ran again): each is a round trip that leaves the device idle until the CPU submits again. One
+    /// in a steady frame of the Auto pipeline, however many clusters it has.
     std::size_t blockingReadBacks = 0;
     double prepassMs = 0.0;
     double uploadMs = 0.0;

@@ -34,7 +34,7 @@ struct MappedRecord {
     std::uint32_t localBase;
     std::uint32_t baseVertex;
     std::uint32_t count;
-    std::uint32_t unused;
+    std::uint32_t firstMapped;  ///< the vertices of the records before it, summed
 };
 static_assert(sizeof(MappedRecord) == 112, "map.comp's std430 layout");
 
@@ -171,11 +171,13 @@ void LevelDevice::uploadPositions(const GpuGeometry& g, Stats& stats) {
                                              g.local.size() * 8, g.keptLocal * 8);
     if (g.mapped.empty()) return readPositionsForTests(g);
     std::vector<MappedRecord> records(g.mapped.size());
-    std::uint32_t most = 0;
+    std::size_t vertices = 0;  // mapped, summed
     for (std::size_t i = 0; i < records.size(); ++i) {
         records[i] = toMappedRecord(g.mapped[i]);
-        most = std::max(most, g.mapped[i].count);
+        records[i].firstMapped = static_cast<std::uint32_t>(vertices);
+        vertices += g.mapped[i].count;
     }
+    if (vertices > 0xFFFFFFFFu) throw BackendError("over 2^32 vertices of transformed meshes in one upload");
     uploadBuffer(buffers[kMapped], capacity[kMapped], records.data(), records.size() * sizeof(MappedRecord));
     stats.bytesUploaded += records.size() * sizeof(MappedRecord);
     glUseProgram(mapProgram);
@@ -183,13 +185,12 @@ void LevelDevice::uploadPositions(const GpuGeometry& g, Stats& stats) {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_LOCAL, buffers[kLocal]);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_MAPPED, buffers[kMapped]);
     glUniform3d(CULLIDE_LOC_ORIGIN, g.origin.x(), g.origin.y(), g.origin.z());
-    const std::size_t rowGroups = std::min<std::size_t>(maxGroups, (most + CULLIDE_COMPUTE_GROUP_SIZE - 1) /
-                                                                       CULLIDE_COMPUTE_GROUP_SIZE);
-    constexpr std::size_t kMaxRows = 65535;  // GL_MAX_COMPUTE_WORK_GROUP_COUNT[1] is at least this
-    for (std::size_t first = 0; first < records.size() && rowGroups > 0; first += kMaxRows) {
-        glUniform1ui(CULLIDE_LOC_MESH_BASE, static_cast<GLuint>(first));
-        glDispatchCompute(static_cast<GLuint>(rowGroups),
-                          static_cast<GLuint>(std::min(kMaxRows, records.size() - first)), 1);
+    glUniform1ui(CULLIDE_LOC_MAPPED_MESHES, static_cast<GLuint>(records.size()));
+    glUniform1ui(CULLIDE_LOC_MAPPED_VERTICES, static_cast<GLuint>(vertices));
+    const std::size_t groups = (vertices + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
+    for (std::size_t first = 0; first < groups; first += maxGroups) {
+        glUniform1ui(CULLIDE_LOC_MAPPED_BASE, static_cast<GLuint>(first * CULLIDE_COMPUTE_GROUP_SIZE));
+        glDispatchCompute(static_cast<GLuint>(std::min(maxGroups, groups - first)), 1, 1);
         stats.draws += 1;
     }
     // Read by the passes after it, and overwritten by the next upload's glNamedBufferSubData only after it.
