@@ -602,9 +602,10 @@ void ReportWriter::gpuLevels(const Class& c) {
             "software renderer `Auto` does not trial and runs the CPU path). GPU levels forced: the levels' wall time (CPU side included: records, uploads, waiting for the flags), "
             "their GPU time from timer queries (– where the driver's timer is absent or implausible) and the "
             "draws and dispatches and the read-backs that waited for the device per frame (medians, and in brackets the "
-            "largest of any frame: the first timed frame, a frame of two clusters); per level, the "
-            "last frame's items per iteration and its CPU / GPU ms (\"ahead\": a level run ahead, whose GPU time is in the next "
-            "level's), and of the CPU ms the set-up (item data and records built and sent; of it, the GL calls "
+            "largest of any frame: the first timed frame, where the buffers grow and a cluster may run again; a frame "
+            "waits once however many clusters it has); per level, the last frame's items per iteration and its CPU / "
+            "GPU ms (\"ahead\": a level run ahead, whose device time is not measured on its own; a deferred level's "
+            "CPU ms include the frame's wait when it is the last), and of the CPU ms the set-up (item data and records built and sent; of it, the GL calls "
             "that send them, and the records sent) and the time blocked in read-backs (waiting for the device); the "
             "rest is issuing commands.\n\n| scene | Auto decision | "
             "trial: CPU path ms | trial: GPU levels ms | engine | levels "
@@ -630,8 +631,9 @@ void ReportWriter::gpuLevels(const Class& c) {
                     items += (items.empty() ? "" : " → ") + count(n.get<double>());
                 const double idle = l.value("idle_iterations", 0.0);
                 if (idle > 0) items += " (+" + count(idle) + " idle)";
-                // A level run ahead (no read-back of its own): its GPU time is in the next level's.
-                const bool ahead = l.value("blocking_read_backs", 0.0) == 0 && l.value("draws", 0.0) > 0;
+                // A level run ahead (no read-back of its own, not deferred): no span of its own.
+                const bool ahead = l.value("blocking_read_backs", 0.0) == 0 && l.value("draws", 0.0) > 0 &&
+                                   !l.value("deferred", false);
                 levels += (levels.empty() ? "" : "; ") + l.value("name", std::string()) + " " + items + ", " +
                           ms(l.value("cpu_ms", 0.0)) + " / " +
                           (ahead ? std::string("ahead") : l.contains("gpu_ms") ? ms(l.value("gpu_ms", 0.0)) : "–");
