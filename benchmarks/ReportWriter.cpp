@@ -604,7 +604,7 @@ void ReportWriter::gpuLevels(const Class& c) {
             "draws and dispatches and the read-backs that waited for the device per frame (medians, and in brackets the "
             "largest of any frame: the first timed frame, where the buffers grow and a cluster may run again; a frame "
             "waits once however many clusters it has); per level, the last frame's items per iteration and its CPU / "
-            "GPU ms (\"ahead\": a level run ahead, whose device time is not measured on its own; a deferred level's "
+            "GPU ms (\"ahead\": a level run ahead, its device time read with the next level's; a deferred level's "
             "CPU ms include the frame's wait when it is the last), and of the CPU ms the set-up (item data and records built and sent; of it, the GL calls "
             "that send them, and the records sent) and the time blocked in read-backs (waiting for the device); the "
             "rest is issuing commands.\n\n| scene | Auto decision | "
@@ -631,12 +631,12 @@ void ReportWriter::gpuLevels(const Class& c) {
                     items += (items.empty() ? "" : " → ") + count(n.get<double>());
                 const double idle = l.value("idle_iterations", 0.0);
                 if (idle > 0) items += " (+" + count(idle) + " idle)";
-                // A level run ahead (no read-back of its own, not deferred): no span of its own.
+                // A level run ahead (no read-back of its own, not deferred), marked as such.
                 const bool ahead = l.value("blocking_read_backs", 0.0) == 0 && l.value("draws", 0.0) > 0 &&
                                    !l.value("deferred", false);
                 levels += (levels.empty() ? "" : "; ") + l.value("name", std::string()) + " " + items + ", " +
                           ms(l.value("cpu_ms", 0.0)) + " / " +
-                          (ahead ? std::string("ahead") : l.contains("gpu_ms") ? ms(l.value("gpu_ms", 0.0)) : "–");
+                          (l.contains("gpu_ms") ? ms(l.value("gpu_ms", 0.0)) : "–") + (ahead ? " ahead" : "");
                 // Set-up split into sending (GL calls) and building on the CPU, where the record has it.
                 if (l.contains("setup_ms"))
                     levels += " (set-up " + ms(l.value("setup_ms", 0.0)) +

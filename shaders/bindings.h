@@ -74,7 +74,7 @@
 #define CULLIDE_CHAIN_STOP 33       /* CULLIDE_STOP_*: why the chain stopped after the last iteration run */
 #define CULLIDE_CHAIN_SURVIVE_DONE 34 /* survive.comp's work groups that have finished (its last one resets it) */
 #define CULLIDE_CHAIN_RECORDS_RUN 35  /* records the level's iterations ran over, summed */
-#define CULLIDE_CHAIN_RECORDED_VIEW 36 /* the view the records were built for (build.comp's APPEND pass) */
+#define CULLIDE_CHAIN_RECORDED_VIEW 36 /* the view the records were built for (build.comp's APPEND or SINGLE pass) */
 #define CULLIDE_CHAIN_ALIVE_START 37 /* items alive at the level's start (all, or those whose parent survived) */
 #define CULLIDE_CHAIN_ALIVE 48      /* CULLIDE_MAX_ITERATIONS words: items alive after iteration i */
 #define CULLIDE_MAX_ITERATIONS 64   /* Settings::maxIterations at most */

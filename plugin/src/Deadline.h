@@ -1,6 +1,6 @@
 // A moment by which a stage of the frame must have finished (Culler::run's budget, a GPU trial frame's budget), and
 // what a stage throws when it finds the moment passed. Stages look at it where they hold nothing half done: between
-// levels, before a tree build, at the start of an exact-stage task.
+// levels, before a tree build, at the start of an exact-stage task; the frame's one wait for the device ends at it.
 #pragma once
 
 #include <chrono>

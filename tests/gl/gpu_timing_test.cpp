@@ -40,9 +40,9 @@ void expectValidOrAbsent(const Stats& stats, const std::string& what) {
         EXPECT_LE(level.setupMs + level.waitMs, level.cpuMs) << what << ", level " << level.name;
         if (level.gpuTimingValid) {
             EXPECT_GE(level.gpuMs, 0.0) << what << ", level " << level.name;
-            // A deferred level's device work may run while later clusters are issued and in the frame's wait,
-            // which the last deferred level counts: the frame's time bounds it.
-            if (!level.deferred) {
+            // A deferred level's or a level run ahead's device work may run while later levels are issued and in
+            // the wait that another level counts: the frame's time bounds it.
+            if (level.blockingReadBacks > 0 && !level.deferred) {
                 EXPECT_LE(level.gpuMs, bound(level.cpuMs)) << what << ", level " << level.name;
             }
             EXPECT_LE(level.gpuMs, bound(stats.totalMs)) << what << ", level " << level.name;
@@ -127,8 +127,6 @@ TEST(GpuTiming, OnlyTheEndOfEachChainOfIterationsIsWaitedFor) {
         if (level.deferred) {
             ++deferred;
             deferredReadBacks += level.blockingReadBacks;
-            EXPECT_EQ(level.recordBuilds, 1u) << level.name << ": a deferred level's chain stopped for a refit";
-            EXPECT_LE(level.blockingReadBacks, 1u) << level.name;
         } else if (level.name == "groups" && level.blockingReadBacks == 0) {
             ++groupsAhead;
         } else {

@@ -49,8 +49,8 @@ struct LevelStats {
     /// triangle level of each cluster): one read-back per frame however many clusters it has.
     bool deferred = false;
     /// GPU time of the level's iterations and record builds from timer queries (one span from the level's first
-    /// pass to its read-back, or to the end of its issue where it is deferred). Only meaningful with gpuTimingValid;
-    /// 0 otherwise, and 0 for a level run ahead: no span is read for it alone.
+    /// pass to its read-back, or to the end of its issue where it runs ahead or is deferred: read after the read-back
+    /// that brings its chain). Only meaningful with gpuTimingValid; 0 otherwise.
     double gpuMs = 0.0;
     /// true when every iteration of the level was timed by an available, plausible timer-query result (at most
     /// the CPU wall time of the same span): false without timer queries and where a driver reports nonsense
@@ -135,7 +135,8 @@ struct Stats {
     std::size_t bytesReadBack = 0;
     /// Read-backs this frame that waited for the device to finish the work submitted before (the sum over levels,
     /// unless a level ran again): each is a round trip that leaves the device idle until the CPU submits again. One
-    /// in a steady frame of the Auto pipeline, however many clusters it has.
+    /// in a steady frame of the Auto pipeline, however many clusters it has (a cluster whose group level ends on the
+    /// CPU waits for its triangle level on its own).
     std::size_t blockingReadBacks = 0;
     double prepassMs = 0.0;
     double uploadMs = 0.0;

@@ -70,7 +70,7 @@ bool waitForDeviceUntil(Clock::time_point until, Clock::time_point delayEnd) {
         }
     }
     glDeleteSync(fence);
-    if (delayEnd <= until) return true;
+    if (delayEnd <= until || delayEnd <= Clock::now()) return true;  // no delay, or it has passed
     std::this_thread::sleep_until(until);
     return false;
 }
@@ -500,7 +500,7 @@ void LevelDevice::waitForChain(bool withAhead, LevelStats& level, Stats& stats) 
         glCopyNamedBufferSubData(buffers[kStash], buffers[kCounters], 0, 4 * CULLIDE_AHEAD, 4 * kChainWords);
     readScratch.resize(words);
     readBack(buffers[kCounters], 0, 4 * words, readScratch.data(), level, stats);
-    recordGpuTime(spans > 0 ? spanMs(spans - 1, timedSpan) : -1.0, level, stats);
+    recordGpuTime(spanMs(lastSpan(), timedSpan), level, stats);
     checkGlError("a level's visibility iterations");
 }
 

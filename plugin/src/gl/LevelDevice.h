@@ -79,6 +79,9 @@ struct Chain {
 void survivorsFrom(const std::uint32_t* bits, std::size_t items, std::uint32_t stop,
                    std::vector<std::uint8_t>& survivors);
 
+/// No timer query span (LevelDevice::spans).
+constexpr std::size_t kNoSpan = static_cast<std::size_t>(-1);
+
 /// One GL context's programs and resources for the visibility levels, and the steps a level is made of. Every public
 /// step expects the context current on the calling thread.
 struct LevelDevice {
@@ -181,6 +184,8 @@ struct LevelDevice {
     /// The device time of span `span`, opened at `opened`, once its work has been waited for (-1: none or implausible;
     /// recordGpuTime).
     double spanMs(std::size_t span, Clock::time_point opened) const;
+    /// The last span opened (kNoSpan without timer queries or before any).
+    std::size_t lastSpan() const { return hasTimers && spans > 0 ? spans - 1 : kNoSpan; }
     /// A frame starts (or its deferred levels were collected): the spans' queries may be used again.
     void forgetSpans();
 

@@ -25,6 +25,8 @@ struct AheadLevel {
     std::size_t place = 0;
     int issued = 0;
     std::vector<IterationTrace>* trace = nullptr;
+    std::size_t span = kNoSpan;  ///< its timer query span (LevelDevice::spans), opened at `spanOpened`
+    Clock::time_point spanOpened;
 };
 
 /// A level whose read-back is deferred to the frame's collect (pruneLevelDeferred): where its words are.
@@ -36,7 +38,7 @@ struct DeferredEntry {
     std::size_t firstWord = 0;  ///< its counter words (counterWords(items)) in kFrameResults
     std::size_t firstView = 0;  ///< its views, then those of the level run ahead, in kFrameViews (with a trace)
     std::optional<AheadLevel> ahead;  ///< the level run ahead before it: its chain in words CULLIDE_AHEAD ..
-    std::size_t span = 0;             ///< its timer query span (LevelDevice::spans), opened at `spanOpened`
+    std::size_t span = kNoSpan;       ///< its timer query span (LevelDevice::spans), opened at `spanOpened`
     Clock::time_point spanOpened;
     std::vector<IterationTrace>* trace = nullptr;
     bool waited = false;  ///< it ran waited for (its place stopped early last time): `survivors` holds its result
@@ -156,8 +158,8 @@ struct VisibilityPass::Impl : LevelDevice {
             reserveBuffer(buffers[kStashViews], capacity[kStashViews], bytes);
             glCopyNamedBufferSubData(buffers[kViews], buffers[kStashViews], 0, 0, static_cast<GLsizeiptr>(bytes));
         }
-        endTiming();  // its device time is not measured: no read-back waits for it alone
-        ahead = AheadLevel{levelIndex, start.place, issued, trace};
+        endTiming();  // its span ends here: read after the read-back that brings its chain
+        ahead = AheadLevel{levelIndex, start.place, issued, trace, lastSpan(), timedSpan};
         checkGlError("a level run ahead");
     }
 
@@ -188,8 +190,8 @@ struct VisibilityPass::Impl : LevelDevice {
         if (ran < 1 || ran > a.issued) throw BackendError("the device's chain of iterations did not run");
         const bool early = !chain.levelEnded();
         level.idleIterations += static_cast<std::size_t>(a.issued - ran);
-        if (chain.shortBuild()) level.shortBuilds += 1;
-        else level.records += chain[CULLIDE_DISPATCH_NEEDED];
+        noteBuild(chain, level);
+        recordGpuTime(spanMs(a.span, a.spanOpened), level, stats);
         if (early) {
             if (a.place >= places.size()) places.resize(a.place + 1);
             places[a.place].wait = true;
@@ -221,7 +223,7 @@ struct VisibilityPass::Impl : LevelDevice {
         entry.issued = issueLevel(items, start, guessFor(start.place), level, stats);
         level.deferred = true;
         endTiming();  // the level's span: its device time is read after collect()'s read-back
-        entry.span = spans - 1;
+        entry.span = lastSpan();
         entry.spanOpened = timedSpan;
         const std::size_t words = counterWords(items.size());
         if (ahead) {
@@ -302,8 +304,7 @@ struct VisibilityPass::Impl : LevelDevice {
         const int ran = chain.ran();
         if (ran < 1 || ran > e.issued) throw BackendError("the device's chain of iterations did not run");
         level.idleIterations += static_cast<std::size_t>(e.issued - ran);
-        if (chain.shortBuild()) level.shortBuilds += 1;
-        else level.records += chain[CULLIDE_DISPATCH_NEEDED];
+        noteBuild(chain, level);
         if (!chain.levelEnded()) {
             if (e.place >= places.size()) places.resize(e.place + 1);
             places[e.place].wait = true;
@@ -318,6 +319,19 @@ struct VisibilityPass::Impl : LevelDevice {
         result.complete = aheadEnded && chain.levelEnded();
         if (result.complete) survivorsFrom(words + CULLIDE_ALIVE_BITS, e.items, chain.stop(), result.survivors);
         return result;
+    }
+
+    /// A chain's build into the level's stats; a short one grows the record buffers for the level that runs again.
+    void noteBuild(const Chain& chain, LevelStats& level) {
+        if (!chain.shortBuild()) {
+            level.records += chain[CULLIDE_DISPATCH_NEEDED];
+            return;
+        }
+        level.shortBuilds += 1;
+        float approx = 0.0f;
+        const std::uint32_t approxBits = chain[CULLIDE_DISPATCH_NEEDED_APPROX];
+        std::memcpy(&approx, &approxBits, sizeof approx);
+        growRecords(chain[CULLIDE_DISPATCH_NEEDED], approx);
     }
 
     /// Forgets the deferred levels (no GL call).
