@@ -122,6 +122,14 @@ bool pruneAhead(LevelRun& run, const char* name) {
                            run.survivors, run.stats.levels.size() - 1, run.stats);
 }
 
+/// Runs the level built since beginLevel with its read-back deferred to the end of the frame; false where it did not
+/// reach the backend (run.survivors then says which items survive).
+bool pruneDeferred(LevelRun& run, const char* name) {
+    addLevel(run, name);
+    return pruneLevelDeferred(run.backend, run.items, run.settings, run.geometry.coordinateBound(), run.place++,
+                              run.survivors, run.stats.levels.size() - 1, run.stats);
+}
+
 std::vector<std::uint32_t> clusterProxies(const LevelRun& run) {
     std::vector<std::uint32_t> proxies;
     for (std::uint32_t o : run.cluster.objects)
@@ -185,33 +193,25 @@ void runTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies) 
 
 /// Every triangle of every group of the cluster and the proxies as one level, which inherits the group level's
 /// survivors on the backend: a triangle starts alive when its group survived and the box pre-pass keeps it, a proxy
-/// when it survived. The surviving triangles go to frame.surviving.
-void runInheritingTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
+/// when it survived. The surviving triangles go to frame.surviving — or, with `defer`, where the level reached the
+/// backend (returns true), its read-back waits for the end of the frame (collectDeferred).
+bool runInheritingTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies, bool defer) {
     beginLevel(run, true);
     addInheritingItems(run, proxies);
-    prune(run, "triangles");
+    if (!defer) {
+        prune(run, "triangles");
+    } else if (pruneDeferred(run, "triangles")) {
+        return true;
+    }
     run.backend.settle(run.stats);  // a level run ahead that the triangle level did not wait for (no two owners)
     addSurvivingGroupTriangles(run.frame, run.cluster.groups, run.survivors);
+    return false;
 }
 
 std::size_t triangleCount(const std::vector<Group>& groups) {
     std::size_t n = 0;
     for (const Group& g : groups) n += g.count;
     return n;
-}
-
-/// runInheritingTriangleLevel with the level's read-back deferred to the end of the frame (collectDeferred): returns
-/// true where it reached the backend, whose survivors then come from PruningBackend::collect.
-bool deferInheritingTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
-    beginLevel(run, true);
-    addInheritingItems(run, proxies);
-    addLevel(run, "triangles");
-    if (pruneLevelDeferred(run.backend, run.items, run.settings, run.geometry.coordinateBound(), run.place++,
-                           run.survivors, run.stats.levels.size() - 1, run.stats))
-        return true;
-    run.backend.settle(run.stats);
-    addSurvivingGroupTriangles(run.frame, run.cluster.groups, run.survivors);
-    return false;
 }
 
 /// CPU pre-pass (done in buildTriangleBoxesAndGroups), group boxes, then the triangles of the surviving groups; a
@@ -227,9 +227,7 @@ bool runAutoPipeline(LevelRun& run, bool defer) {
         for (std::uint32_t o : proxies) addObjectBoxItem(run, o);
         if (pruneAhead(run, "groups")) {
             // The device goes on with the groups while the triangle level is described here.
-            if (defer) return deferInheritingTriangleLevel(run, proxies);
-            runInheritingTriangleLevel(run, proxies);
-            return false;
+            return runInheritingTriangleLevel(run, proxies, defer);
         }
         keepSurvivors(run.survivors, 0, groups);
         keepSurvivors(run.survivors, run.cluster.groups.size(), proxies);

@@ -19,8 +19,8 @@
 namespace cullide::gl {
 namespace {
 
-/// A level run ahead (pruneLevelAhead) whose chain has not been read back yet.
-struct AheadLevel {
+/// A level issued without waiting (run ahead, or deferred) whose chain has not been read back yet.
+struct IssuedLevel {
     std::size_t levelIndex = 0;  ///< into Stats::levels
     std::size_t place = 0;
     int issued = 0;
@@ -29,18 +29,16 @@ struct AheadLevel {
     Clock::time_point spanOpened;
 };
 
+/// The ViewRecords of a level's views (as kViews holds them).
+constexpr std::size_t kViewsEach = CULLIDE_MAX_ITERATIONS + 1;
+
 /// A level whose read-back is deferred to the frame's collect (pruneLevelDeferred): where its words are.
 struct DeferredEntry {
-    std::size_t levelIndex = 0;  ///< into Stats::levels
-    std::size_t place = 0;
+    IssuedLevel level;
     std::size_t items = 0;
-    int issued = 0;
     std::size_t firstWord = 0;  ///< its counter words (counterWords(items)) in kFrameResults
     std::size_t firstView = 0;  ///< its views, then those of the level run ahead, in kFrameViews (with a trace)
-    std::optional<AheadLevel> ahead;  ///< the level run ahead before it: its chain in words CULLIDE_AHEAD ..
-    std::size_t span = kNoSpan;       ///< its timer query span (LevelDevice::spans), opened at `spanOpened`
-    Clock::time_point spanOpened;
-    std::vector<IterationTrace>* trace = nullptr;
+    std::optional<IssuedLevel> ahead;  ///< the level run ahead before it: its chain in words CULLIDE_AHEAD ..
     bool waited = false;  ///< it ran waited for (its place stopped early last time): `survivors` holds its result
     std::vector<std::uint8_t> survivors;
 };
@@ -62,7 +60,7 @@ struct VisibilityPass::Impl : LevelDevice {
                              ///< chain
     };
     std::vector<PlaceHistory> places;
-    std::optional<AheadLevel> ahead;  ///< a level run ahead, not read back yet
+    std::optional<IssuedLevel> ahead;  ///< a level run ahead, not read back yet
     std::vector<DeferredEntry> deferred;  ///< levels whose read-back waits for collect(), in order
     std::size_t frameWords = 0;           ///< words of kFrameResults they fill
     std::size_t frameViews = 0;           ///< ViewRecords of kFrameViews they fill
@@ -111,10 +109,7 @@ struct VisibilityPass::Impl : LevelDevice {
             if (chain.shortBuild()) {  // iteration ran - 1 pruned nothing: build again, rerun it
                 if (++shortBuilds > 2) throw BackendError("the record buffers were short after growing twice");
                 level.shortBuilds += 1;
-                float approx = 0.0f;
-                const std::uint32_t approxBits = chain[CULLIDE_DISPATCH_NEEDED_APPROX];
-                std::memcpy(&approx, &approxBits, sizeof approx);
-                growRecords(chain[CULLIDE_DISPATCH_NEEDED], approx);
+                growRecordsFor(chain);
                 next = ran - 1;
             } else {
                 if (built) level.records += chain[CULLIDE_DISPATCH_NEEDED];
@@ -159,7 +154,7 @@ struct VisibilityPass::Impl : LevelDevice {
             glCopyNamedBufferSubData(buffers[kViews], buffers[kStashViews], 0, 0, static_cast<GLsizeiptr>(bytes));
         }
         endTiming();  // its span ends here: read after the read-back that brings its chain
-        ahead = AheadLevel{levelIndex, start.place, issued, trace, lastSpan(), timedSpan};
+        ahead = IssuedLevel{levelIndex, start.place, issued, trace, lastSpan(), timedSpan};
         checkGlError("a level run ahead");
     }
 
@@ -167,7 +162,7 @@ struct VisibilityPass::Impl : LevelDevice {
     /// and trace. Where it stopped early (records to build again, more iterations needed) it is waited for next time
     /// and, when a level inherited its survivors, both run again (LevelsRerun).
     void finishAhead(Stats& stats, bool inReadBack) {
-        const AheadLevel a = *ahead;
+        const IssuedLevel a = *ahead;
         ahead.reset();
         std::vector<std::uint32_t> own;
         const std::uint32_t* words = nullptr;
@@ -178,29 +173,35 @@ struct VisibilityPass::Impl : LevelDevice {
             readBack(buffers[kStash], 0, 4 * kChainWords, own.data(), stats.levels[a.levelIndex], stats);
             words = own.data();
         }
-        const bool early = noteAhead(a, Chain{words}, buffers[kStashViews], 0, stats);
-        if (early && inReadBack) throw LevelsRerun{};
+        const bool ended = noteIssued(a, Chain{words}, buffers[kStashViews], 0, stats);
+        if (!ended && inReadBack) throw LevelsRerun{};
     }
 
-    /// A level run ahead, from its chain: its stats and (from ViewRecord `firstView` of `views` on) its trace. Returns
-    /// whether it stopped early; its place then waits for it next time, which finds out how many it needs.
-    bool noteAhead(const AheadLevel& a, const Chain& chain, GLuint views, std::size_t firstView, Stats& stats) {
+    /// A level issued without waiting, from its chain as read back: its stats, its device time and (from ViewRecord
+    /// `firstView` of `views` on) its trace. Returns whether it ended as one chain; otherwise its place waits for it
+    /// next time.
+    bool noteIssued(const IssuedLevel& a, const Chain& chain, GLuint views, std::size_t firstView, Stats& stats) {
         LevelStats& level = stats.levels[a.levelIndex];
         const int ran = chain.ran();
         if (ran < 1 || ran > a.issued) throw BackendError("the device's chain of iterations did not run");
-        const bool early = !chain.levelEnded();
         level.idleIterations += static_cast<std::size_t>(a.issued - ran);
-        noteBuild(chain, level);
-        recordGpuTime(spanMs(a.span, a.spanOpened), level, stats);
-        if (early) {
+        if (chain.shortBuild()) {  // the record buffers grow for the level that runs again
+            level.shortBuilds += 1;
+            growRecordsFor(chain);
+        } else {
+            level.records += chain[CULLIDE_DISPATCH_NEEDED];
+        }
+        const bool ended = chain.levelEnded();
+        if (ended) {
+            remember(a.place, ran, true);
+        } else {
             if (a.place >= places.size()) places.resize(a.place + 1);
             places[a.place].wait = true;
-        } else {
-            remember(a.place, ran, true);
         }
         noteIterations(chain, level);
+        recordGpuTime(spanMs(a.span, a.spanOpened), level, stats);
         if (a.trace) readTrace(views, firstView, ran, *a.trace);
-        return early;
+        return ended;
     }
 
     /// A level whose read-back is deferred: issued, and its counter words (with the chain of the level run ahead
@@ -210,21 +211,21 @@ struct VisibilityPass::Impl : LevelDevice {
                      std::vector<IterationTrace>* trace) {
         LevelStats& level = stats.levels[levelIndex];
         DeferredEntry entry;
-        entry.levelIndex = levelIndex;
-        entry.place = start.place;
+        entry.level.levelIndex = levelIndex;
+        entry.level.place = start.place;
+        entry.level.trace = trace;
         entry.items = items.size();
-        entry.trace = trace;
         if (waitsAt(start.place)) {
             runLevel(items, start, entry.survivors, level, stats, trace);
             entry.waited = true;
             deferred.push_back(std::move(entry));
             return;
         }
-        entry.issued = issueLevel(items, start, guessFor(start.place), level, stats);
+        entry.level.issued = issueLevel(items, start, guessFor(start.place), level, stats);
         level.deferred = true;
         endTiming();  // the level's span: its device time is read after collect()'s read-back
-        entry.span = lastSpan();
-        entry.spanOpened = timedSpan;
+        entry.level.span = lastSpan();
+        entry.level.spanOpened = timedSpan;
         const std::size_t words = counterWords(items.size());
         if (ahead) {
             glCopyNamedBufferSubData(buffers[kStash], buffers[kCounters], 0, 4 * CULLIDE_AHEAD, 4 * kChainWords);
@@ -237,7 +238,6 @@ struct VisibilityPass::Impl : LevelDevice {
                                  static_cast<GLintptr>(4 * frameWords), static_cast<GLsizeiptr>(4 * words));
         frameWords += words;
         if (trace || (entry.ahead && entry.ahead->trace)) {
-            constexpr std::size_t kViewsEach = CULLIDE_MAX_ITERATIONS + 1;  // as kViews holds
             const std::size_t firstView = frameViews;
             entry.firstView = firstView;
             frameViews += 2 * kViewsEach;
@@ -258,15 +258,13 @@ struct VisibilityPass::Impl : LevelDevice {
 
     /// One read-back for every deferred level (at most until `until`), then each one's stats, trace and result.
     bool collect(const Deadline& until, std::vector<DeferredLevel>& results, Stats& stats) {
-        results.clear();
-        if (deferred.empty()) return true;
         const DeferredEntry* lastIssued = nullptr;
         for (const DeferredEntry& e : deferred)
             if (!e.waited) lastIssued = &e;
         if (lastIssued) {
             // The read-back (its wait in its CPU time too) is the last issued level's: it is the one waited for.
             const auto waitStart = Clock::now();
-            LevelStats& last = stats.levels[lastIssued->levelIndex];
+            LevelStats& last = stats.levels[lastIssued->level.levelIndex];
             frameScratch.resize(frameWords);
             const bool done =
                 readBack(buffers[kFrameResults], 0, 4 * frameWords, frameScratch.data(), last, stats, until);
@@ -294,40 +292,21 @@ struct VisibilityPass::Impl : LevelDevice {
             result.survivors = std::move(e.survivors);
             return result;
         }
-        constexpr std::size_t kViewsEach = CULLIDE_MAX_ITERATIONS + 1;
         const std::uint32_t* words = frameScratch.data() + e.firstWord;
-        bool aheadEnded = true;
-        if (e.ahead) aheadEnded = !noteAhead(*e.ahead, Chain{words + CULLIDE_AHEAD}, buffers[kFrameViews],
-                                             e.firstView + kViewsEach, stats);
-        LevelStats& level = stats.levels[e.levelIndex];
+        const bool aheadEnded = !e.ahead || noteIssued(*e.ahead, Chain{words + CULLIDE_AHEAD}, buffers[kFrameViews],
+                                                       e.firstView + kViewsEach, stats);
         const Chain chain{words + CULLIDE_DISPATCH_RECORDS};
-        const int ran = chain.ran();
-        if (ran < 1 || ran > e.issued) throw BackendError("the device's chain of iterations did not run");
-        level.idleIterations += static_cast<std::size_t>(e.issued - ran);
-        noteBuild(chain, level);
-        if (!chain.levelEnded()) {
-            if (e.place >= places.size()) places.resize(e.place + 1);
-            places[e.place].wait = true;
-            // It needed more iterations than were issued: the rerun issues all that are allowed.
-            if (!chain.shortBuild() && chain.stop() == CULLIDE_STOP_NONE) remember(e.place, settings.maxIterations, false);
-        } else {
-            remember(e.place, ran, true);
-        }
-        noteIterations(chain, level);
-        recordGpuTime(spanMs(e.span, e.spanOpened), level, stats);
-        if (e.trace) readTrace(buffers[kFrameViews], e.firstView, ran, *e.trace);
-        result.complete = aheadEnded && chain.levelEnded();
+        const bool ended = noteIssued(e.level, chain, buffers[kFrameViews], e.firstView, stats);
+        // It needed more iterations than were issued: the rerun issues all that are allowed.
+        if (!ended && !chain.shortBuild() && chain.stop() == CULLIDE_STOP_NONE)
+            remember(e.level.place, settings.maxIterations, false);
+        result.complete = ended && aheadEnded;
         if (result.complete) survivorsFrom(words + CULLIDE_ALIVE_BITS, e.items, chain.stop(), result.survivors);
         return result;
     }
 
-    /// A chain's build into the level's stats; a short one grows the record buffers for the level that runs again.
-    void noteBuild(const Chain& chain, LevelStats& level) {
-        if (!chain.shortBuild()) {
-            level.records += chain[CULLIDE_DISPATCH_NEEDED];
-            return;
-        }
-        level.shortBuilds += 1;
+    /// Grows the record buffers for the count a short build needed (as the chain says).
+    void growRecordsFor(const Chain& chain) {
         float approx = 0.0f;
         const std::uint32_t approxBits = chain[CULLIDE_DISPATCH_NEEDED_APPROX];
         std::memcpy(&approx, &approxBits, sizeof approx);
