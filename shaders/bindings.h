@@ -15,16 +15,20 @@
                                       * CULLIDE_COUNTER_*; then the record-sized passes' count and indirect arguments,
                                       * see CULLIDE_DISPATCH_*; then the alive set's bits, see CULLIDE_ALIVE_BITS */
 #define CULLIDE_SSBO_ALIVE 8       /* uint[itemCount]: 1 = the item is still in the level's set (kept on the device) */
-#define CULLIDE_SSBO_ITEM_BOUNDS 9 /* uint[6 * itemCount]: item boxes (build.comp), order-preserving float bits: min xyz
-                                      * of every item (3 per item), then max xyz of every item */
-#define CULLIDE_SSBO_PRIMS_OUT 10  /* uvec4[primCount]: survive.comp: the records of the items still alive */
+#define CULLIDE_SSBO_ITEM_BOUNDS 9 /* uint[8 * itemCount]: item boxes (build.comp), order-preserving float bits: min xyz
+                                      * of every item (3 per item), then max xyz of every item; then each item's records
+                                      * (build.comp, cleared before every build); then the compute back-end's flag
+                                      * pass's invocations done over it in the current iteration (the last one resets
+                                      * the count) */
+#define CULLIDE_SSBO_PRIMS_OUT 10  /* uvec4[primCount]: the records of the items still alive, packed (survive.comp, or
+                                      * the compute back-end's nearest pass) */
 /* The record build (build.comp): */
 #define CULLIDE_SSBO_PRIM_BEGIN 11 /* uint[itemCount + 1]: item i's primitives: ITEM_PRIMS[begin[i] .. begin[i + 1]) */
 #define CULLIDE_SSBO_ITEM_PRIMS 12 /* uint[itemPrimCount]: primitive references (triangle, or box | PRIM_BOX_BIT) */
 #define CULLIDE_SSBO_BANDS 13      /* uint[itemPrimCount]: each primitive's footprint (float bits), then its bands */
 #define CULLIDE_SSBO_BUILD 14      /* uint[CULLIDE_BUILD_GROUPS + work groups]: see CULLIDE_BUILD_* */
 #define CULLIDE_SSBO_VIEWS 15      /* ViewRecord[CULLIDE_MAX_ITERATIONS + 1] (view.glsl): iteration i's view (the first
-                                      * written by the C++ side, each next one by survive.comp's last work group) and
+                                      * written by the C++ side, each next one where the iteration before ends) and
                                       * what the iteration left */
 #define CULLIDE_SSBO_PARENT 16     /* uint[]: a level whose items inherit the last level's survivors (ordered by
                                       * parent): parentBegin[parents + 1] (items parentBegin[p] .. parentBegin[p + 1]
@@ -43,18 +47,20 @@
 
 /* Counters, reset before every iteration. */
 #define CULLIDE_COUNTER_OVERFLOWS 0 /* compute invocations that would exceed CULLIDE_MAX_LOOP_ITERATIONS */
-#define CULLIDE_COUNTER_ALIVE 1     /* items alive after the iteration (survive.comp) */
+#define CULLIDE_COUNTER_ALIVE 1     /* items alive after the iteration (iteration.glsl) */
 #define CULLIDE_COUNTER_OWNER_MIN 2 /* smallest and largest owner id among them */
 #define CULLIDE_COUNTER_OWNER_MAX 3
 #define CULLIDE_COUNTER_LO 4        /* 3 entries: min xyz of their boxes, as order-preserving float bits */
 #define CULLIDE_COUNTER_HI 7        /* 3 entries: max xyz of their boxes, likewise */
-#define CULLIDE_COUNTER_RECORDS 10  /* records survive.comp kept */
+#define CULLIDE_COUNTER_RECORDS 10  /* records kept, packed into CULLIDE_SSBO_PRIMS_OUT: those of the items still
+                                     * alive (survive.comp), or (cull.comp's nearest pass) alive at the iteration's
+                                     * start, which its second and flag passes run over */
 #define CULLIDE_COUNTER_COUNT 11   /* the counters the C++ side resets before every iteration */
 
 /* After the counters, in the same buffer (one read-back returns both): what the record-sized passes of the next
- * iteration (cull.comp or cull_setup.comp and the draws, survive.comp) run over, dispatched indirectly. Written by
- * build.comp's APPEND pass after a record build (the C++ side never waits for the count), otherwise by the C++ side
- * from the counters it read back. */
+ * iteration (cull.comp, or cull_setup.comp, the draws and survive.comp) run over, dispatched indirectly. Written by
+ * build.comp after a record build (the C++ side never waits for the count), otherwise by the work group that ends the
+ * iteration before (iteration.glsl). */
 #define CULLIDE_DISPATCH_RECORDS 16 /* records the passes run over */
 #define CULLIDE_DISPATCH_NEEDED 17  /* records the last build needed (its total, written even when they did not fit);
                                      * APPEND's work groups reserve their room from it (reset before a build) */
@@ -69,10 +75,11 @@
 #define CULLIDE_DISPATCH_DRAW 28    /* 4 uints: glDrawArraysIndirect's (9 vertices per record, 1, 0, 0) */
 #define CULLIDE_COUNTERS_SIZE 32
 /* Then the level's chain of iterations, kept across them (the C++ side issues a level's iterations without waiting;
- * survive.comp's last work group decides whether the next one runs and fits its view): */
+ * the work group that ends an iteration, iteration.glsl, decides whether the next one runs and fits its view): */
 #define CULLIDE_CHAIN_RAN 32        /* iterations run (the last one's index + 1) */
 #define CULLIDE_CHAIN_STOP 33       /* CULLIDE_STOP_*: why the chain stopped after the last iteration run */
-#define CULLIDE_CHAIN_SURVIVE_DONE 34 /* survive.comp's work groups that have finished (its last one resets it) */
+#define CULLIDE_CHAIN_SURVIVE_DONE 34 /* work groups of the pass that ends the iteration that have finished (the
+                                       * last one resets it) */
 #define CULLIDE_CHAIN_RECORDS_RUN 35  /* records the level's iterations ran over, summed */
 #define CULLIDE_CHAIN_RECORDED_VIEW 36 /* the view the records were built for (build.comp's APPEND or SINGLE pass) */
 #define CULLIDE_CHAIN_ALIVE_START 37 /* items alive at the level's start (all, or those whose parent survived) */
@@ -82,7 +89,7 @@
  * (copied there before the read-back: one read-back brings both levels' chains). */
 #define CULLIDE_AHEAD 112
 /* Then the level's alive set, one bit per item (item i: bit i % 32 of word CULLIDE_ALIVE_BITS + i / 32): set at the
- * level's start (by the C++ side, or by build.comp where items inherit their parents'), cleared by survive.comp as
+ * level's start (by the C++ side, or by build.comp where items inherit their parents'), cleared as
  * items leave. The level's one read-back brings it all. */
 #define CULLIDE_ALIVE_BITS 208
 
@@ -123,7 +130,7 @@
 #define CULLIDE_LOC_AXES 10         /* uint: bit mask of the view axes in use (x = 1, y = 2, z = 4) */
 #define CULLIDE_LOC_PRIM_BASE 11    /* uint: build.comp: first primitive of this dispatch (split at the group-count
                                      * limit) */
-#define CULLIDE_LOC_REQUIRED 12     /* uint: survive.comp: the flag bits an item needs to stay alive */
+#define CULLIDE_LOC_REQUIRED 12     /* uint: iteration.glsl: the flag bits an item needs to stay alive */
 #define CULLIDE_LOC_BANDS 13        /* int: build.comp: CULLIDE_BANDS_* */
 #define CULLIDE_LOC_GROUPS 14       /* uint: build.comp: work groups of its per-primitive passes */
 #define CULLIDE_LOC_ITEM_COUNT 15   /* uint: build.comp: the level's items */
@@ -131,10 +138,10 @@
 #define CULLIDE_LOC_MAX_GROUPS 17   /* uint: build.comp: GL_MAX_COMPUTE_WORK_GROUP_COUNT[0] (indirect arguments) */
 #define CULLIDE_LOC_WITH_BOUNDS 18  /* int: build.comp: 1 = the first pass (FOOTPRINTS, SINGLE) builds the items' boxes */
 #define CULLIDE_LOC_ITERATION 19    /* uint: the iteration whose view the passes use (views[u_iteration]) */
-#define CULLIDE_LOC_MAX_ITERATIONS 20 /* uint: survive.comp: Settings::maxIterations */
-#define CULLIDE_LOC_MARGIN 21       /* double: survive.comp: Settings::margin (the next view's fit) */
-#define CULLIDE_LOC_COORDINATE_BOUND 22 /* double: survive.comp: GpuGeometry::coordinateBound */
-#define CULLIDE_LOC_MIN_PRUNE_FRACTION 23 /* double: survive.comp: Settings::minPruneFraction */
+#define CULLIDE_LOC_MAX_ITERATIONS 20 /* uint: iteration.glsl: Settings::maxIterations */
+#define CULLIDE_LOC_MARGIN 21       /* double: iteration.glsl: Settings::margin (the next view's fit) */
+#define CULLIDE_LOC_COORDINATE_BOUND 22 /* double: iteration.glsl: GpuGeometry::coordinateBound */
+#define CULLIDE_LOC_MIN_PRUNE_FRACTION 23 /* double: iteration.glsl: Settings::minPruneFraction */
 #define CULLIDE_LOC_PARENTS 24      /* uint: build.comp: items of the last level whose survivors the items inherit (0:
                                      * they do not) */
 #define CULLIDE_LOC_ONE_PRIM_EACH 25 /* int: build.comp: 1 = item i is primitive i (CULLIDE_SSBO_PRIM_BEGIN not sent) */

@@ -6,9 +6,9 @@
 // binary search: an item of a whole mesh has too many primitives for one invocation's loops):
 //   FOOTPRINTS  each primitive's footprint and each work group's sum; the last work group to finish turns the sum
 //               over all of them into the pixels per band (short bands: a hardware GPU's load balance). At the
-//               level's start (CULLIDE_LOC_WITH_BOUNDS) also each primitive's box into its item's, for survive.comp.
+//               level's start (CULLIDE_LOC_WITH_BOUNDS) also each primitive's box into its item's, for iteration.glsl.
 //   APPEND      each primitive's records (none for a pruned item's), appended where its work group reserved room
-//               with one atomic add; the last work group to finish turns the total into the count and the indirect
+//               with one atomic add, and counted in its item's (CULLIDE_SSBO_ITEM_BOUNDS); the last work group to finish turns the total into the count and the indirect
 //               arguments of the iteration's record-sized passes (CULLIDE_DISPATCH_*): the C++ side never waits.
 //   SINGLE      both in one pass where the pixels per band are a constant (long bands on a software renderer) or
 //               there are no bands (the raster back-end): a build is one dispatch there.
@@ -125,7 +125,7 @@ vec3 primExtent(uint ref) {
     return hi - lo;
 }
 
-// Float bits whose unsigned order is the floats' order (for atomicMin / atomicMax; survive.comp gathers them).
+// Float bits whose unsigned order is the floats' order (for atomicMin / atomicMax; iteration.glsl gathers them).
 uint orderedBits(float f) {
     uint u = floatBitsToUint(f);
     return (u & 0x80000000u) != 0u ? ~u : (u | 0x80000000u);
@@ -152,14 +152,14 @@ uint bandsOf(float footprint, float perBand) {
 void writeDispatch(uint total, float approx) {
     bool fits = approx <= 2147483648.0 && total <= u_capacity;
     uint records = fits ? total : 0u;
-    writePassArguments(records, max(records, u_itemCount));
+    writePassArguments(records, max(records, u_itemCount), true);
     counters[CULLIDE_DISPATCH_NEEDED] = total;
     counters[CULLIDE_DISPATCH_NEEDED_APPROX] = floatBitsToUint(approx);
     counters[CULLIDE_DISPATCH_SHORT] = fits ? 0u : 1u;
 }
 
 // Primitive `prim`'s box into its item's, cleared by the C++ side (at the level's start). The axes are written out:
-// NVIDIA's compiler (driver 580.159) crashed on a loop of atomics indexed by the loop variable (survive.comp).
+// NVIDIA's compiler (driver 580.159) crashed on a loop of atomics indexed by the loop variable (iteration.glsl).
 void addToItemBounds(uint prim, uint item) {
     vec3 lo;
     vec3 hi;
@@ -276,8 +276,10 @@ void main() {
         uint groupTotal = s_total;
         bool fits = base + groupTotal >= base && base + groupTotal <= u_capacity;  // no wrap-around, within capacity
         uint record = base + inclusive - n;
-        if (fits)
+        if (fits && n != 0u) {
             for (uint band = 0u; band < n; ++band) prims[record + band] = uvec4(prim, item, band, n);
+            atomicAdd(bounds[6u * u_itemCount + item], n);
+        }
         if (!lastToFinish(CULLIDE_DISPATCH_BUILD_DONE, false)) return;
         if (lane == 0u) {
             uint total = atomicAdd(counters[CULLIDE_DISPATCH_NEEDED], 0u);

@@ -9,7 +9,7 @@ layout(std430, binding = CULLIDE_SSBO_INDICES) readonly buffer Indices { uint in
 layout(std430, binding = CULLIDE_SSBO_BOXES) readonly buffer Boxes { float boxes[]; };
 layout(std430, binding = CULLIDE_SSBO_PRIMS) readonly buffer Prims { uvec4 prims[]; };
 layout(std430, binding = CULLIDE_SSBO_ITEM_OWNER) readonly buffer Owners { uint owners[]; };
-layout(std430, binding = CULLIDE_SSBO_ALIVE) readonly buffer Alive { uint alive[]; };
+layout(std430, binding = CULLIDE_SSBO_ALIVE) buffer Alive { uint alive[]; };  // written where an iteration ends
 
 layout(location = CULLIDE_LOC_PASS) uniform int u_pass;
 layout(location = CULLIDE_LOC_RESOLUTION) uniform int u_resolution;

@@ -1,7 +1,7 @@
 // The views of a level's iterations (CULLIDE_SSBO_VIEWS): views[i] is what iteration i's passes read (u_iteration),
-// written by the C++ side for the first iteration (fitView) and by survive.comp's last work group for each next one
-// (the same fit in double, operation for operation); after the iteration that work group adds what it left. Mirrored by
-// plugin/src/gl/ViewRecords.h.
+// written by the C++ side for the first iteration (fitView) and by the work group that ends the iteration before
+// (iteration.glsl) for each next one (the same fit in double, operation for operation); after the iteration that work
+// group adds what it left. Mirrored by plugin/src/gl/ViewRecords.h.
 struct ViewRecord {
     double boxMin[3];     // the view box (relative to the upload origin)
     double boxMax[3];

@@ -6,6 +6,7 @@
 #include "PruningBackend.h"
 #include "cullide/Culler.h"
 
+#include <cstddef>
 #include <functional>
 #include <memory>
 #include <vector>
@@ -26,6 +27,10 @@ struct GlBackendOptions {
     /// Where set: after every upload, every position the device holds (the mapped meshes' as map.comp wrote them) is
     /// read back into it, so that tests can hold them to allPositions bit for bit: a read-back that no stat counts.
     std::shared_ptr<std::vector<float>> positionsAfterUpload;
+    /// Where above 0: work groups along x per dispatch at most, below the device's own limit
+    /// (GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]), so that tests reach the split dispatches and rows of work groups that
+    /// only scenes of millions of records or vertices need otherwise.
+    std::size_t maxWorkGroups = 0;
 };
 
 /// The GL visibility test (gl/VisibilityPass). Throws GlUnavailableError without a usable GL device.

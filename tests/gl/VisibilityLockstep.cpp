@@ -261,7 +261,7 @@ PruningBackendFactory lockstepFactory(std::shared_ptr<LockstepLog> log, GlBacken
 std::string lockstepName(const LockstepCase& c) {
     return std::string(c.pipeline == Pipeline::Paper ? "Paper" : "Auto") +
            (c.mode == Mode::Reliable ? "Reliable" : "Sampled") + (c.backend == Backend::Raster ? "Raster" : "Compute") +
-           std::to_string(c.resolution);
+           std::to_string(c.resolution) + (c.axes == 7 ? "" : "Axes" + std::to_string(c.axes));
 }
 
 void PrintTo(const LockstepCase& c, std::ostream* os) { *os << lockstepName(c); }
@@ -272,6 +272,7 @@ Settings lockstepSettings(const LockstepCase& c) {
     s.mode = c.mode;
     s.backend = c.backend;
     s.resolution = c.resolution;
+    s.axes = c.axes;
     s.gpuLevels = GpuLevels::Always;
     s.exactThreshold = 0;  // every level runs
     // The paper's pipeline iterates until the set stops changing (both stop rules of the chain are held to the

@@ -42,6 +42,7 @@ struct LockstepCase {
     Mode mode;
     Backend backend;
     int resolution;
+    unsigned axes = 7;  ///< Settings::axes
 };
 
 /// The case as a test-name part, e.g. "PaperReliableCompute64".

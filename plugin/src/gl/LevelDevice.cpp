@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <functional>
 #include <initializer_list>
 #include <stdexcept>
 #include <string>
@@ -86,9 +87,9 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
       positionsAfterUpload(options.positionsAfterUpload) {
     context.makeCurrent();
     if (settings.backend == Backend::Compute) {
-        program = linkProgram(
-            {compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl", "cull.comp"})},
-            "the visibility program");
+        program = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl", "passes.glsl",
+                                                                 "iteration.glsl", "cull.comp"})},
+                              "the visibility program");
     } else {
         setupProgram = linkProgram(
             {compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "records.glsl", "cull_setup.comp"})},
@@ -103,9 +104,11 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
             throw;
         }
         program = linkProgram({vs, fs}, "the visibility raster program");
+        surviveProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl",
+                                                                        "passes.glsl", "iteration.glsl",
+                                                                        "survive.comp"})},
+                                     "the survivor program");
     }
-    surviveProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "passes.glsl", "survive.comp"})},
-                                 "the survivor program");
     buildProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "passes.glsl", "build.comp"})},
                                "the record build program");
     mapProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"map.comp"})}, "the mapped meshes' program");
@@ -124,9 +127,10 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
     GLint limit = 65535;
     glGetIntegeri_v(GL_MAX_COMPUTE_WORK_GROUP_COUNT, 0, &limit);
     maxGroups = static_cast<std::size_t>(std::max(1, limit));
+    if (options.maxWorkGroups > 0) maxGroups = std::min(maxGroups, options.maxWorkGroups);
     reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * CULLIDE_ALIVE_BITS);
     reserveBuffer(buffers[kViews], capacity[kViews], sizeof(ViewRecord) * (CULLIDE_MAX_ITERATIONS + 1));
-    for (Buffer b : {kParent, kParentAlive, kPrimBegin, kStash, kStashViews, kOrdered})
+    for (Buffer b : {kParent, kParentAlive, kPrimBegin, kStash, kStashViews, kOrdered, kBands})
         reserveBuffer(buffers[b], capacity[b], 4);
     checkGlError("creating the visibility pass");
     // Every call makes the context current on its own thread: the culler may be used from another thread than
@@ -143,7 +147,7 @@ LevelDevice::~LevelDevice() {
     glDeleteVertexArrays(1, &vao);
     glDeleteProgram(program);
     if (setupProgram) glDeleteProgram(setupProgram);
-    glDeleteProgram(surviveProgram);
+    if (surviveProgram) glDeleteProgram(surviveProgram);
     glDeleteProgram(buildProgram);
     glDeleteProgram(mapProgram);
 }
@@ -216,7 +220,9 @@ void LevelDevice::draw(int pass, LevelStats& level, Stats& stats) const {
         const std::uintptr_t offset = 4 * CULLIDE_DISPATCH_DRAW;
         glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(offset));
     }
-    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+    // The compute back-end's flag pass ends the iteration: it writes the next one's indirect arguments.
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT |
+                    GL_BUFFER_UPDATE_BARRIER_BIT);
     level.draws += 1;
     stats.draws += 1;
 }
@@ -228,7 +234,7 @@ void LevelDevice::setLevelUniforms(double coordinateBound) const {
         glProgramUniform1i(p, CULLIDE_LOC_CONSERVATIVE, settings.mode == Mode::Reliable ? 1 : 0);
         glProgramUniform1ui(p, CULLIDE_LOC_AXES, settings.axes);
     }
-    const GLuint s = surviveProgram;
+    const GLuint s = settings.backend == Backend::Compute ? program : surviveProgram;  // ends the iterations
     glProgramUniform1ui(s, CULLIDE_LOC_ITEM_COUNT, static_cast<GLuint>(levelItems->size()));
     glProgramUniform1ui(s, CULLIDE_LOC_REQUIRED, requiredFlags(settings.axes));
     glProgramUniform1ui(s, CULLIDE_LOC_MAX_ITERATIONS, static_cast<GLuint>(settings.maxIterations));
@@ -262,6 +268,11 @@ void LevelDevice::uploadItems(const LevelItems& items, const LevelStart& start, 
     const bool inherits = !items.parentBegin.empty();
     const auto send = Clock::now();
     onePrimEach = items.onePrimitiveEach();
+    // cull.comp's flag pass decides an item once its last record is done: an item without one would never be.
+    const auto& begin = items.primBegin;
+    if (settings.backend == Backend::Compute && !onePrimEach &&
+        std::adjacent_find(begin.begin(), begin.end(), std::equal_to<std::uint32_t>()) != begin.end())
+        throw BackendError("a level item without primitives");
     inheritOwners = inherits && items.ownersFromParents;
     generatePrims = inherits && onePrimEach && !items.parentFirst.empty();
     if (items.described() && !generatePrims) throw BackendError("a level described by its parents that inherits none");
@@ -299,7 +310,7 @@ void LevelDevice::uploadItems(const LevelItems& items, const LevelStart& start, 
                               GL_UNSIGNED_INT, &aliveWord);
     reserveBuffer(buffers[kFlags], capacity[kFlags], n * 4);
     reserveBuffer(buffers[kAlive], capacity[kAlive], n * 4);
-    reserveBuffer(buffers[kItemBounds], capacity[kItemBounds], n * 24);
+    reserveBuffer(buffers[kItemBounds], capacity[kItemBounds], n * 32);
     const GLuint empty[2] = {0xFFFFFFFFu, 0u};
     glClearNamedBufferSubData(buffers[kAlive], GL_R32UI, 0, static_cast<GLsizeiptr>(n * 4), GL_RED_INTEGER,
                               GL_UNSIGNED_INT, &aliveItem);
@@ -341,7 +352,8 @@ void LevelDevice::buildRecords(int iteration, bool withBounds, LevelStats& level
                            std::to_string(kMaxBuildGroups * CULLIDE_COMPUTE_GROUP_SIZE));
     const auto setUp = Clock::now();
     reserveRecords(primCount);
-    reserveBuffer(buffers[kBands], capacity[kBands], primCount * 4);
+    if (bands == CULLIDE_BANDS_SHORT)  // each primitive's footprint, between the two passes
+        reserveBuffer(buffers[kBands], capacity[kBands], primCount * 4);
     reserveBuffer(buffers[kBuild], capacity[kBuild], (CULLIDE_BUILD_GROUPS + groups) * 4);
     // The build's atomic counters start at 0 (the dispatch block is rewritten by the build's last work group).
     const GLuint zero = 0;
@@ -350,6 +362,9 @@ void LevelDevice::buildRecords(int iteration, bool withBounds, LevelStats& level
                               GL_UNSIGNED_INT, &zero);
     glClearNamedBufferSubData(buffers[kBuild], GL_R32UI, 4 * CULLIDE_BUILD_FOOTPRINTS_DONE, 4, GL_RED_INTEGER,
                               GL_UNSIGNED_INT, &zero);
+    // Each item's records, and the flag pass's count over them (which a short build may have left half done).
+    glClearNamedBufferSubData(buffers[kItemBounds], GL_R32UI, static_cast<GLintptr>(levelItems->size() * 24),
+                              static_cast<GLsizeiptr>(levelItems->size() * 8), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
     bindBuffers();
     glUseProgram(buildProgram);
     glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
@@ -460,19 +475,32 @@ void LevelDevice::issueIteration(int iteration, LevelStats& level, Stats& stats)
     }
     glUseProgram(program);
     glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_PRIMS_OUT, buffers[kPrimsNext]);
     draw(CULLIDE_PASS_NEAREST, level, stats);
+    if (settings.backend == Backend::Compute) {
+        // The nearest pass packed the records of the items alive: the second and flag passes run over those, and
+        // the flag pass ends the iteration.
+        swapRecords();
+        draw(CULLIDE_PASS_SECOND, level, stats);
+        draw(CULLIDE_PASS_FLAG, level, stats);
+        return;
+    }
     draw(CULLIDE_PASS_SECOND, level, stats);
     draw(CULLIDE_PASS_FLAG, level, stats);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_PRIMS_OUT, buffers[kPrimsNext]);
     glUseProgram(surviveProgram);
     glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
     glDispatchComputeIndirect(4 * CULLIDE_DISPATCH_SURVIVE);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     level.draws += 1;
     stats.draws += 1;
-    // The records the survivor pass packed are the next iteration's.
+    swapRecords();  // the records the survivor pass packed are the next iteration's
+}
+
+void LevelDevice::swapRecords() {
     std::swap(buffers[kPrims], buffers[kPrimsNext]);
     std::swap(capacity[kPrims], capacity[kPrimsNext]);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_PRIMS, buffers[kPrims]);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_PRIMS_OUT, buffers[kPrimsNext]);
 }
 
 bool LevelDevice::readBack(GLuint buffer, std::size_t offset, std::size_t bytes, void* to, LevelStats& level,

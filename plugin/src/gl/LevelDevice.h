@@ -28,7 +28,8 @@ enum Buffer {
     kIndices,
     kBoxes,
     kPrims,
-    kPrimsNext,  ///< survive.comp's packed records; swapped with kPrims after every iteration
+    kPrimsNext,  ///< the records of the items alive, packed (the compute back-end's nearest pass, survive.comp);
+                 ///< swapped with kPrims
     kOwners,
     kFlags,
     kRecords,
@@ -193,10 +194,14 @@ struct LevelDevice {
     void prepareIteration(std::size_t itemCount);
 
     /// Issues iteration `iteration` of the level (nothing waits for it): the three passes over the alive items'
-    /// records and the survivor pass, which packs the records of the items still alive and whose last work group
-    /// ends the iteration on the device (survive.comp: the stop rule, the next view and the next iteration's indirect
-    /// arguments). Where the chain stopped before it, every pass is dispatched with empty arguments: nothing runs.
+    /// records, whose last work group ends the iteration on the device (iteration.glsl: the stop rule, the next view
+    /// and the next iteration's indirect arguments). On the compute back-end the nearest pass packs the records of
+    /// the items alive and the flag pass ends the iteration (cull.comp); on the raster back-end a set-up dispatch
+    /// comes first and a survivor pass last, which packs and ends it (survive.comp). Where the chain stopped before
+    /// it, every pass is dispatched with empty arguments: nothing runs.
     void issueIteration(int iteration, LevelStats& level, Stats& stats);
+    /// The packed records become the ones the passes read (kPrims and kPrimsNext swap, bound again).
+    void swapRecords();
 
     /// Reads `bytes` at `offset` of `buffer` back into `to`: blocks until the device has finished the work submitted
     /// before, which the level's waitMs counts (with the tests' readBackDelayMs inside it). With `until`, the wait

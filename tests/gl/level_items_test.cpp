@@ -1,0 +1,67 @@
+// What a GL back-end takes as a level's items (PruningBackend::pruneLevel's contract): the compute back-end decides
+// an item when its last record is done, so an item without primitives, which has no record, is refused with a
+// BackendError (the culler then finishes the frame on the CPU) instead of being left alive and uncounted.
+#include "CullerBackends.h"
+#include "GlTestSupport.h"
+#include "PruningBackend.h"
+#include "VisibilityLevel.h"
+#include "bindings.h"
+
+#include <gtest/gtest.h>
+
+#include <vector>
+
+namespace cullide::test {
+namespace {
+
+/// Two unit boxes, overlapping, as one upload.
+GpuGeometry twoBoxes() {
+    GpuGeometry g;
+    g.boxes = {0, 0, 0, 1, 1, 1, 0.5f, 0.5f, 0.5f, 1.5f, 1.5f, 1.5f};
+    g.coordinateBound = 1.5;
+    return g;
+}
+
+LevelItems boxItems(bool withEmptyItem) {
+    LevelItems items;
+    const auto add = [&](std::uint32_t owner, std::vector<std::uint32_t> prims, const Aabb& box) {
+        items.owner.push_back(owner);
+        items.prims.insert(items.prims.end(), prims.begin(), prims.end());
+        items.primBegin.push_back(static_cast<std::uint32_t>(items.prims.size()));
+        items.bounds.push_back(box);
+    };
+    const Aabb first{Vec3(0, 0, 0), Vec3(1, 1, 1)}, second{Vec3(0.5, 0.5, 0.5), Vec3(1.5, 1.5, 1.5)};
+    add(0, {0u | CULLIDE_PRIM_BOX_BIT}, first);
+    if (withEmptyItem) add(1, {}, second);
+    add(1, {1u | CULLIDE_PRIM_BOX_BIT}, second);
+    return items;
+}
+
+TEST(LevelItems, TheComputeBackEndRefusesAnItemWithoutPrimitives) {
+    Settings settings;
+    settings.gpuLevels = GpuLevels::Always;
+    settings.backend = Backend::Compute;
+    settings.resolution = 64;
+    CULLIDE_GPU_CULLER_OR_SKIP(probe, settings);
+    auto backend = createGlPruningBackend(settings);
+    const GpuGeometry geometry = twoBoxes();
+    Stats stats;
+    backend->upload(geometry, stats);
+    for (const bool withEmptyItem : {false, true}) {
+        const LevelItems items = boxItems(withEmptyItem);
+        std::vector<std::uint8_t> survivors;
+        stats.levels.assign(1, LevelStats{});
+        const auto run = [&] {
+            pruneLevel(*backend, items, settings, geometry.coordinateBound, 0, survivors, stats.levels[0], stats);
+        };
+        if (withEmptyItem) {
+            EXPECT_THROW(run(), BackendError);
+        } else {
+            ASSERT_NO_THROW(run());
+            EXPECT_EQ(survivors, (std::vector<std::uint8_t>{1, 1}));  // they overlap
+        }
+    }
+}
+
+}  // namespace
+}  // namespace cullide::test
