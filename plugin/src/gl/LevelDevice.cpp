@@ -88,8 +88,12 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
     context.makeCurrent();
     if (settings.backend == Backend::Compute) {
         program = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl", "passes.glsl",
-                                                                 "iteration.glsl", "cull.comp"})},
+                                                                 "scan.glsl", "cull.comp"})},
                               "the visibility program");
+        flagProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl",
+                                                                     "passes.glsl", "iteration.glsl", "scan.glsl",
+                                                                     "flag.comp"})},
+                                  "the flag pass program");
     } else {
         setupProgram = linkProgram(
             {compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "records.glsl", "cull_setup.comp"})},
@@ -148,6 +152,7 @@ LevelDevice::~LevelDevice() {
     glDeleteProgram(program);
     if (setupProgram) glDeleteProgram(setupProgram);
     if (surviveProgram) glDeleteProgram(surviveProgram);
+    if (flagProgram) glDeleteProgram(flagProgram);
     glDeleteProgram(buildProgram);
     glDeleteProgram(mapProgram);
 }
@@ -228,13 +233,13 @@ void LevelDevice::draw(int pass, LevelStats& level, Stats& stats) const {
 }
 
 void LevelDevice::setLevelUniforms(double coordinateBound) const {
-    for (GLuint p : {program, setupProgram}) {
+    for (GLuint p : {program, setupProgram, flagProgram}) {
         if (p == 0) continue;  // no setup program on the compute back-end
         glProgramUniform1i(p, CULLIDE_LOC_RESOLUTION, settings.resolution);
         glProgramUniform1i(p, CULLIDE_LOC_CONSERVATIVE, settings.mode == Mode::Reliable ? 1 : 0);
         glProgramUniform1ui(p, CULLIDE_LOC_AXES, settings.axes);
     }
-    const GLuint s = settings.backend == Backend::Compute ? program : surviveProgram;  // ends the iterations
+    const GLuint s = settings.backend == Backend::Compute ? flagProgram : surviveProgram;  // ends the iterations
     glProgramUniform1ui(s, CULLIDE_LOC_ITEM_COUNT, static_cast<GLuint>(levelItems->size()));
     glProgramUniform1ui(s, CULLIDE_LOC_REQUIRED, requiredFlags(settings.axes));
     glProgramUniform1ui(s, CULLIDE_LOC_MAX_ITERATIONS, static_cast<GLuint>(settings.maxIterations));
@@ -482,6 +487,8 @@ void LevelDevice::issueIteration(int iteration, LevelStats& level, Stats& stats)
         // the flag pass ends the iteration.
         swapRecords();
         draw(CULLIDE_PASS_SECOND, level, stats);
+        glUseProgram(flagProgram);
+        glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
         draw(CULLIDE_PASS_FLAG, level, stats);
         return;
     }

@@ -92,6 +92,7 @@ struct LevelDevice {
     GLuint program = 0;
     GLuint setupProgram = 0;  // raster back-end only
     GLuint surviveProgram = 0;
+    GLuint flagProgram = 0;  ///< compute back-end: the flag pass, which ends the iteration (flag.comp)
     GLuint buildProgram = 0;
     GLuint mapProgram = 0;
     int bands = CULLIDE_BANDS_NONE;  ///< build.comp's CULLIDE_BANDS_* for this back-end and device
@@ -196,9 +197,9 @@ struct LevelDevice {
     /// Issues iteration `iteration` of the level (nothing waits for it): the three passes over the alive items'
     /// records, whose last work group ends the iteration on the device (iteration.glsl: the stop rule, the next view
     /// and the next iteration's indirect arguments). On the compute back-end the nearest pass packs the records of
-    /// the items alive and the flag pass ends the iteration (cull.comp); on the raster back-end a set-up dispatch
-    /// comes first and a survivor pass last, which packs and ends it (survive.comp). Where the chain stopped before
-    /// it, every pass is dispatched with empty arguments: nothing runs.
+    /// the items alive (cull.comp) and the flag pass ends the iteration (flag.comp); on the raster back-end a set-up
+    /// dispatch comes first and a survivor pass last, which packs and ends it (survive.comp). Where the chain stopped
+    /// before it, every pass is dispatched with empty arguments: nothing runs.
     void issueIteration(int iteration, LevelStats& level, Stats& stats);
     /// The packed records become the ones the passes read (kPrims and kPrimsNext swap, bound again).
     void swapRecords();
