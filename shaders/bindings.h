@@ -83,6 +83,8 @@
 #define CULLIDE_CHAIN_RECORDS_RUN 35  /* records the level's iterations ran over, summed */
 #define CULLIDE_CHAIN_RECORDED_VIEW 36 /* the view the records were built for (build.comp's APPEND or SINGLE pass) */
 #define CULLIDE_CHAIN_ALIVE_START 37 /* items alive at the level's start (all, or those whose parent survived) */
+#define CULLIDE_CHAIN_PER_BAND 38   /* short bands: the pixels per band the level's last build found (float bits): the
+                                     * estimate of the next build in the level's place (CULLIDE_LOC_PER_BAND) */
 #define CULLIDE_CHAIN_ALIVE 48      /* CULLIDE_MAX_ITERATIONS words: items alive after iteration i */
 #define CULLIDE_MAX_ITERATIONS 64   /* Settings::maxIterations at most */
 /* Then words CULLIDE_DISPATCH_RECORDS .. CULLIDE_AHEAD of the level run before this one without being waited for
@@ -113,7 +115,8 @@
                                          * group: pixels per band */
 #define CULLIDE_BUILD_PASS_APPEND 1     /* per primitive: its records, appended; the last work group: the dispatch */
 #define CULLIDE_BUILD_PASS_SINGLE 2     /* FOOTPRINTS' per-primitive work and APPEND in one pass, where the pixels per
-                                         * band need no sum over the primitives (long bands, no bands) */
+                                         * band are given (CULLIDE_LOC_PER_BAND: long bands, or short ones estimated
+                                         * from the last build in the level's place) or there are no bands */
 
 /* Per-pixel images (r32ui), three views side by side: width 3 * resolution, height resolution. */
 #define CULLIDE_IMAGE_NEAR1 0  /* min over items of (quantized nearest depth << idBits | owner) */
@@ -154,6 +157,8 @@
 #define CULLIDE_LOC_MAPPED_VERTICES 32 /* uint: map.comp: their vertices, summed */
 #define CULLIDE_LOC_GENERATE 29     /* int: build.comp: 1 = the first build writes each item's primitive (one each)
                                      * from its parent: ITEM_PRIMS[i] = ORDERED[PARENT_FIRST[p] + i - parentBegin[p]] */
+#define CULLIDE_LOC_PER_BAND 33     /* float: build.comp's SINGLE pass: pixels per band (CULLIDE_PIXELS_PER_INVOCATION
+                                     * for long bands; for short ones an estimate from the last build in the place) */
 #define CULLIDE_LOC_START_BITS 30   /* uint: build.comp: 0, or where in CULLIDE_SSBO_PARENT the start bits begin: an
                                      * inheriting item i starts alive only where bit i % 32 of word i / 32 is set */
 

@@ -8,10 +8,13 @@
 //               over all of them into the pixels per band (short bands: a hardware GPU's load balance). At the
 //               level's start (CULLIDE_LOC_WITH_BOUNDS) also each primitive's box into its item's, for iteration.glsl.
 //   APPEND      each primitive's records (none for a pruned item's), appended where its work group reserved room
-//               with one atomic add, and counted in its item's (CULLIDE_SSBO_ITEM_BOUNDS); the last work group to finish turns the total into the count and the indirect
-//               arguments of the iteration's record-sized passes (CULLIDE_DISPATCH_*): the C++ side never waits.
-//   SINGLE      both in one pass where the pixels per band are a constant (long bands on a software renderer) or
-//               there are no bands (the raster back-end): a build is one dispatch there.
+//               with one atomic add, and counted in its item's (CULLIDE_SSBO_ITEM_BOUNDS); the last work group to
+//               finish turns the total into the count and the indirect arguments of the iteration's record-sized
+//               passes (CULLIDE_DISPATCH_*): the C++ side never waits.
+//   SINGLE      both in one pass where the pixels per band are given (CULLIDE_LOC_PER_BAND): long bands on a software
+//               renderer, or short bands estimated from the last build in the level's place (whose sum this pass
+//               leaves for the next one, CULLIDE_CHAIN_PER_BAND) — or where there are no bands (the raster
+//               back-end). A build is one dispatch there; only a place's first short-band build takes two.
 // A level that inherits its parents' survivors starts in its first build's first pass: each item alive where its
 // parent survived (and its start bit allows), its owner its parent's (CULLIDE_LOC_INHERIT_OWNERS) and its primitive
 // generated from its parent's range of the mesh's spatial order (CULLIDE_LOC_GENERATE) — nothing per item is sent.
@@ -48,6 +51,7 @@ layout(location = CULLIDE_LOC_ONE_PRIM_EACH) uniform int u_onePrimEach;
 layout(location = CULLIDE_LOC_INHERIT_OWNERS) uniform int u_inheritOwners;
 layout(location = CULLIDE_LOC_GENERATE) uniform int u_generate;
 layout(location = CULLIDE_LOC_START_BITS) uniform uint u_startBits;
+layout(location = CULLIDE_LOC_PER_BAND) uniform float u_perBand;
 
 const uint kLanes = uint(CULLIDE_COMPUTE_GROUP_SIZE);
 shared uint s_scan[CULLIDE_COMPUTE_GROUP_SIZE];
@@ -139,6 +143,27 @@ float footprintOf(vec3 size) {
     vec3 halfSize = vec3(v.halfSize[0], v.halfSize[1], v.halfSize[2]);
     vec3 side = size * pixelScale + 2.0 * halfSize + vec3(3.0);
     return max(max(side.y * side.z, side.z * side.x), side.x * side.y);
+}
+
+// Work group `group`'s footprints, summed (every lane calls it), for shortBandsPerBand.
+void addGroupFootprints(uint group, float pixels) {
+    float sum = groupSum(pixels);
+    if (gl_LocalInvocationID.x == 0u) build[CULLIDE_BUILD_GROUPS + group] = floatBitsToUint(sum);
+}
+
+// The last work group (every lane calls it): the pixels per band of short bands from every group's footprints, for
+// about CULLIDE_TARGET_INVOCATIONS records (a hardware GPU's load balance), also left in the chain
+// (CULLIDE_CHAIN_PER_BAND: the next build in this level's place may take it as its estimate and build in one pass).
+float shortBandsPerBand() {
+    float total = 0.0;
+    for (uint g = gl_LocalInvocationID.x; g < u_groups; g += kLanes)
+        total += uintBitsToFloat(build[CULLIDE_BUILD_GROUPS + g]);
+    total = groupSum(total);
+    float perBand = float(CULLIDE_PIXELS_PER_INVOCATION);
+    if (u_bands == CULLIDE_BANDS_SHORT)
+        perBand = clamp(ceil(total / CULLIDE_TARGET_INVOCATIONS), CULLIDE_MIN_PIXELS_PER_INVOCATION, perBand);
+    if (gl_LocalInvocationID.x == 0u) counters[CULLIDE_CHAIN_PER_BAND] = floatBitsToUint(perBand);
+    return perBand;
 }
 
 // At most half of CULLIDE_MAX_LOOP_ITERATIONS bands, so that the APPEND pass's loop stays within llvmpipe's limit; a
@@ -245,23 +270,20 @@ void main() {
         if (u_withBounds != 0 && p < u_primCount) addToItemBounds(prim, item);
         float pixels = live ? footprintOf(primExtent(prim)) : 0.0;
         if (p < u_primCount) bands[p] = floatBitsToUint(pixels);
-        float sum = groupSum(pixels);
-        if (lane == 0u) build[CULLIDE_BUILD_GROUPS + group] = floatBitsToUint(sum);
+        addGroupFootprints(group, pixels);
         if (!lastToFinish(CULLIDE_BUILD_FOOTPRINTS_DONE, true)) return;
-        float total = 0.0;
-        for (uint g = lane; g < u_groups; g += kLanes) total += uintBitsToFloat(build[CULLIDE_BUILD_GROUPS + g]);
-        total = groupSum(total);
-        float perBand = float(CULLIDE_PIXELS_PER_INVOCATION);
-        if (u_bands == CULLIDE_BANDS_SHORT)
-            perBand = clamp(ceil(total / CULLIDE_TARGET_INVOCATIONS), CULLIDE_MIN_PIXELS_PER_INVOCATION, perBand);
+        float perBand = shortBandsPerBand();
         if (lane == 0u) build[CULLIDE_BUILD_PER_BAND] = floatBitsToUint(perBand);
     } else {  // APPEND, SINGLE
         if (single && u_withBounds != 0 && p < u_primCount) addToItemBounds(prim, item);
+        bool shortBands = u_bands == CULLIDE_BANDS_SHORT;
+        float pixels = live && single && u_bands != CULLIDE_BANDS_NONE ? footprintOf(primExtent(prim)) : 0.0;
+        if (single && shortBands) addGroupFootprints(group, pixels);
         uint n = 0u;
         if (live && u_bands == CULLIDE_BANDS_NONE) {
             n = 1u;
-        } else if (live && single) {  // long bands: FOOTPRINTS' pixels and pixels per band
-            n = bandsOf(footprintOf(primExtent(prim)), float(CULLIDE_PIXELS_PER_INVOCATION));
+        } else if (live && single) {  // the pixels per band as given: long bands, or short ones estimated
+            n = bandsOf(pixels, u_perBand);
         } else if (live) {
             n = bandsOf(uintBitsToFloat(bands[p]), uintBitsToFloat(build[CULLIDE_BUILD_PER_BAND]));
         }
@@ -281,6 +303,7 @@ void main() {
             atomicAdd(bounds[6u * u_itemCount + item], n);
         }
         if (!lastToFinish(CULLIDE_DISPATCH_BUILD_DONE, false)) return;
+        if (single && shortBands) shortBandsPerBand();  // for the next build's estimate
         if (lane == 0u) {
             uint total = atomicAdd(counters[CULLIDE_DISPATCH_NEEDED], 0u);
             float approx = float(atomicAdd(counters[CULLIDE_DISPATCH_NEEDED_HI], 0u)) * 256.0;

@@ -357,7 +357,8 @@ void LevelDevice::buildRecords(int iteration, bool withBounds, LevelStats& level
                            std::to_string(kMaxBuildGroups * CULLIDE_COMPUTE_GROUP_SIZE));
     const auto setUp = Clock::now();
     reserveRecords(primCount);
-    if (bands == CULLIDE_BANDS_SHORT)  // each primitive's footprint, between the two passes
+    const bool twoPasses = bands == CULLIDE_BANDS_SHORT && !(perBandEstimate > 0.0f);
+    if (twoPasses)  // each primitive's footprint, between the two passes
         reserveBuffer(buffers[kBands], capacity[kBands], primCount * 4);
     reserveBuffer(buffers[kBuild], capacity[kBuild], (CULLIDE_BUILD_GROUPS + groups) * 4);
     // The build's atomic counters start at 0 (the dispatch block is rewritten by the build's last work group).
@@ -387,10 +388,12 @@ void LevelDevice::buildRecords(int iteration, bool withBounds, LevelStats& level
     glUniform1i(CULLIDE_LOC_GENERATE, generatePrims ? 1 : 0);
     glUniform1ui(CULLIDE_LOC_START_BITS, startBitsAt);
     startTiming();
-    if (bands == CULLIDE_BANDS_SHORT) {  // the pixels per band come from every primitive's footprint
+    if (twoPasses) {  // the pixels per band come from every primitive's footprint
         buildPass(CULLIDE_BUILD_PASS_FOOTPRINTS, primCount, level, stats);
         buildPass(CULLIDE_BUILD_PASS_APPEND, primCount, level, stats);
     } else {
+        const float perBand = bands == CULLIDE_BANDS_SHORT ? perBandEstimate : float(CULLIDE_PIXELS_PER_INVOCATION);
+        glUniform1f(CULLIDE_LOC_PER_BAND, perBand);
         buildPass(CULLIDE_BUILD_PASS_SINGLE, primCount, level, stats);
     }
     checkGlError("building a level's records");
@@ -539,9 +542,10 @@ void LevelDevice::waitForChain(bool withAhead, LevelStats& level, Stats& stats) 
     checkGlError("a level's visibility iterations");
 }
 
-int LevelDevice::issueLevel(const LevelItems& items, const LevelStart& start, int iterations, LevelStats& level,
-                           Stats& stats) {
+int LevelDevice::issueLevel(const LevelItems& items, const LevelStart& start, int iterations, float perBand,
+                           LevelStats& level, Stats& stats) {
     levelItems = &items;
+    perBandEstimate = perBand;
     const auto send = Clock::now();
     uploadItems(items, start, level, stats);
     level.setupMs += msSince(send);

@@ -115,6 +115,8 @@ struct LevelDevice {
     bool withStartBits = false;     ///< LevelItems::startBits sent
     std::uint32_t startBitsAt = 0;  ///< where they start in kParent (0: none)
     std::vector<std::uint32_t> parentWords;  ///< kParent's words, gathered before they are sent
+    /// Short bands: the pixels per band the level's builds take, from the last build in its place (0: none).
+    float perBandEstimate = 0.0f;
     /// Records the record buffers (kPrims, kPrimsNext; kRecords on the raster back-end) hold: kept between levels and
     /// frames, grown when a build needs more (the iteration then runs again).
     std::size_t recordCapacity = 0;
@@ -168,7 +170,8 @@ struct LevelDevice {
 
     /// Builds the records of the level's alive items for the view of iteration `iteration` on the device
     /// (build.comp; on the compute back-end each primitive is split into bands of its largest footprint over the three
-    /// views; first the items' boxes when `withBounds`: at a level's start). Its last work group writes the count and
+    /// views; first the items' boxes when `withBounds`: at a level's start). One dispatch, or two where short bands
+    /// have no estimate of their length (perBandEstimate). Its last work group writes the count and
     /// the indirect arguments of the next iteration's record-sized passes. Nothing is read back: the level's read-back
     /// brings the count, and a build that needed more records than the buffers hold is run again.
     void buildRecords(int iteration, bool withBounds, LevelStats& level, Stats& stats);
@@ -215,8 +218,10 @@ struct LevelDevice {
     void waitForChain(bool withAhead, LevelStats& level, Stats& stats);
 
     /// Issues the level: its items sent, its records built and `iterations` iterations (at least 1, at most
-    /// Settings::maxIterations). Returns how many were issued.
-    int issueLevel(const LevelItems& items, const LevelStart& start, int iterations, LevelStats& level, Stats& stats);
+    /// Settings::maxIterations). `perBand`: short bands' pixels per band estimated from the last build in the level's
+    /// place (CULLIDE_CHAIN_PER_BAND; 0: none, its builds sum the footprints first). Returns how many were issued.
+    int issueLevel(const LevelItems& items, const LevelStart& start, int iterations, float perBand, LevelStats& level,
+                   Stats& stats);
 
     /// The alive set as 0/1 per item, from the level's read-back (every item pruned where one owner is left).
     void readSurvivors(std::uint32_t stop, std::vector<std::uint8_t>& survivors) const;

@@ -58,6 +58,7 @@ struct VisibilityPass::Impl : LevelDevice {
         int sinceGuess = 0;  ///< levels there since one ran `guess` iterations
         bool wait = false;   ///< the level run ahead or deferred there stopped early: waited for until it runs as one
                              ///< chain
+        float perBand = 0.0f;  ///< short bands: the pixels per band the last build there found (0: none yet)
     };
     std::vector<PlaceHistory> places;
     std::optional<IssuedLevel> ahead;  ///< a level run ahead, not read back yet
@@ -67,6 +68,18 @@ struct VisibilityPass::Impl : LevelDevice {
     std::vector<std::uint32_t> frameScratch;  ///< collect()'s read-back
 
     bool waitsAt(std::size_t place) const { return place < places.size() && places[place].wait; }
+
+    float perBandFor(std::size_t place) const { return place < places.size() ? places[place].perBand : 0.0f; }
+
+    /// The pixels per band of short bands the level's last build found, for the next build in its place.
+    void learnPerBand(std::size_t place, const Chain& chain) {
+        float perBand = 0.0f;
+        const std::uint32_t bits = chain[CULLIDE_CHAIN_PER_BAND];
+        std::memcpy(&perBand, &bits, sizeof perBand);
+        if (!(perBand > 0.0f)) return;  // no short-band build (also NaN)
+        if (place >= places.size()) places.resize(place + 1);
+        places[place].perBand = perBand;
+    }
 
     int guessFor(std::size_t place) const {
         const int guess = place < places.size() ? places[place].guess : 0;
@@ -93,7 +106,7 @@ struct VisibilityPass::Impl : LevelDevice {
     void runLevel(const LevelItems& items, const LevelStart& start, std::vector<std::uint8_t>& survivors,
                   LevelStats& level, Stats& stats, std::vector<IterationTrace>* trace) {
         const int maxIterations = settings.maxIterations;
-        int issued = issueLevel(items, start, guessFor(start.place), level, stats);
+        int issued = issueLevel(items, start, guessFor(start.place), perBandFor(start.place), level, stats);
         int next = 0;  // the first iteration of the chain being waited for
         bool built = true;
         bool oneChain = true;
@@ -129,6 +142,7 @@ struct VisibilityPass::Impl : LevelDevice {
         }
         const Chain chain{readScratch.data() + CULLIDE_DISPATCH_RECORDS};
         remember(start.place, chain.ran(), oneChain);
+        learnPerBand(start.place, chain);
         noteIterations(chain, level);
         readSurvivors(chain.stop(), survivors);
         if (trace) readTrace(buffers[kViews], 0, chain.ran(), *trace);
@@ -144,7 +158,7 @@ struct VisibilityPass::Impl : LevelDevice {
             runLevel(items, start, survivors, level, stats, trace);
             return;
         }
-        const int issued = issueLevel(items, start, guessFor(start.place), level, stats);
+        const int issued = issueLevel(items, start, guessFor(start.place), perBandFor(start.place), level, stats);
         reserveBuffer(buffers[kStash], capacity[kStash], 4 * kChainWords);
         glCopyNamedBufferSubData(buffers[kCounters], buffers[kStash], 4 * CULLIDE_DISPATCH_RECORDS, 0,
                                  4 * kChainWords);
@@ -191,6 +205,7 @@ struct VisibilityPass::Impl : LevelDevice {
         } else {
             level.records += chain[CULLIDE_DISPATCH_NEEDED];
         }
+        learnPerBand(a.place, chain);
         const bool ended = chain.levelEnded();
         if (ended) {
             remember(a.place, ran, true);
@@ -221,7 +236,7 @@ struct VisibilityPass::Impl : LevelDevice {
             deferred.push_back(std::move(entry));
             return;
         }
-        entry.level.issued = issueLevel(items, start, guessFor(start.place), level, stats);
+        entry.level.issued = issueLevel(items, start, guessFor(start.place), perBandFor(start.place), level, stats);
         level.deferred = true;
         endTiming();  // the level's span: its device time is read after collect()'s read-back
         entry.level.span = lastSpan();
