@@ -27,6 +27,9 @@ struct GlBackendOptions {
     /// Where set: after every upload, every position the device holds (the mapped meshes' as map.comp wrote them) is
     /// read back into it, so that tests can hold them to allPositions bit for bit: a read-back that no stat counts.
     std::shared_ptr<std::vector<float>> positionsAfterUpload;
+    /// Where set: after every upload, the boxes the device holds (GpuGeometry::boxes, of which only what changed is
+    /// sent) are read back into it likewise.
+    std::shared_ptr<std::vector<float>> boxesAfterUpload;
     /// Where above 0: work groups along x per dispatch at most, below the device's own limit
     /// (GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]), so that tests reach the split dispatches and rows of work groups that
     /// only scenes of millions of records or vertices need otherwise.

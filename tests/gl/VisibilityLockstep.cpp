@@ -15,24 +15,29 @@ namespace {
 class LockstepBackend final : public PruningBackend {
 public:
     LockstepBackend(std::unique_ptr<PruningBackend> tested, std::unique_ptr<PruningBackend> reference,
-                    std::shared_ptr<LockstepLog> log, std::shared_ptr<std::vector<float>> devicePositions)
+                    std::shared_ptr<LockstepLog> log, std::shared_ptr<std::vector<float>> devicePositions,
+                    std::shared_ptr<std::vector<float>> deviceBoxes)
         : m_tested(std::move(tested)), m_reference(std::move(reference)), m_log(std::move(log)),
-          m_devicePositions(std::move(devicePositions)) {}
+          m_devicePositions(std::move(devicePositions)), m_deviceBoxes(std::move(deviceBoxes)) {}
 
     /// Every upload: the positions the device holds against allPositions, bit for bit (the mapped meshes' are
-    /// mapped there by map.comp).
+    /// mapped there by map.comp), and its boxes against the upload's (only what changed is sent).
     void upload(const GpuGeometry& geometry, Stats& stats) override {
         m_tested->upload(geometry, stats);
         m_reference->upload(geometry, m_scratch);
         const std::vector<float> expected = allPositions(geometry);
         ++m_log->uploads;
         m_log->mappedVertices += expected.size() / 3 - geometry.positions.size() / 3;
+        compareFloats(expected, *m_devicePositions, "position");
+        compareFloats(geometry.boxes, *m_deviceBoxes, "box");
+    }
+    void compareFloats(const std::vector<float>& expected, const std::vector<float>& got, const char* what) {
         std::size_t differing = 0;
-        for (std::size_t i = 0; i < expected.size() && i < m_devicePositions->size(); ++i)
-            differing += std::memcmp(&expected[i], &(*m_devicePositions)[i], 4) != 0 ? 1 : 0;
-        if (differing != 0 || expected.size() != m_devicePositions->size())
+        for (std::size_t i = 0; i < expected.size() && i < got.size(); ++i)
+            differing += std::memcmp(&expected[i], &got[i], 4) != 0 ? 1 : 0;
+        if (differing != 0 || expected.size() != got.size())
             note(0, "upload " + std::to_string(m_log->uploads) + ": " + std::to_string(differing) + " of " +
-                        std::to_string(expected.size()) + " position floats differ on the device");
+                        std::to_string(expected.size()) + " " + what + " floats differ on the device");
     }
     void beginFrame() override {
         m_tested->beginFrame();
@@ -229,6 +234,7 @@ private:
     std::unique_ptr<PruningBackend> m_reference;
     std::shared_ptr<LockstepLog> m_log;
     std::shared_ptr<std::vector<float>> m_devicePositions;  ///< GlBackendOptions::positionsAfterUpload
+    std::shared_ptr<std::vector<float>> m_deviceBoxes;      ///< GlBackendOptions::boxesAfterUpload
     Stats m_scratch;  ///< what the checks cost is not the culler's
     LevelStats m_scratchLevel;
     std::vector<IterationTrace> m_got;
@@ -253,8 +259,10 @@ PruningBackendFactory lockstepFactory(std::shared_ptr<LockstepLog> log, GlBacken
     return [log, options](const Settings& settings) -> std::unique_ptr<PruningBackend> {
         GlBackendOptions o = options;
         o.positionsAfterUpload = std::make_shared<std::vector<float>>();
+        o.boxesAfterUpload = std::make_shared<std::vector<float>>();
         return std::make_unique<LockstepBackend>(createGlPruningBackend(settings, o),
-                                                 createReferencePruningBackend(settings), log, o.positionsAfterUpload);
+                                                 createReferencePruningBackend(settings), log, o.positionsAfterUpload,
+                                                 o.boxesAfterUpload);
     };
 }
 

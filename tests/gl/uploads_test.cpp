@@ -43,32 +43,42 @@ TEST(Uploads, TheDeviceHoldsEachFramesGeometryWhenOnlyPartOfItIsSent) {
     EXPECT_LT(restingFrameBytes, firstFrameBytes);
 }
 
-// A frame at rest sends no geometry and nothing per triangle but the triangle level's start bit: the boxes (objects
-// and groups), the group level's items, and per group where its triangles begin and where their range of the
-// mesh's spatial order starts (the device generates the triangle items from them).
+// A frame at rest sends no geometry, no box and nothing per triangle but the triangle level's start bit: the group
+// level's items, and per group where its triangles begin and where their range of the mesh's spatial order starts (the
+// device generates the triangle items from them). The boxes (objects and groups) are the last frame's: at rest after
+// the first frame, and again after a frame in which one mesh moved.
 TEST(Uploads, AFrameAtRestSendsNothingPerTriangleButAStartBit) {
     Settings settings = lockstepSettings({Pipeline::Auto, Mode::Reliable, Backend::Compute, 64});
-    CULLIDE_GPU_CULLER_OR_SKIP(culler, settings);
-    const std::vector<TriangleMesh> meshes = randomSoups(17, 8, 600, 0.3);
+    CULLIDE_GPU_CULLER_OR_SKIP(probe, settings);
+    auto log = std::make_shared<LockstepLog>();
+    std::unique_ptr<Culler> culler = createGpuCuller(settings, lockstepFactory(log));
+    std::vector<TriangleMesh> meshes = randomSoups(17, 8, 600, 0.3);
     const std::vector<Object> objects = asObjects(meshes);
-    Result first, rest;
-    culler->run(objects, first);
-    culler->run(objects, rest);
-    const Stats& s = rest.stats;
-    ASSERT_EQ(s.levels.size(), 2u);
-    ASSERT_EQ(s.levels[1].name, "triangles");
-    const std::size_t groups = s.prepassGroupsOut, clusterObjects = s.prepassObjectsOut;
     std::size_t triangles = 0;
     for (const TriangleMesh& m : meshes) triangles += m.triangles.size();
-    const std::size_t boxes = 24 * (clusterObjects + groups);
-    const std::size_t groupItems = 8 * groups;               // owner and primitive
-    const std::size_t parents = 4 * (2 * groups + 1);        // where each group's triangles begin, its range's start
-    const std::size_t startBits = 4 * ((triangles + 31) / 32);
-    const std::size_t views = 2 * 160;                       // each level's first view
-    const std::size_t expected = boxes + groupItems + parents + startBits + views;
-    ASSERT_LT(expected, 4 * triangles) << "a scene where a word per triangle would show";
-    EXPECT_LE(s.bytesUploaded, expected) << groups << " groups, " << triangles << " triangles";
+    const auto expectAtRest = [&](const Stats& s, const char* frame) {
+        ASSERT_EQ(s.levels.size(), 2u) << frame;
+        ASSERT_EQ(s.levels[1].name, "triangles") << frame;
+        const std::size_t groups = s.prepassGroupsOut;
+        const std::size_t groupItems = 8 * groups;         // owner and primitive
+        const std::size_t parents = 4 * (2 * groups + 1);  // where each group's triangles begin, its range's start
+        const std::size_t startBits = 4 * ((triangles + 31) / 32);
+        const std::size_t views = 2 * 160;                 // each level's first view
+        const std::size_t expected = groupItems + parents + startBits + views;
+        ASSERT_LT(expected, 4 * triangles) << "a scene where a word per triangle would show";
+        EXPECT_LE(s.bytesUploaded, expected) << frame << ": " << groups << " groups, " << triangles << " triangles";
+    };
+    Result first, rest, moved, restAgain;
+    culler->run(objects, first);
+    culler->run(objects, rest);
+    for (Vec3& v : meshes[3].vertices) v += Vec3(0.02, -0.01, 0.015);
+    culler->run(objects, moved);
+    culler->run(objects, restAgain);
+    EXPECT_EQ(log->mismatches, 0u) << log->summary();
     EXPECT_GT(first.stats.bytesUploaded, 12 * triangles) << "the first frame sends the geometry";
+    EXPECT_GT(moved.stats.bytesUploaded, rest.stats.bytesUploaded) << "the moved mesh's positions and boxes";
+    expectAtRest(rest.stats, "at rest");
+    expectAtRest(restAgain.stats, "at rest after a move");
 }
 
 }  // namespace

@@ -1,6 +1,7 @@
 #include "gl/GlBuffers.h"
 
 #include <algorithm>
+#include <cstring>
 
 namespace cullide::gl {
 
@@ -40,6 +41,43 @@ std::size_t uploadAfterPrefix(GLuint buffer, std::size_t& capacity, std::size_t&
                              static_cast<const unsigned char*>(data) + keepBytes);
     valid = bytes;
     return bytes - keepBytes;
+}
+
+std::size_t uploadChanged(GLuint buffer, std::size_t& capacity, std::vector<unsigned char>& held, const void* data,
+                          std::size_t bytes) {
+    constexpr std::size_t kBlock = 64;   // compared as a whole
+    constexpr std::size_t kGap = 1024;   // unchanged bytes between two runs worth a call of their own
+    const auto* in = static_cast<const unsigned char*>(data);
+    if (bytes > capacity || capacity == 0) {
+        reserveBuffer(buffer, capacity, bytes);
+        held.clear();
+    }
+    const auto changed = [&](std::size_t at) {
+        const std::size_t end = std::min(at + kBlock, bytes);
+        return end > held.size() || std::memcmp(in + at, held.data() + at, end - at) != 0;
+    };
+    std::size_t sent = 0;
+    std::size_t runStart = 0, runEnd = 0;  // the run being gathered: [runStart, runEnd), empty when equal
+    const auto send = [&] {
+        if (runEnd == runStart) return;
+        glNamedBufferSubData(buffer, static_cast<GLintptr>(runStart), static_cast<GLsizeiptr>(runEnd - runStart),
+                             in + runStart);
+        sent += runEnd - runStart;
+    };
+    for (std::size_t at = 0; at < bytes; at += kBlock) {
+        if (!changed(at)) continue;
+        const std::size_t end = std::min(at + kBlock, bytes);
+        if (runEnd != runStart && at - runEnd < kGap) {
+            runEnd = end;  // close enough: one call
+            continue;
+        }
+        send();
+        runStart = at;
+        runEnd = end;
+    }
+    send();
+    held.assign(in, in + bytes);
+    return sent;
 }
 
 }  // namespace cullide::gl

@@ -4,6 +4,7 @@
 #include "gl/GlApi.h"
 
 #include <cstddef>
+#include <vector>
 
 namespace cullide::gl {
 
@@ -21,5 +22,11 @@ void uploadBuffer(GLuint buffer, std::size_t& capacity, const void* data, std::s
 /// previous upload); a buffer that has to grow loses its contents and is filled whole. Returns the bytes sent.
 std::size_t uploadAfterPrefix(GLuint buffer, std::size_t& capacity, std::size_t& valid, const void* data,
                               std::size_t bytes, std::size_t keepBytes);
+
+/// Uploads the parts of `data` that differ from `held` (what the buffer holds, as last sent, kept on the CPU): each
+/// run of changed 64-byte blocks (runs less than 1 KiB apart sent as one); everything where the buffer grows or
+/// nothing is held. `held` becomes `data`. Returns the bytes sent.
+std::size_t uploadChanged(GLuint buffer, std::size_t& capacity, std::vector<unsigned char>& held, const void* data,
+                          std::size_t bytes);
 
 }  // namespace cullide::gl

@@ -84,7 +84,7 @@ std::size_t counterWords(std::size_t items) { return CULLIDE_ALIVE_BITS + (items
 
 LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const GlBackendOptions& options)
     : ownContext(std::move(c)), context(*ownContext), settings(s), readBackDelayMs(options.readBackDelayMs),
-      positionsAfterUpload(options.positionsAfterUpload) {
+      positionsAfterUpload(options.positionsAfterUpload), boxesAfterUpload(options.boxesAfterUpload) {
     context.makeCurrent();
     if (settings.backend == Backend::Compute) {
         program = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl", "passes.glsl",

@@ -101,6 +101,7 @@ struct LevelDevice {
     GLuint images[4] = {};
     GLuint buffers[kBufferCount] = {};
     std::size_t capacity[kBufferCount] = {};
+    std::vector<unsigned char> heldBoxes;  ///< the boxes the device holds, as last sent (uploadChanged)
     std::size_t valid[kBufferCount] = {};  ///< bytes of the buffer that hold the last upload (positions, indices)
     bool hasTimers = false;      ///< timer queries (GL_TIME_ELAPSED) are there
     std::vector<GLuint> timers;  ///< one per span of the frame, made as needed
@@ -128,6 +129,7 @@ struct LevelDevice {
     Clock::time_point timedSpan;  ///< when the last span opened
     double readBackDelayMs = 0.0;  ///< GlBackendOptions::readBackDelayMs (tests: a slow device's round trip)
     std::shared_ptr<std::vector<float>> positionsAfterUpload;  ///< GlBackendOptions::positionsAfterUpload (tests)
+    std::shared_ptr<std::vector<float>> boxesAfterUpload;      ///< GlBackendOptions::boxesAfterUpload (tests)
 
     /// Builds the programs of Settings::backend in context `c` (made current, then released).
     LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const GlBackendOptions& options);

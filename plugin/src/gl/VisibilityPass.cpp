@@ -380,8 +380,14 @@ void VisibilityPass::upload(const GpuGeometry& geometry, Stats& stats) {
     stats.bytesUploaded += uploadAfterPrefix(s.buffers[kOrdered], s.capacity[kOrdered], s.valid[kOrdered],
                                              geometry.ordered.data(), geometry.ordered.size() * 4,
                                              geometry.keptOrdered * 4);
-    uploadBuffer(s.buffers[kBoxes], s.capacity[kBoxes], geometry.boxes.data(), geometry.boxes.size() * 4);
-    stats.bytesUploaded += geometry.boxes.size() * 4;
+    // A cluster at rest keeps its boxes; an object moving sends its own (its object box, its groups').
+    stats.bytesUploaded += uploadChanged(s.buffers[kBoxes], s.capacity[kBoxes], s.heldBoxes, geometry.boxes.data(),
+                                         geometry.boxes.size() * 4);
+    if (s.boxesAfterUpload) {  // tests: what the device holds
+        s.boxesAfterUpload->assign(geometry.boxes.size(), 0.0f);
+        glGetNamedBufferSubData(s.buffers[kBoxes], 0, static_cast<GLsizeiptr>(geometry.boxes.size() * 4),
+                                s.boxesAfterUpload->data());
+    }
     s.geometry = &geometry;
     s.ahead.reset();  // a cluster starts: a level run ahead before belongs to an abandoned frame
 }
@@ -399,6 +405,7 @@ void VisibilityPass::forgetUploads() {
     // asked for: the next frame allocates and sends everything again.
     Impl& s = *m_impl;
     for (std::size_t& v : s.valid) v = 0;
+    s.heldBoxes.clear();
     for (std::size_t& c : s.capacity) c = 0;
     s.recordCapacity = 0;
     s.places.clear();
