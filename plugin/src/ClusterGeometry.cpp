@@ -41,9 +41,22 @@ void ClusterGeometry::upload(const FrameState& frame, const Cluster& cluster, Pr
     m_geometry.coordinateBound = 0.0;
     m_objectBox.assign(frame.valid.size(), 0);
     for (std::uint32_t o : cluster.objects) m_objectBox[o] = appendBox(frame.valid[o].box);
-    m_groupBox.resize(cluster.groups.size());
-    for (std::size_t g = 0; g < cluster.groups.size(); ++g) m_groupBox[g] = appendBox(cluster.groups[g].box);
+    appendGroupBoxes(frame, cluster);
     backend.upload(m_geometry, stats);
+}
+
+/// Every group of the cluster's meshes (FrameState::allGroups, in object order), whichever the pre-pass keeps: the
+/// boxes of a mesh at rest stay where the device holds them, so only a moving mesh's are sent again.
+void ClusterGeometry::appendGroupBoxes(const FrameState& frame, const Cluster& cluster) {
+    const std::vector<Group>& all = frame.allGroups;
+    m_allGroupBox.assign(all.size(), 0);
+    for (std::uint32_t o : cluster.objects) {
+        const auto before = [](const Group& a, std::uint32_t object) { return a.object < object; };
+        auto g = std::lower_bound(all.begin(), all.end(), o, before);
+        for (; g != all.end() && g->object == o; ++g) m_allGroupBox[g->index] = appendBox(g->box);
+    }
+    m_groupBox.resize(cluster.groups.size());
+    for (std::size_t g = 0; g < cluster.groups.size(); ++g) m_groupBox[g] = m_allGroupBox[cluster.groups[g].index];
 }
 
 namespace {

@@ -57,6 +57,7 @@ private:
     Changed writeMesh(const FrameState& frame, const MeshSlot& slot);
     void writePositions(const TriangleMesh& world, const MeshSlot& slot, Changed& changed);
     std::uint32_t appendBox(const Aabb& worldBox);
+    void appendGroupBoxes(const FrameState& frame, const Cluster& cluster);
 
     ResidentRegion m_region;
     MappedVertices m_mappedVertices;  ///< the slots of m_geometry.local
@@ -65,7 +66,8 @@ private:
     Vec3 m_origin = Vec3::Zero();
     std::vector<std::uint32_t> m_baseTriangle;
     std::vector<std::uint32_t> m_objectBox;
-    std::vector<std::uint32_t> m_groupBox;
+    std::vector<std::uint32_t> m_groupBox;     ///< per group of the cluster (Cluster::groups)
+    std::vector<std::uint32_t> m_allGroupBox;  ///< per group of FrameState::allGroups (those of the cluster)
     std::vector<MeshSlot> m_written;  ///< the meshes written this upload
     std::vector<Changed> m_changed;   ///< per written mesh
 };

@@ -20,6 +20,7 @@ struct Group {
     std::uint32_t first;  ///< into the object's spatial triangle order (FrameState::order)
     std::uint32_t count;
     Aabb box;  ///< world, inflated by margin / 2
+    std::uint32_t index = 0;  ///< its place in FrameState::allGroups
 };
 
 /// One triangle of one object.
@@ -63,7 +64,10 @@ struct FrameState {
     std::vector<std::uint8_t> whole;
     /// Per object: that tree, once built (null for every other object).
     std::vector<const BoxTree*> tree;
-    /// The groups the levels start from (GPU levels only).
+    /// Every group of k triangles of every active mesh, with its box, in object order (GPU levels only): the device
+    /// holds all of their boxes, so that a mesh at rest keeps its own whichever groups the pre-pass keeps.
+    std::vector<Group> allGroups;
+    /// The groups the levels start from: those of allGroups the box pre-pass keeps (GPU levels only).
     std::vector<Group> groups;
     /// Per object: its triangles that may touch another object's, sorted (what the exact stage tests).
     std::vector<std::vector<std::uint32_t>> surviving;

@@ -49,12 +49,15 @@ void assignBoxStorage(FrameState& frame, TriangleScratch& scratch) {
 /// box overlaps a partner's.
 void buildGroups(FrameState& frame, std::uint32_t k, bool prepass, TaskPool& pool, TriangleScratch& scratch,
                  Stats& stats) {
-    std::vector<Group>& candidates = scratch.groupCandidates;
+    std::vector<Group>& candidates = frame.allGroups;
     candidates.clear();
     for (std::uint32_t o = 0; o < frame.valid.size(); ++o) {
         if (!frame.isActiveMesh(o)) continue;
         const auto n = static_cast<std::uint32_t>(frame.meshOf(o).triangles.size());
-        for (std::uint32_t first = 0; first < n; first += k) candidates.push_back({o, first, std::min(k, n - first), {}});
+        for (std::uint32_t first = 0; first < n; first += k) {
+            const auto index = static_cast<std::uint32_t>(candidates.size());
+            candidates.push_back({o, first, std::min(k, n - first), {}, index});
+        }
     }
     resizeKeeping(scratch.groupKept, candidates.size());
     pool.parallelFor(candidates.size(), 256, [&](std::size_t begin, std::size_t end) {
@@ -78,6 +81,7 @@ void buildGroups(FrameState& frame, std::uint32_t k, bool prepass, TaskPool& poo
 void buildTriangleBoxesAndGroups(FrameState& frame, std::uint32_t groupSize, double margin, bool prepass,
                                  TaskPool& pool, TriangleScratch& scratch, Stats& stats) {
     frame.groups.clear();
+    frame.allGroups.clear();
     assignBoxStorage(frame, scratch);
     splitIntoRanges(frame, [&](std::uint32_t o) { return scratch.needBoxes[o] != 0; }, 8192, scratch.ranges);
     const double inflate = 0.5 * margin;

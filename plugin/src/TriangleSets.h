@@ -21,7 +21,6 @@ struct TriangleScratch {
     };
     std::vector<Range> ranges;
     std::vector<std::vector<std::uint32_t>> rangeKept;
-    std::vector<Group> groupCandidates;
     std::vector<std::uint8_t> groupKept;
     std::vector<std::vector<FrameTriangle>> taskTriangles;
     std::vector<Aabb> partnerUnion;

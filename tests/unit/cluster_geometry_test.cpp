@@ -59,7 +59,8 @@ TEST(ClusterGeometry, StaticMeshesAreSentOnceAndOthersEveryUpload) {
                    ValidatedObject{true, true, {Vec3(-0.5, -0.5, 0.4), Vec3(0.5, 0.5, 1.4)}}};
     Cluster cluster;
     cluster.objects = {0, 1, 2};
-    cluster.groups = {Group{2, 0, 12, frame.valid[2].box}};
+    frame.allGroups = {Group{2, 0, 12, frame.valid[2].box, 0}};
+    cluster.groups = frame.allGroups;
     StaticMeshCache cache;
     ClusterGeometry geometry;
     RecordingBackend backend;
@@ -133,6 +134,52 @@ TEST(ClusterGeometry, OnlyWhatChangedSinceTheLastUploadIsSent) {
     EXPECT_EQ(g.keptPositions, groundFloats) << "-0 was taken for the +0 the device holds";
     g = upload();
     EXPECT_EQ(g.keptPositions, g.positions.size());
+}
+
+/// The boxes hold every group of the cluster's meshes (FrameState::allGroups), not only those the pre-pass keeps: when
+/// the kept set changes, no box moves, so a mesh at rest keeps its boxes on the device (the GL back-end sends the
+/// boxes that changed). Cluster::groups map to their own boxes.
+TEST(ClusterGeometry, GroupBoxesStayInPlaceWhateverThePrepassKeeps) {
+    const TriangleMesh a = makeBox(Vec3::Constant(0.5));
+    TriangleMesh b = makeBox(Vec3::Constant(0.5));
+    transformMesh(b, Eigen::Affine3d(Eigen::Translation3d(0.6, 0, 0)));
+    std::vector<Object> objects(2);
+    objects[0].mesh = &a;
+    objects[1].mesh = &b;
+    FrameState frame;
+    frame.objects = &objects;
+    frame.valid = {ValidatedObject{true, true, {Vec3::Constant(-0.5), Vec3::Constant(0.5)}},
+                   ValidatedObject{true, true, {Vec3(0.1, -0.5, -0.5), Vec3(1.1, 0.5, 0.5)}}};
+    StaticMeshCache cache;
+    frame.statics = lookUpAndCheck(cache, objects);
+    // Three groups of four triangles each, a box apiece that tells them apart.
+    for (std::uint32_t k = 0; k < 6; ++k) {
+        const std::uint32_t object = k < 3 ? 0 : 1;
+        const double x = 0.1 * k;
+        frame.allGroups.push_back({object, 4 * (k % 3), 4, {Vec3(x, 0, 0), Vec3(x + 0.05, 0.1, 0.1)}, k});
+    }
+    ClusterGeometry geometry;
+    RecordingBackend backend;
+    TaskPool pool(1);
+    Stats stats;
+    Cluster cluster;
+    cluster.objects = {0, 1};
+    std::vector<float> firstBoxes;
+    for (const std::vector<std::uint32_t>& kept : {std::vector<std::uint32_t>{0, 1, 2, 3, 4, 5},
+                                                   std::vector<std::uint32_t>{1, 4}, std::vector<std::uint32_t>{5}}) {
+        cluster.groups.clear();
+        for (std::uint32_t k : kept) cluster.groups.push_back(frame.allGroups[k]);
+        geometry.upload(frame, cluster, backend, pool, stats);
+        const GpuGeometry& g = backend.uploads.back();
+        ASSERT_EQ(g.boxes.size(), 6u * (2 + 6)) << "two object boxes and every group's";
+        if (firstBoxes.empty()) firstBoxes = g.boxes;
+        EXPECT_EQ(g.boxes, firstBoxes) << "a box moved when the pre-pass kept other groups";
+        for (std::size_t i = 0; i < kept.size(); ++i) {
+            const std::uint32_t box = geometry.groupBox(i);
+            EXPECT_EQ(box, 2 + kept[i]);
+            EXPECT_NEAR(g.boxes[6 * box], 0.1 * kept[i] - g.origin.x(), 1e-6) << "group " << kept[i];
+        }
+    }
 }
 
 /// A mesh that came with a transform (and is not static) goes in its own frame: its own vertices are sent when they
