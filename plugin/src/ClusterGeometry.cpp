@@ -45,18 +45,25 @@ void ClusterGeometry::upload(const FrameState& frame, const Cluster& cluster, Pr
     backend.upload(m_geometry, stats);
 }
 
-/// Every group of the cluster's meshes (FrameState::allGroups, in object order), whichever the pre-pass keeps: the
-/// boxes of a mesh at rest stay where the device holds them, so only a moving mesh's are sent again.
+/// The groups' boxes: first every group of the cluster's static meshes (FrameState::allGroups, in object order),
+/// whichever the pre-pass keeps, so that their boxes stay where the device holds them while other meshes move and the
+/// pre-pass keeps other groups; then the kept groups of the other meshes (whose boxes change as they move).
 void ClusterGeometry::appendGroupBoxes(const FrameState& frame, const Cluster& cluster) {
     const std::vector<Group>& all = frame.allGroups;
-    m_allGroupBox.assign(all.size(), 0);
+    constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+    m_allGroupBox.assign(all.size(), kNone);
+    const auto before = [](const Group& a, std::uint32_t object) { return a.object < object; };
     for (std::uint32_t o : cluster.objects) {
-        const auto before = [](const Group& a, std::uint32_t object) { return a.object < object; };
+        if (frame.statics.entry.empty() || frame.statics.entry[o] == nullptr) continue;
         auto g = std::lower_bound(all.begin(), all.end(), o, before);
         for (; g != all.end() && g->object == o; ++g) m_allGroupBox[g->index] = appendBox(g->box);
     }
     m_groupBox.resize(cluster.groups.size());
-    for (std::size_t g = 0; g < cluster.groups.size(); ++g) m_groupBox[g] = m_allGroupBox[cluster.groups[g].index];
+    for (std::size_t g = 0; g < cluster.groups.size(); ++g) {
+        const Group& group = cluster.groups[g];
+        const bool placed = group.index < all.size() && m_allGroupBox[group.index] != kNone;
+        m_groupBox[g] = placed ? m_allGroupBox[group.index] : appendBox(group.box);
+    }
 }
 
 namespace {

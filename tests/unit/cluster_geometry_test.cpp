@@ -136,23 +136,21 @@ TEST(ClusterGeometry, OnlyWhatChangedSinceTheLastUploadIsSent) {
     EXPECT_EQ(g.keptPositions, g.positions.size());
 }
 
-/// The boxes hold every group of the cluster's meshes (FrameState::allGroups), not only those the pre-pass keeps: when
-/// the kept set changes, no box moves, so a mesh at rest keeps its boxes on the device (the GL back-end sends the
-/// boxes that changed). Cluster::groups map to their own boxes.
-TEST(ClusterGeometry, GroupBoxesStayInPlaceWhateverThePrepassKeeps) {
+/// The boxes hold every group of the cluster's static meshes (FrameState::allGroups), not only those the pre-pass
+/// keeps, ahead of the kept groups of the other meshes: when the kept set changes, no static mesh's box moves, so it
+/// keeps its boxes on the device (the GL back-end sends the boxes that changed). Cluster::groups map to their own.
+TEST(ClusterGeometry, StaticMeshesGroupBoxesStayInPlaceWhateverThePrepassKeeps) {
     const TriangleMesh a = makeBox(Vec3::Constant(0.5));
     TriangleMesh b = makeBox(Vec3::Constant(0.5));
     transformMesh(b, Eigen::Affine3d(Eigen::Translation3d(0.6, 0, 0)));
-    std::vector<Object> objects(2);
-    objects[0].mesh = &a;
-    objects[1].mesh = &b;
+    std::vector<Object> objects = {staticObject(a, 7), Object{}};
+    objects[1].mesh = &b;  // not static
     FrameState frame;
     frame.objects = &objects;
     frame.valid = {ValidatedObject{true, true, {Vec3::Constant(-0.5), Vec3::Constant(0.5)}},
                    ValidatedObject{true, true, {Vec3(0.1, -0.5, -0.5), Vec3(1.1, 0.5, 0.5)}}};
     StaticMeshCache cache;
-    frame.statics = lookUpAndCheck(cache, objects);
-    // Three groups of four triangles each, a box apiece that tells them apart.
+    // Three groups of four triangles per mesh, a box apiece that tells them apart.
     for (std::uint32_t k = 0; k < 6; ++k) {
         const std::uint32_t object = k < 3 ? 0 : 1;
         const double x = 0.1 * k;
@@ -164,19 +162,24 @@ TEST(ClusterGeometry, GroupBoxesStayInPlaceWhateverThePrepassKeeps) {
     Stats stats;
     Cluster cluster;
     cluster.objects = {0, 1};
-    std::vector<float> firstBoxes;
+    std::vector<float> staticBoxes;
     for (const std::vector<std::uint32_t>& kept : {std::vector<std::uint32_t>{0, 1, 2, 3, 4, 5},
                                                    std::vector<std::uint32_t>{1, 4}, std::vector<std::uint32_t>{5}}) {
+        frame.statics = lookUpAndCheck(cache, objects);
         cluster.groups.clear();
         for (std::uint32_t k : kept) cluster.groups.push_back(frame.allGroups[k]);
         geometry.upload(frame, cluster, backend, pool, stats);
         const GpuGeometry& g = backend.uploads.back();
-        ASSERT_EQ(g.boxes.size(), 6u * (2 + 6)) << "two object boxes and every group's";
-        if (firstBoxes.empty()) firstBoxes = g.boxes;
-        EXPECT_EQ(g.boxes, firstBoxes) << "a box moved when the pre-pass kept other groups";
+        std::size_t movingKept = 0;
+        for (std::uint32_t k : kept) movingKept += k >= 3 ? 1 : 0;
+        ASSERT_EQ(g.boxes.size(), 6u * (2 + 3 + movingKept)) << "two object boxes, the static mesh's every group's";
+        const std::vector<float> front(g.boxes.begin(), g.boxes.begin() + 6 * 5);
+        if (staticBoxes.empty()) staticBoxes = front;
+        EXPECT_EQ(front, staticBoxes) << "a static box moved when the pre-pass kept other groups";
+        std::uint32_t nextMoving = 5;
         for (std::size_t i = 0; i < kept.size(); ++i) {
             const std::uint32_t box = geometry.groupBox(i);
-            EXPECT_EQ(box, 2 + kept[i]);
+            EXPECT_EQ(box, kept[i] < 3 ? 2 + kept[i] : nextMoving++) << "group " << kept[i];
             EXPECT_NEAR(g.boxes[6 * box], 0.1 * kept[i] - g.origin.x(), 1e-6) << "group " << kept[i];
         }
     }
