@@ -18,8 +18,8 @@
 #define CULLIDE_SSBO_ITEM_BOUNDS 9 /* uint[8 * itemCount]: item boxes (build.comp), order-preserving float bits: min xyz
                                       * of every item (3 per item), then max xyz of every item; then each item's records
                                       * (build.comp, cleared before every build); then the compute back-end's flag
-                                      * pass's invocations done over it in the current iteration (the last one resets
-                                      * the count) */
+                                      * pass's invocations done over it in the current iteration (cleared before every
+                                      * iteration) */
 #define CULLIDE_SSBO_PRIMS_OUT 10  /* uvec4[primCount]: the records of the items still alive, packed (survive.comp, or
                                       * the compute back-end's nearest pass) */
 /* The record build (build.comp): */
@@ -55,7 +55,8 @@
 #define CULLIDE_COUNTER_RECORDS 10  /* records kept, packed into CULLIDE_SSBO_PRIMS_OUT: those of the items still
                                      * alive (survive.comp), or (cull.comp's nearest pass) alive at the iteration's
                                      * start, which its second and flag passes run over */
-#define CULLIDE_COUNTER_COUNT 11   /* the counters the C++ side resets before every iteration */
+#define CULLIDE_COUNTER_PRUNED 11   /* items the iteration pruned (with CULLIDE_COUNTER_ALIVE: every item decided) */
+#define CULLIDE_COUNTER_COUNT 12   /* the counters the C++ side resets before every iteration */
 
 /* After the counters, in the same buffer (one read-back returns both): what the record-sized passes of the next
  * iteration (cull.comp, or cull_setup.comp, the draws and survive.comp) run over, dispatched indirectly. Written by
@@ -83,6 +84,8 @@
 #define CULLIDE_CHAIN_RECORDS_RUN 35  /* records the level's iterations ran over, summed */
 #define CULLIDE_CHAIN_RECORDED_VIEW 36 /* the view the records were built for (build.comp's APPEND or SINGLE pass) */
 #define CULLIDE_CHAIN_ALIVE_START 37 /* items alive at the level's start (all, or those whose parent survived) */
+#define CULLIDE_CHAIN_MISCOUNTED 39 /* 1: an iteration decided fewer or more items than were alive at its start (a
+                                     * device fault: the C++ side throws BackendError) */
 #define CULLIDE_CHAIN_PER_BAND 38   /* short bands: the pixels per band the level's last build found (float bits): the
                                      * estimate of the next build in the level's place (CULLIDE_LOC_PER_BAND) */
 #define CULLIDE_CHAIN_ALIVE 48      /* CULLIDE_MAX_ITERATIONS words: items alive after iteration i */

@@ -1,9 +1,10 @@
 // The level's records, built on the device: at the level's start, and again where the view shrank enough to refit
 // the bands (VisibilityPass.cpp). A record is (primitive reference, item, band, bands); on the compute back-end each
 // primitive of an alive item is split into bands of its largest footprint over the three views, so that no
-// invocation of cull.comp scans more than CULLIDE_PIXELS_PER_INVOCATION pixels. The passes of this program
-// (CULLIDE_LOC_PASS), one invocation per primitive of the level's items (alive or not; a primitive finds its item by
-// binary search: an item of a whole mesh has too many primitives for one invocation's loops):
+// invocation of the compute back-end's passes (scan.glsl) scans more than CULLIDE_PIXELS_PER_INVOCATION pixels. The
+// passes of this program (CULLIDE_LOC_PASS), one invocation per primitive of the level's items (alive or not; a
+// primitive finds its item by binary search: an item of a whole mesh has too many primitives for one invocation's
+// loops):
 //   FOOTPRINTS  each primitive's footprint and each work group's sum; the last work group to finish turns the sum
 //               over all of them into the pixels per band (short bands: a hardware GPU's load balance). At the
 //               level's start (CULLIDE_LOC_WITH_BOUNDS) also each primitive's box into its item's, for iteration.glsl.
@@ -167,7 +168,7 @@ float shortBandsPerBand() {
 }
 
 // At most half of CULLIDE_MAX_LOOP_ITERATIONS bands, so that the APPEND pass's loop stays within llvmpipe's limit; a
-// primitive that would need more gets longer bands, and cull.comp counts an invocation over the limit as an overflow.
+// primitive that would need more gets longer bands, and scan.glsl counts an invocation over the limit as an overflow.
 uint bandsOf(float footprint, float perBand) {
     return uint(clamp(ceil(footprint / perBand), 1.0, float(CULLIDE_MAX_LOOP_ITERATIONS / 2)));
 }

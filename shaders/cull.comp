@@ -1,13 +1,14 @@
-// Compute back-end, the nearest and second passes: one invocation per (primitive band, view axis) scans its share of
-// the primitive's conservative footprint (scan.glsl). On llvmpipe this runs on every core (the raster back-end's
-// vertex stage is single-threaded); on a GPU it avoids the fixed-function path. Dispatched indirectly
-// (CULLIDE_DISPATCH_CULL): work groups along x and z, the view along y. An iteration is these two passes and the flag
-// pass (flag.comp), with no survivor pass: the nearest pass runs over the records the last iteration ran over and
-// packs those of the items still alive into the other record buffer (CULLIDE_SSBO_PRIMS_OUT; CULLIDE_COUNTER_RECORDS
-// of them), so that the second and flag passes run over these only and a pruned item's record costs no lane of
-// theirs. Those two are dispatched over as many work groups as the nearest pass: the ones past the packed records do
-// nothing. The flag pass is a program of its own: its end needs work-group barriers, which the nearest and second
-// passes' scans do without (llvmpipe runs a program with barriers as coroutines).
+// Compute back-end, the nearest pass: one invocation per (primitive band, view axis) scans its share of the
+// primitive's conservative footprint (scan.glsl). On llvmpipe this runs on every core (the raster back-end's vertex
+// stage is single-threaded); on a GPU it avoids the fixed-function path. Dispatched indirectly
+// (CULLIDE_DISPATCH_CULL): work groups along x and z, the view along y. An iteration is this pass, the second pass
+// (second.comp) and the flag pass (flag.comp), with no survivor pass: this one runs over the records the last
+// iteration ran over and packs those of the items still alive into the other record buffer
+// (CULLIDE_SSBO_PRIMS_OUT; CULLIDE_COUNTER_RECORDS of them), so that the other two run over these only and a pruned
+// item's record costs no lane of theirs. They are dispatched over as many work groups as this pass: the ones past
+// the packed records do nothing. Each pass is a program of its own: the packing and the flag pass's end need
+// work-group barriers, which the second pass's scan does without (llvmpipe runs a program with barriers as
+// coroutines).
 
 layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
 layout(std430, binding = CULLIDE_SSBO_PRIMS_OUT) writeonly buffer PrimsOut { uvec4 primsOut[]; };
@@ -15,8 +16,8 @@ layout(std430, binding = CULLIDE_SSBO_PRIMS_OUT) writeonly buffer PrimsOut { uve
 shared uint s_kept;
 shared uint s_keptBase;
 
-// The nearest pass's packing (every lane of a work group along the first view): record `index` is kept where `keep`,
-// with one atomic add per work group.
+// The packing (every lane of a work group along the first view): record `index` is kept where `keep`, with one atomic
+// add per work group.
 void keepRecord(uint index, bool keep) {
     uint lane = gl_LocalInvocationID.x;
     if (lane == 0u) s_kept = 0u;
@@ -32,10 +33,7 @@ void main() {
     uint index = (gl_WorkGroupID.z * gl_NumWorkGroups.x + gl_WorkGroupID.x) * gl_WorkGroupSize.x +
                  gl_LocalInvocationID.x;
     int axis = int(gl_GlobalInvocationID.y);
-    bool nearest = u_pass == CULLIDE_PASS_NEAREST;
-    // The nearest pass's records are the last iteration's; the second pass runs over those it packed.
-    uint records = nearest ? counters[CULLIDE_DISPATCH_RECORDS] : counters[CULLIDE_COUNTER_RECORDS];
-    bool live = index < records && primAlive(index);
-    if (nearest && gl_WorkGroupID.y == 0u) keepRecord(index, live);
+    bool live = index < counters[CULLIDE_DISPATCH_RECORDS] && primAlive(index);
+    if (gl_WorkGroupID.y == 0u) keepRecord(index, live);
     if (live && axisEnabled(axis)) scan(index, axis);
 }

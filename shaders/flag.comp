@@ -7,12 +7,11 @@
 layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
 
 // Whether this is the last of the flag pass's invocations over `item` (its records times the enabled views): all of
-// its flags are in. It leaves the item's count at 0 for the next iteration.
+// its flags are in (the counts start at 0 in every iteration: the C++ side clears them).
 bool lastForItem(uint item) {
     memoryBarrierBuffer();
     uint expected = bounds[6u * u_itemCount + item] * uint(bitCount(u_axes & 7u));
     if (atomicAdd(bounds[7u * u_itemCount + item], 1u) + 1u != expected) return false;
-    bounds[7u * u_itemCount + item] = 0u;
     memoryBarrierBuffer();
     return true;
 }

@@ -1,4 +1,4 @@
-// The end of an iteration, shared by the compute back-end's flag pass (cull.comp) and the raster back-end's survivor
+// The end of an iteration, shared by the compute back-end's flag pass (flag.comp) and the raster back-end's survivor
 // pass (survive.comp), which decide the fate of each item alive at the iteration's start:
 //   - an item that is not hidden in every enabled view leaves the set (nothing leaves when an invocation overflowed
 //     or the records did not fit their buffers): its alive bit is cleared;
@@ -110,6 +110,7 @@ void decideItem(uint item) {
     if (!staysAlive(item)) {
         alive[item] = 0u;
         atomicAnd(counters[CULLIDE_ALIVE_BITS + item / 32u], ~(1u << (item % 32u)));
+        atomicAdd(s_counters[CULLIDE_COUNTER_PRUNED], 1u);
         return;
     }
     atomicAdd(s_counters[CULLIDE_COUNTER_ALIVE], 1u);
@@ -125,6 +126,8 @@ void decideItem(uint item) {
 
 // The work group's counters into the iteration's (one lane, after a barrier).
 void addGroupCounters() {
+    if (s_counters[CULLIDE_COUNTER_PRUNED] != 0u)
+        atomicAdd(counters[CULLIDE_COUNTER_PRUNED], s_counters[CULLIDE_COUNTER_PRUNED]);
     if (s_counters[CULLIDE_COUNTER_ALIVE] == 0u) return;
     atomicAdd(counters[CULLIDE_COUNTER_ALIVE], s_counters[CULLIDE_COUNTER_ALIVE]);
     atomicMin(counters[CULLIDE_COUNTER_OWNER_MIN], s_counters[CULLIDE_COUNTER_OWNER_MIN]);
@@ -162,8 +165,14 @@ void finishIteration(uint ranOver, uint nextRecords, uint surviveOver) {
     uint ownerMin = counters[CULLIDE_COUNTER_OWNER_MIN];
     uint ownerMax = counters[CULLIDE_COUNTER_OWNER_MAX];
     uint before = it == 0u ? counters[CULLIDE_CHAIN_ALIVE_START] : counters[CULLIDE_CHAIN_ALIVE + it - 1u];
+    bool shortBuild = counters[CULLIDE_DISPATCH_SHORT] != 0u;
+    // Every item alive at the start is decided exactly once, except in a short iteration (no record ran: nothing
+    // leaves, and the C++ side runs it again).
+    if (shortBuild) left = before;
+    bool miscounted = !shortBuild && left + counters[CULLIDE_COUNTER_PRUNED] != before;
+    if (miscounted) counters[CULLIDE_CHAIN_MISCOUNTED] = 1u;
     uint stop = CULLIDE_STOP_NONE;
-    if (overflows != 0u || counters[CULLIDE_DISPATCH_SHORT] != 0u || left == before || left == 0u)
+    if (overflows != 0u || shortBuild || miscounted || left == before || left == 0u)
         stop = CULLIDE_STOP_DONE;
     else if (ownerMin == ownerMax)
         stop = CULLIDE_STOP_ONE_OWNER;

@@ -49,7 +49,7 @@ void main() {
     uint v = k - meshes[mesh].firstMapped;
     uint l = 3u * (meshes[mesh].localBase + v);
     dvec3 p = dvec3(local[l], local[l + 1u], local[l + 2u]);
-    // The three rows written out (NVIDIA's compiler and loops over indexed doubles: see survive.comp).
+    // The three rows written out (NVIDIA's compiler and loops over indexed doubles: see iteration.glsl).
     precise dvec3 w = dvec3(row(mesh, 0, p), row(mesh, 1, p), row(mesh, 2, p));
     bool finite = !any(isnan(w)) && !any(isinf(w));
     precise dvec3 r = finite ? w - u_origin : dvec3(0.0);

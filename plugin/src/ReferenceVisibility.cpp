@@ -147,13 +147,13 @@ bool coverage(const Prim& p, Vec2f c, Vec2f h, bool conservative, const View& vi
     return true;
 }
 
-/// A float pixel bound as cull.comp's int conversion sees it, clamped first so that the conversion is defined (the
-/// clamp changes nothing after cull.comp's own clamp to [0, resolution - 1]).
+/// A float pixel bound as scan.glsl's int conversion sees it, clamped first so that the conversion is defined (the
+/// clamp changes nothing after scan.glsl's own clamp to [0, resolution - 1]).
 int pixelIndex(float v, int resolution) {
     return static_cast<int>(std::clamp(v, -1.0f, static_cast<float>(resolution)));
 }
 
-/// cull.comp's scan: calls visit(pixelX, pixelY, zlo, zhi) for every pixel centre whose square meets the primitive.
+/// scan.glsl's scan: calls visit(pixelX, pixelY, zlo, zhi) for every pixel centre whose square meets the primitive.
 template <typename Visit>
 void forEachFragment(const Prim& p, Vec2f h, bool conservative, const View& view, int resolution, Visit&& visit) {
     const int firstX = std::max(pixelIndex(std::floor(p.rect[0] - h.x - 0.5f), resolution), 0);

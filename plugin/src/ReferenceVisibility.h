@@ -1,5 +1,5 @@
 // The CPU reference of CULLIDE's visibility test: the PruningBackend that computes, pixel by pixel, what the
-// shaders compute (shaders/common.glsl, visit.glsl, cull.comp, survive.comp) in the same float operations in the
+// shaders compute (shaders/common.glsl, visit.glsl, scan.glsl, iteration.glsl) in the same float operations in the
 // same order: the same primitive set-up, the same pixel grid and coverage test (pixel centres in sampled mode; the
 // conservative square and depth range in reliable mode), the same quantized per-pixel "nearest and farthest other
 // owner" bookkeeping and the same survival rule. GL tests assert that the GL backend keeps exactly the items this

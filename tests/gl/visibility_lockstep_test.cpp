@@ -51,7 +51,7 @@ INSTANTIATE_TEST_SUITE_P(
                       LockstepCase{Pipeline::Paper, Mode::Reliable, Backend::Raster, 64},
                       LockstepCase{Pipeline::Paper, Mode::Sampled, Backend::Raster, 16},
                       LockstepCase{Pipeline::Paper, Mode::Sampled, Backend::Raster, 64},
-                      // Fewer views: an item is done after fewer invocations (cull.comp's count per item).
+                      // Fewer views: an item is done after fewer invocations (flag.comp's count per item).
                       LockstepCase{Pipeline::Auto, Mode::Reliable, Backend::Compute, 64, 5},
                       LockstepCase{Pipeline::Paper, Mode::Sampled, Backend::Compute, 16, 2},
                       LockstepCase{Pipeline::Auto, Mode::Reliable, Backend::Raster, 64, 5}),

@@ -90,6 +90,9 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
         program = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl", "passes.glsl",
                                                                  "scan.glsl", "cull.comp"})},
                               "the visibility program");
+        secondProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl",
+                                                                       "passes.glsl", "scan.glsl", "second.comp"})},
+                                    "the second pass program");
         flagProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl",
                                                                      "passes.glsl", "iteration.glsl", "scan.glsl",
                                                                      "flag.comp"})},
@@ -152,6 +155,7 @@ LevelDevice::~LevelDevice() {
     glDeleteProgram(program);
     if (setupProgram) glDeleteProgram(setupProgram);
     if (surviveProgram) glDeleteProgram(surviveProgram);
+    if (secondProgram) glDeleteProgram(secondProgram);
     if (flagProgram) glDeleteProgram(flagProgram);
     glDeleteProgram(buildProgram);
     glDeleteProgram(mapProgram);
@@ -233,7 +237,7 @@ void LevelDevice::draw(int pass, LevelStats& level, Stats& stats) const {
 }
 
 void LevelDevice::setLevelUniforms(double coordinateBound) const {
-    for (GLuint p : {program, setupProgram, flagProgram}) {
+    for (GLuint p : {program, setupProgram, secondProgram, flagProgram}) {
         if (p == 0) continue;  // no setup program on the compute back-end
         glProgramUniform1i(p, CULLIDE_LOC_RESOLUTION, settings.resolution);
         glProgramUniform1i(p, CULLIDE_LOC_CONSERVATIVE, settings.mode == Mode::Reliable ? 1 : 0);
@@ -273,7 +277,7 @@ void LevelDevice::uploadItems(const LevelItems& items, const LevelStart& start, 
     const bool inherits = !items.parentBegin.empty();
     const auto send = Clock::now();
     onePrimEach = items.onePrimitiveEach();
-    // cull.comp's flag pass decides an item once its last record is done: an item without one would never be.
+    // flag.comp decides an item once its last record is done: an item without one would never be.
     const auto& begin = items.primBegin;
     if (settings.backend == Backend::Compute && !onePrimEach &&
         std::adjacent_find(begin.begin(), begin.end(), std::equal_to<std::uint32_t>()) != begin.end())
@@ -368,9 +372,9 @@ void LevelDevice::buildRecords(int iteration, bool withBounds, LevelStats& level
                               GL_UNSIGNED_INT, &zero);
     glClearNamedBufferSubData(buffers[kBuild], GL_R32UI, 4 * CULLIDE_BUILD_FOOTPRINTS_DONE, 4, GL_RED_INTEGER,
                               GL_UNSIGNED_INT, &zero);
-    // Each item's records, and the flag pass's count over them (which a short build may have left half done).
+    // Each item's records, counted by the build.
     glClearNamedBufferSubData(buffers[kItemBounds], GL_R32UI, static_cast<GLintptr>(levelItems->size() * 24),
-                              static_cast<GLsizeiptr>(levelItems->size() * 8), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+                              static_cast<GLsizeiptr>(levelItems->size() * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
     bindBuffers();
     glUseProgram(buildProgram);
     glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
@@ -452,6 +456,9 @@ void LevelDevice::prepareIteration(std::size_t itemCount) {
     glClearTexImage(images[CULLIDE_IMAGE_FAR2], 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
     glClearNamedBufferSubData(buffers[kFlags], GL_R32UI, 0, static_cast<GLsizeiptr>(itemCount * 4),
                               GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
+    // flag.comp's count of the invocations done per item
+    glClearNamedBufferSubData(buffers[kItemBounds], GL_R32UI, static_cast<GLintptr>(itemCount * 28),
+                              static_cast<GLsizeiptr>(itemCount * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
     GLuint counters[CULLIDE_COUNTER_COUNT] = {};
     counters[CULLIDE_COUNTER_OWNER_MIN] = 0xFFFFFFFFu;
     for (int a = 0; a < 3; ++a) counters[CULLIDE_COUNTER_LO + a] = 0xFFFFFFFFu;
@@ -489,6 +496,8 @@ void LevelDevice::issueIteration(int iteration, LevelStats& level, Stats& stats)
         // The nearest pass packed the records of the items alive: the second and flag passes run over those, and
         // the flag pass ends the iteration.
         swapRecords();
+        glUseProgram(secondProgram);
+        glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
         draw(CULLIDE_PASS_SECOND, level, stats);
         glUseProgram(flagProgram);
         glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));

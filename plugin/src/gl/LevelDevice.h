@@ -1,6 +1,7 @@
 // The device side of CULLIDE's visibility levels (OpenGL 4.5 through headless EGL): the programs, buffers and images,
 // and the steps a level is made of — its items and first view sent, its records built (build.comp), an iteration
-// issued (three passes and survive.comp, dispatched indirectly: nothing waits), the chain read back. gl::VisibilityPass
+// issued (three passes, and on the raster back-end a set-up and a survivor pass, dispatched indirectly: nothing
+// waits), the chain read back. gl::VisibilityPass
 // decides which steps run and when it waits. GL code: only under plugin/src/gl.
 #pragma once
 
@@ -67,6 +68,8 @@ struct Chain {
     int ran() const { return static_cast<int>((*this)[CULLIDE_CHAIN_RAN]); }
     std::uint32_t stop() const { return (*this)[CULLIDE_CHAIN_STOP]; }
     bool shortBuild() const { return (*this)[CULLIDE_DISPATCH_SHORT] != 0; }
+    /// An iteration decided fewer or more items than were alive at its start (a device fault).
+    bool miscounted() const { return (*this)[CULLIDE_CHAIN_MISCOUNTED] != 0; }
     /// The level ended (its set stopped changing, one owner is left, or it ran every iteration allowed: the device
     /// stops with CULLIDE_STOP_DONE there) rather than stopping for records to build again or running past the
     /// iterations issued.
@@ -92,7 +95,8 @@ struct LevelDevice {
     GLuint program = 0;
     GLuint setupProgram = 0;  // raster back-end only
     GLuint surviveProgram = 0;
-    GLuint flagProgram = 0;  ///< compute back-end: the flag pass, which ends the iteration (flag.comp)
+    GLuint secondProgram = 0;  ///< compute back-end: the second pass (second.comp)
+    GLuint flagProgram = 0;    ///< compute back-end: the flag pass, which ends the iteration (flag.comp)
     GLuint buildProgram = 0;
     GLuint mapProgram = 0;
     int bands = CULLIDE_BANDS_NONE;  ///< build.comp's CULLIDE_BANDS_* for this back-end and device
@@ -144,11 +148,11 @@ struct LevelDevice {
     /// One pass over the iteration's records (their count and the arguments are on the device).
     void draw(int pass, LevelStats& level, Stats& stats) const;
 
-    /// The uniforms that stay the same over a level's iterations, in the visibility and survivor programs (each
+    /// The uniforms that stay the same over a level's iterations, in the programs of an iteration (each
     /// iteration sets only its index: its view is views[iteration] on the device).
     void setLevelUniforms(double coordinateBound) const;
 
-    /// Sends what the record build and the survivor pass need of the level's items (their primitives and owners, and
+    /// Sends what the record build and the iterations need of the level's items (their primitives and owners, and
     /// parentBegin where they inherit) and the first view; clears their boxes (built by buildRecords) and the chain,
     /// and sets the alive set: every item alive, or (inheriting) none until the first build marks those whose parent
     /// survived (the last level's alive set is copied aside first).
@@ -202,9 +206,10 @@ struct LevelDevice {
     /// Issues iteration `iteration` of the level (nothing waits for it): the three passes over the alive items'
     /// records, whose last work group ends the iteration on the device (iteration.glsl: the stop rule, the next view
     /// and the next iteration's indirect arguments). On the compute back-end the nearest pass packs the records of
-    /// the items alive (cull.comp) and the flag pass ends the iteration (flag.comp); on the raster back-end a set-up
-    /// dispatch comes first and a survivor pass last, which packs and ends it (survive.comp). Where the chain stopped
-    /// before it, every pass is dispatched with empty arguments: nothing runs.
+    /// the items alive (cull.comp), the second pass runs over those (second.comp) and the flag pass ends the iteration
+    /// (flag.comp); on the raster back-end a set-up dispatch comes first and a survivor pass last, which packs and ends
+    /// it (survive.comp). Where the chain stopped before it, every pass is dispatched with empty arguments: nothing
+    /// runs.
     void issueIteration(int iteration, LevelStats& level, Stats& stats);
     /// The packed records become the ones the passes read (kPrims and kPrimsNext swap, bound again).
     void swapRecords();

@@ -1,5 +1,5 @@
 // The C++ mirror of view.glsl's ViewRecord: a level's iteration views on the device (CULLIDE_SSBO_VIEWS). The C++
-// side writes the first one; survive.comp's last work group fits each next one and adds what each iteration left,
+// side writes the first one; the work group that ends an iteration (iteration.glsl) fits each next one and adds what each iteration left,
 // which a level's trace reads back (tests).
 #pragma once
 
@@ -25,7 +25,7 @@ struct ViewRecord {
     std::uint32_t overflows;
     std::uint32_t records;
     std::uint32_t stop;
-    std::uint32_t boundsLo[3];  ///< order-preserving float bits (survive.comp)
+    std::uint32_t boundsLo[3];  ///< order-preserving float bits (iteration.glsl)
     std::uint32_t boundsHi[3];
 };
 static_assert(sizeof(ViewRecord) == 160, "view.glsl's ViewRecord is 160 bytes in std430");

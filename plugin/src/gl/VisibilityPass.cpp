@@ -336,8 +336,9 @@ struct VisibilityPass::Impl : LevelDevice {
     }
 
     /// The level's iterations into its stats, from the chain's items alive at its start (all, or those whose parent
-    /// survived) and after each iteration.
+    /// survived) and after each iteration. Throws BackendError where an iteration miscounted its items.
     static void noteIterations(const Chain& chain, LevelStats& level) {
+        if (chain.miscounted()) throw BackendError("an iteration on the device did not decide every alive item once");
         std::size_t before = chain[CULLIDE_CHAIN_ALIVE_START];
         if (!level.itemsPerIteration.empty()) level.itemsPerIteration.front() = before;
         const int ran = chain.ran();

@@ -1,7 +1,7 @@
 // The image-space visibility test of CULLIDE on the GPU (OpenGL 4.5 through headless EGL): the PruningBackend that
 // production runs. A level runs on the device as a chain: its records are built there (build.comp), the passes over
 // them are dispatched indirectly, and each iteration's last work group decides whether the next one runs, fits its
-// view and writes its arguments (survive.comp). The C++ side issues the level's iterations without waiting and reads
+// view and writes its arguments (iteration.glsl). The C++ side issues the level's iterations without waiting and reads
 // back once at the end: the counters, the chain and the alive set as bits. A frame's deferred levels (one per cluster)
 // are read back together: one wait per frame.
 #pragma once
