@@ -60,6 +60,7 @@ shared float s_sum[CULLIDE_COMPUTE_GROUP_SIZE];
 shared uint s_base;   // APPEND: where the work group's records start
 shared uint s_total;  // APPEND: the work group's records
 shared bool s_last;
+shared uint s_runItem[CULLIDE_COMPUTE_GROUP_SIZE];  // APPEND, SINGLE: per lane, the item its records go to (or none)
 
 // Inclusive prefix sum over the work group's lanes (every lane must call it).
 uint inclusiveScan(uint value) {
@@ -246,6 +247,17 @@ void inherit(uint item, bool live) {
     atomicAdd(counters[CULLIDE_CHAIN_ALIVE_START], 1u);
 }
 
+// The records of the work group's run of lanes whose primitives belong to `item` (an item's primitives lie together),
+// counted for the item with one atomic add by the run's first lane (`before`: the records of the lanes before it). A
+// whole-mesh item has thousands of primitives: one add per lane would all hit one word.
+void addItemRecords(uint item, uint before) {
+    uint lane = gl_LocalInvocationID.x;
+    if (lane > 0u && s_runItem[lane - 1u] == item) return;
+    uint last = lane;
+    while (last + 1u < kLanes && s_runItem[last + 1u] == item) ++last;
+    atomicAdd(bounds[6u * u_itemCount + item], s_scan[last] - before);
+}
+
 void main() {
     uint lane = gl_LocalInvocationID.x;
     uint group = u_primBase / kLanes + gl_WorkGroupID.x;
@@ -294,6 +306,7 @@ void main() {
             atomicAdd(counters[CULLIDE_DISPATCH_NEEDED_HI], (inclusive + 255u) / 256u);
             s_total = inclusive;
         }
+        s_runItem[lane] = n != 0u ? item : 0xFFFFFFFFu;
         barrier();
         uint base = s_base;
         uint groupTotal = s_total;
@@ -301,7 +314,7 @@ void main() {
         uint record = base + inclusive - n;
         if (fits && n != 0u) {
             for (uint band = 0u; band < n; ++band) prims[record + band] = uvec4(prim, item, band, n);
-            atomicAdd(bounds[6u * u_itemCount + item], n);
+            addItemRecords(item, inclusive - n);
         }
         if (!lastToFinish(CULLIDE_DISPATCH_BUILD_DONE, false)) return;
         if (single && shortBands) shortBandsPerBand();  // for the next build's estimate
