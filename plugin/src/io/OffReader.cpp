@@ -138,10 +138,12 @@ Vec3 readOffVertex(TokenReader& r, bool& faceLike) {
         p[k] = r.number("vertex coordinate");
     }
     const std::size_t extra = r.trailingNumbers("vertex coordinates", allIntegers);
-    // A polygon "n i1 ... in" has n + 1 integers, n + 4 or n + 5 with an RGB(A) colour. Compared as tokens - n: both
-    // are positive, so the difference cannot overflow where n + 4 could (n up to 2^63 - 1).
-    const std::int64_t beyondCount = static_cast<std::int64_t>(3 + extra) - first;
-    faceLike = allIntegers && first >= 3 && (beyondCount == 1 || beyondCount == 4 || beyondCount == 5);
+    // A polygon "n i1 ... in" has n + 1 integers, n + 4 or n + 5 with an RGB(A) colour. Compared as tokens - n, and
+    // only for n >= 3: both are then positive, so the difference cannot overflow where n + 4 could (n up to
+    // 2^63 - 1), nor tokens - n for a negative n (down to -2^63 + 1).
+    const bool countLike = allIntegers && first >= 3;
+    const std::int64_t beyondCount = countLike ? static_cast<std::int64_t>(3 + extra) - first : 0;
+    faceLike = countLike && (beyondCount == 1 || beyondCount == 4 || beyondCount == 5);
     return p;
 }
 

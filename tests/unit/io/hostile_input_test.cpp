@@ -185,11 +185,14 @@ TEST(HostileInput, WrongOffCountsAreNamedAsSuch) {
 
 /// A vertex whose first coordinate is the largest 64-bit integer: the face-likeness test (is the line "n i1 ... in"?)
 /// compared n + 4 with the token count, an overflow (found by the readers' fuzzer; UBSan aborts on it).
+/// The most negative ones too: tokens - n overflowed for n = -2^63 + 1 (found by the fuzzer again).
 TEST(HostileInput, AVertexOfHugeIntegersIsAVertex) {
-    const TriangleMesh m = off("OFF\n3 1 0\n9223372036854775807 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
-    ASSERT_EQ(m.vertices.size(), 3u);
-    EXPECT_EQ(m.vertices[0][0], 9223372036854775807.0);
-    EXPECT_EQ(m.triangles.size(), 1u);
+    for (const char* first : {"9223372036854775807", "-9223372036854775807"}) {
+        const TriangleMesh m = off(std::string("OFF\n3 1 0\n") + first + " 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+        ASSERT_EQ(m.vertices.size(), 3u) << first;
+        EXPECT_EQ(m.vertices[0][0], std::stod(first)) << first;
+        EXPECT_EQ(m.triangles.size(), 1u) << first;
+    }
 }
 
 TEST(HostileInput, SceneFromAStream) {
