@@ -11,29 +11,12 @@
 // coroutines).
 
 layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
-layout(std430, binding = CULLIDE_SSBO_PRIMS_OUT) writeonly buffer PrimsOut { uvec4 primsOut[]; };
-
-shared uint s_kept;
-shared uint s_keptBase;
-
-// The packing (every lane of a work group along the first view): record `index` is kept where `keep`, with one atomic
-// add per work group.
-void keepRecord(uint index, bool keep) {
-    uint lane = gl_LocalInvocationID.x;
-    if (lane == 0u) s_kept = 0u;
-    barrier();
-    uint slot = keep ? atomicAdd(s_kept, 1u) : 0u;
-    barrier();
-    if (lane == 0u && s_kept != 0u) s_keptBase = atomicAdd(counters[CULLIDE_COUNTER_RECORDS], s_kept);
-    barrier();
-    if (keep) primsOut[s_keptBase + slot] = prims[index];
-}
 
 void main() {
     uint index = (gl_WorkGroupID.z * gl_NumWorkGroups.x + gl_WorkGroupID.x) * gl_WorkGroupSize.x +
                  gl_LocalInvocationID.x;
     int axis = int(gl_GlobalInvocationID.y);
     bool live = index < counters[CULLIDE_DISPATCH_RECORDS] && primAlive(index);
-    if (gl_WorkGroupID.y == 0u) keepRecord(index, live);
+    if (gl_WorkGroupID.y == 0u) keepRecord(index, live);  // pack.glsl: the work groups along the first view
     if (live && axisEnabled(axis)) scan(index, axis);
 }

@@ -88,7 +88,7 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
     context.makeCurrent();
     if (settings.backend == Backend::Compute) {
         program = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl", "passes.glsl",
-                                                                 "scan.glsl", "cull.comp"})},
+                                                                 "pack.glsl", "scan.glsl", "cull.comp"})},
                               "the visibility program");
         secondProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl",
                                                                        "passes.glsl", "scan.glsl", "second.comp"})},
@@ -112,7 +112,7 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
         }
         program = linkProgram({vs, fs}, "the visibility raster program");
         surviveProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl",
-                                                                        "passes.glsl", "iteration.glsl",
+                                                                        "passes.glsl", "iteration.glsl", "pack.glsl",
                                                                         "survive.comp"})},
                                      "the survivor program");
     }
@@ -182,7 +182,7 @@ void LevelDevice::uploadPositions(const GpuGeometry& g, Stats& stats) {
     // holds of them must always be the last upload's, or a store that started over could keep stale slots there.
     stats.bytesUploaded += uploadAfterPrefix(buffers[kLocal], capacity[kLocal], valid[kLocal], g.local.data(),
                                              g.local.size() * 8, g.keptLocal * 8);
-    if (g.mapped.empty()) return readPositionsForTests(g);
+    if (g.mapped.empty()) return readForTests(kPositions, 3 * g.vertexCount(), positionsAfterUpload.get());
     std::vector<MappedRecord> records(g.mapped.size());
     std::size_t vertices = 0;  // mapped, summed
     for (std::size_t i = 0; i < records.size(); ++i) {
@@ -208,15 +208,14 @@ void LevelDevice::uploadPositions(const GpuGeometry& g, Stats& stats) {
     }
     // Read by the passes after it, and overwritten by the next upload's glNamedBufferSubData only after it.
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-    readPositionsForTests(g);
+    readForTests(kPositions, 3 * g.vertexCount(), positionsAfterUpload.get());
 }
 
-void LevelDevice::readPositionsForTests(const GpuGeometry& g) const {
-    if (!positionsAfterUpload) return;
-    positionsAfterUpload->assign(3 * g.vertexCount(), 0.0f);
-    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-    glGetNamedBufferSubData(buffers[kPositions], 0, static_cast<GLsizeiptr>(positionsAfterUpload->size() * 4),
-                            positionsAfterUpload->data());
+void LevelDevice::readForTests(Buffer buffer, std::size_t floats, std::vector<float>* to) const {
+    if (to == nullptr) return;
+    to->assign(floats, 0.0f);
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);  // what a shader wrote (map.comp's positions)
+    glGetNamedBufferSubData(buffers[buffer], 0, static_cast<GLsizeiptr>(floats * 4), to->data());
 }
 
 void LevelDevice::draw(int pass, LevelStats& level, Stats& stats) const {
@@ -229,9 +228,11 @@ void LevelDevice::draw(int pass, LevelStats& level, Stats& stats) const {
         const std::uintptr_t offset = 4 * CULLIDE_DISPATCH_DRAW;
         glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(offset));
     }
-    // The compute back-end's flag pass ends the iteration: it writes the next one's indirect arguments.
-    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT |
-                    GL_BUFFER_UPDATE_BARRIER_BIT);
+    // The compute back-end's flag pass ends the iteration: it writes the next one's indirect arguments and what the
+    // level's copies and read-back take.
+    const bool endsIteration = settings.backend == Backend::Compute && pass == CULLIDE_PASS_FLAG;
+    glMemoryBarrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT |
+                    (endsIteration ? GL_COMMAND_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT : 0));
     level.draws += 1;
     stats.draws += 1;
 }
@@ -376,8 +377,7 @@ void LevelDevice::buildRecords(int iteration, bool withBounds, LevelStats& level
     glClearNamedBufferSubData(buffers[kItemBounds], GL_R32UI, static_cast<GLintptr>(levelItems->size() * 24),
                               static_cast<GLsizeiptr>(levelItems->size() * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
     bindBuffers();
-    glUseProgram(buildProgram);
-    glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
+    useForIteration(buildProgram, iteration);
     glUniform1ui(CULLIDE_LOC_ITEM_COUNT, static_cast<GLuint>(levelItems->size()));
     glUniform1ui(CULLIDE_LOC_PRIM_COUNT, static_cast<GLuint>(primCount));
     glUniform1i(CULLIDE_LOC_BANDS, bands);
@@ -481,38 +481,38 @@ void LevelDevice::issueIteration(int iteration, LevelStats& level, Stats& stats)
     prepareIteration(itemCount);
     if (settings.backend == Backend::Raster) {
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_RECORDS, buffers[kRecords]);
-        glUseProgram(setupProgram);
-        glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
+        useForIteration(setupProgram, iteration);
         glDispatchComputeIndirect(4 * CULLIDE_DISPATCH_CULL);
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         level.draws += 1;
         stats.draws += 1;
     }
-    glUseProgram(program);
-    glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
+    useForIteration(program, iteration);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_PRIMS_OUT, buffers[kPrimsNext]);
     draw(CULLIDE_PASS_NEAREST, level, stats);
     if (settings.backend == Backend::Compute) {
         // The nearest pass packed the records of the items alive: the second and flag passes run over those, and
         // the flag pass ends the iteration.
         swapRecords();
-        glUseProgram(secondProgram);
-        glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
+        useForIteration(secondProgram, iteration);
         draw(CULLIDE_PASS_SECOND, level, stats);
-        glUseProgram(flagProgram);
-        glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
+        useForIteration(flagProgram, iteration);
         draw(CULLIDE_PASS_FLAG, level, stats);
         return;
     }
     draw(CULLIDE_PASS_SECOND, level, stats);
     draw(CULLIDE_PASS_FLAG, level, stats);
-    glUseProgram(surviveProgram);
-    glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
+    useForIteration(surviveProgram, iteration);
     glDispatchComputeIndirect(4 * CULLIDE_DISPATCH_SURVIVE);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     level.draws += 1;
     stats.draws += 1;
     swapRecords();  // the records the survivor pass packed are the next iteration's
+}
+
+void LevelDevice::useForIteration(GLuint p, int iteration) const {
+    glUseProgram(p);
+    glUniform1ui(CULLIDE_LOC_ITERATION, static_cast<GLuint>(iteration));
 }
 
 void LevelDevice::swapRecords() {

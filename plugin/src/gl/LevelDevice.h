@@ -161,8 +161,9 @@ struct LevelDevice {
     /// Sends the upload's positions (those before the mapped meshes') and what changed of the mapped meshes' own
     /// vertices, then maps those to the positions after them (map.comp: one dispatch, their transforms sent).
     void uploadPositions(const GpuGeometry& geometry, Stats& stats);
-    /// GlBackendOptions::positionsAfterUpload: the device's positions read back into it (tests only).
-    void readPositionsForTests(const GpuGeometry& geometry) const;
+    /// GlBackendOptions::positionsAfterUpload and boxesAfterUpload: the first `floats` of `buffer` read back into `to`
+    /// (tests only; nothing where `to` is null).
+    void readForTests(Buffer buffer, std::size_t floats, std::vector<float>* to) const;
 
     /// An inheriting level's view of the last level: its alive set and owners copied aside on the device, and
     /// parentBegin, parentFirst and startBits sent as one buffer (kParent).
@@ -213,6 +214,8 @@ struct LevelDevice {
     void issueIteration(int iteration, LevelStats& level, Stats& stats);
     /// The packed records become the ones the passes read (kPrims and kPrimsNext swap, bound again).
     void swapRecords();
+    /// Makes program `p` current for iteration `iteration`'s pass (its view is views[iteration]).
+    void useForIteration(GLuint p, int iteration) const;
 
     /// Reads `bytes` at `offset` of `buffer` back into `to`: blocks until the device has finished the work submitted
     /// before, which the level's waitMs counts (with the tests' readBackDelayMs inside it). With `until`, the wait

@@ -384,11 +384,7 @@ void VisibilityPass::upload(const GpuGeometry& geometry, Stats& stats) {
     // A cluster at rest keeps its boxes; an object moving sends its own (its object box, its groups').
     stats.bytesUploaded += uploadChanged(s.buffers[kBoxes], s.capacity[kBoxes], s.heldBoxes, geometry.boxes.data(),
                                          geometry.boxes.size() * 4);
-    if (s.boxesAfterUpload) {  // tests: what the device holds
-        s.boxesAfterUpload->assign(geometry.boxes.size(), 0.0f);
-        glGetNamedBufferSubData(s.buffers[kBoxes], 0, static_cast<GLsizeiptr>(geometry.boxes.size() * 4),
-                                s.boxesAfterUpload->data());
-    }
+    s.readForTests(kBoxes, geometry.boxes.size(), s.boxesAfterUpload.get());
     s.geometry = &geometry;
     s.ahead.reset();  // a cluster starts: a level run ahead before belongs to an abandoned frame
 }
