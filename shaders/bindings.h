@@ -44,6 +44,9 @@
 #define CULLIDE_SSBO_MAPPED 20     /* MappedRecord[mapped meshes] (map.comp): transform, where its vertices are */
 #define CULLIDE_SSBO_ORDERED 21    /* uint[triangleCount]: each mesh's triangles in its spatial order (global indices;
                                       * GpuGeometry::ordered), kept between uploads like the indices */
+/* The boxes built on the device (group_boxes.comp): the groups of the meshes that move or deform. */
+#define CULLIDE_SSBO_BOX_RANGES 18 /* uint[2 * built boxes]: per box, its group's first triangle in CULLIDE_SSBO_ORDERED
+                                      * and its triangle count (GpuGeometry::builtRanges), kept between uploads */
 
 /* Counters, reset before every iteration. */
 #define CULLIDE_COUNTER_OVERFLOWS 0 /* compute invocations that would exceed CULLIDE_MAX_LOOP_ITERATIONS */
@@ -162,6 +165,11 @@
                                      * from its parent: ITEM_PRIMS[i] = ORDERED[PARENT_FIRST[p] + i - parentBegin[p]] */
 #define CULLIDE_LOC_PER_BAND 33     /* float: build.comp's SINGLE pass: pixels per band (CULLIDE_PIXELS_PER_INVOCATION
                                      * for long bands; for short ones an estimate from the last build in the place) */
+#define CULLIDE_LOC_BOX_BASE 34     /* uint: group_boxes.comp: the first built box of this dispatch (split at the
+                                     * group-count limit) */
+#define CULLIDE_LOC_BOX_FIRST 35    /* uint: group_boxes.comp: where the built boxes start (after the uploaded ones) */
+#define CULLIDE_LOC_BOX_COUNT 36    /* uint: group_boxes.comp: the built boxes */
+#define CULLIDE_LOC_BOX_INFLATE 37  /* float: group_boxes.comp: GpuGeometry::builtInflate */
 #define CULLIDE_LOC_START_BITS 30   /* uint: build.comp: 0, or where in CULLIDE_SSBO_PARENT the start bits begin: an
                                      * inheriting item i starts alive only where bit i % 32 of word i / 32 is set */
 

@@ -9,8 +9,8 @@
 
 namespace cullide {
 
-void ClusterGeometry::upload(const FrameState& frame, const Cluster& cluster, PruningBackend& backend, TaskPool& pool,
-                             Stats& stats) {
+void ClusterGeometry::upload(const FrameState& frame, const Cluster& cluster, double margin, PruningBackend& backend,
+                             TaskPool& pool, Stats& stats) {
     placeMeshes(frame, cluster);
     // Whatever the arrays already hold is what the device holds (up to the last upload's size): only what changes
     // from the first changed value on is sent again — a mesh whose topology stays the same keeps its indices there,
@@ -41,22 +41,37 @@ void ClusterGeometry::upload(const FrameState& frame, const Cluster& cluster, Pr
     m_geometry.coordinateBound = 0.0;
     m_objectBox.assign(frame.valid.size(), 0);
     for (std::uint32_t o : cluster.objects) m_objectBox[o] = appendBox(frame.valid[o].box);
-    appendGroupBoxes(frame, cluster);
+    appendGroupBoxes(frame, cluster, margin);
     backend.upload(m_geometry, stats);
 }
 
-/// The groups' boxes: first every group of the cluster's static meshes (FrameState::allGroups, in object order),
-/// whichever the pre-pass keeps, so that their boxes stay where the device holds them while other meshes move and the
-/// pre-pass keeps other groups; then the kept groups of the other meshes (whose boxes change as they move).
-void ClusterGeometry::appendGroupBoxes(const FrameState& frame, const Cluster& cluster) {
+/// The groups' boxes: every group of the cluster's static meshes (FrameState::allGroups, in object order), whichever
+/// the pre-pass keeps, so that their boxes stay where the device holds them while other meshes move and the pre-pass
+/// keeps other groups; then every group of the other meshes, built on the device from their positions
+/// (GpuGeometry::builtRanges: a range of the spatial order each, which changes only with the layout). Cluster::groups
+/// map to their own; a group not in allGroups (made by hand) gets a box of its own, sent.
+void ClusterGeometry::appendGroupBoxes(const FrameState& frame, const Cluster& cluster, double margin) {
     const std::vector<Group>& all = frame.allGroups;
-    constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+    constexpr std::uint32_t kNone = 0xFFFFFFFFu, kBuilt = 0x80000000u;  // kBuilt | its place among the built boxes
     m_allGroupBox.assign(all.size(), kNone);
+    m_geometry.builtRanges.clear();
+    m_geometry.builtInflate = floatUp(0.5 * margin);
     const auto before = [](const Group& a, std::uint32_t object) { return a.object < object; };
-    for (std::uint32_t o : cluster.objects) {
-        if (frame.statics.entry.empty() || frame.statics.entry[o] == nullptr) continue;
-        auto g = std::lower_bound(all.begin(), all.end(), o, before);
-        for (; g != all.end() && g->object == o; ++g) m_allGroupBox[g->index] = appendBox(g->box);
+    for (const bool built : {false, true}) {
+        for (std::uint32_t o : cluster.objects) {
+            const bool isStatic = !frame.statics.entry.empty() && frame.statics.entry[o] != nullptr;
+            if (isStatic == built) continue;
+            auto g = std::lower_bound(all.begin(), all.end(), o, before);
+            for (; g != all.end() && g->object == o; ++g) {
+                if (!built) {
+                    m_allGroupBox[g->index] = appendBox(g->box);
+                    continue;
+                }
+                m_allGroupBox[g->index] = kBuilt | static_cast<std::uint32_t>(m_geometry.builtRanges.size() / 2);
+                m_geometry.builtRanges.push_back(m_baseTriangle[o] + g->first);
+                m_geometry.builtRanges.push_back(g->count);
+            }
+        }
     }
     m_groupBox.resize(cluster.groups.size());
     for (std::size_t g = 0; g < cluster.groups.size(); ++g) {
@@ -64,6 +79,9 @@ void ClusterGeometry::appendGroupBoxes(const FrameState& frame, const Cluster& c
         const bool placed = group.index < all.size() && m_allGroupBox[group.index] != kNone;
         m_groupBox[g] = placed ? m_allGroupBox[group.index] : appendBox(group.box);
     }
+    const auto firstBuilt = static_cast<std::uint32_t>(m_geometry.boxes.size() / 6);  // the built ones follow
+    for (std::uint32_t& box : m_groupBox)
+        if ((box & kBuilt) != 0) box = firstBuilt + (box & ~kBuilt);
 }
 
 namespace {
@@ -174,6 +192,31 @@ std::vector<float> allPositions(const GpuGeometry& geometry) {
             devicePosition(transformPoint(m.transform, Vec3(p[0], p[1], p[2])), geometry.origin,
                            &all[3 * (std::size_t{m.baseVertex} + v)]);
         }
+    }
+    return all;
+}
+
+std::vector<float> allBoxes(const GpuGeometry& geometry, const std::vector<float>& positions) {
+    std::vector<float> all = geometry.boxes;
+    const auto vertex = [&](std::uint32_t triangle, int corner) {
+        return &positions.at(3 * std::size_t{geometry.indices.at(3 * std::size_t{triangle} + corner)});
+    };
+    for (std::size_t b = 0; b + 1 < geometry.builtRanges.size(); b += 2) {
+        const std::uint32_t first = geometry.builtRanges[b], count = geometry.builtRanges[b + 1];
+        float lo[3], hi[3];
+        std::copy_n(vertex(geometry.ordered.at(first), 0), 3, lo);
+        std::copy_n(lo, 3, hi);
+        for (std::uint32_t k = 0; k < count; ++k) {
+            for (int c = 0; c < 3; ++c) {
+                const float* p = vertex(geometry.ordered.at(first + k), c);
+                for (int a = 0; a < 3; ++a) {
+                    if (p[a] < lo[a]) lo[a] = p[a];
+                    if (p[a] > hi[a]) hi[a] = p[a];
+                }
+            }
+        }
+        for (int a = 0; a < 3; ++a) all.push_back(lo[a] - geometry.builtInflate);
+        for (int a = 0; a < 3; ++a) all.push_back(hi[a] + geometry.builtInflate);
     }
     return all;
 }

@@ -19,9 +19,10 @@ namespace cullide {
 class ClusterGeometry {
 public:
     /// Writes the cluster's geometry relative to its origin (float precision is spent on the cluster, not on its
-    /// offset) and hands it to `backend`. Boxes are rounded outwards to float.
-    void upload(const FrameState& frame, const Cluster& cluster, PruningBackend& backend, TaskPool& pool,
-                Stats& stats);
+    /// offset) and hands it to `backend`. Boxes are rounded outwards to float; the groups of the meshes that are not
+    /// static are built on the device, grown by `margin` / 2 (GpuGeometry::builtRanges).
+    void upload(const FrameState& frame, const Cluster& cluster, double margin, PruningBackend& backend,
+                TaskPool& pool, Stats& stats);
 
     /// Starts a frame: what the device keeps between frames ages by frames, not by uploads (one per cluster).
     void beginFrame() { m_mappedVertices.beginFrame(); }
@@ -57,7 +58,7 @@ private:
     Changed writeMesh(const FrameState& frame, const MeshSlot& slot);
     void writePositions(const TriangleMesh& world, const MeshSlot& slot, Changed& changed);
     std::uint32_t appendBox(const Aabb& worldBox);
-    void appendGroupBoxes(const FrameState& frame, const Cluster& cluster);
+    void appendGroupBoxes(const FrameState& frame, const Cluster& cluster, double margin);
 
     ResidentRegion m_region;
     MappedVertices m_mappedVertices;  ///< the slots of m_geometry.local

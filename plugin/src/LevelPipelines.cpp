@@ -37,7 +37,7 @@ struct LevelRun {
 void beginLevel(LevelRun& run, bool keepOwners = false) {
     if (!run.uploaded) {
         Timer upload;
-        run.geometry.upload(run.frame, run.cluster, run.backend, run.pool, run.stats);
+        run.geometry.upload(run.frame, run.cluster, run.settings.margin, run.backend, run.pool, run.stats);
         run.stats.uploadMs += upload.ms();
         run.uploaded = true;
     }

@@ -52,6 +52,13 @@ struct GpuGeometry {
     std::vector<MappedMesh> mapped;
     Vec3 origin = Vec3::Zero();         ///< of the upload, in world space
     std::vector<float> boxes;           ///< min xyz, max xyz per box (rounded outwards)
+    /// Boxes the device builds after these (group_boxes.comp), from the positions above and the mapped meshes':
+    /// built box i (box boxes.size() / 6 + i) is the box of the vertices of the triangles ordered[builtRanges[2i] ..
+    /// builtRanges[2i] + builtRanges[2i + 1]) (one group of a mesh that moves or deforms; at least one triangle),
+    /// grown by builtInflate on each side in float — the box of what the triangle level rasterises, which the views'
+    /// error bounds hold to the true triangles as they do the positions (allBoxes computes the same on the CPU).
+    std::vector<std::uint32_t> builtRanges;
+    float builtInflate = 0.0f;
     double coordinateBound = 0.0;       ///< max |coordinate| over positions and boxes (for error bounds)
 
     std::size_t vertexCount() const {
@@ -71,6 +78,10 @@ inline void devicePosition(const Vec3& world, const Vec3& origin, float out[3]) 
 /// Every vertex of `geometry` as the device holds it: `positions`, then the mapped meshes' vertices mapped on the CPU
 /// (the reference backend's copy of what the GL one maps on the device).
 std::vector<float> allPositions(const GpuGeometry& geometry);
+
+/// Every box of `geometry` as the device holds it: `boxes`, then the built ones (GpuGeometry::builtRanges) from
+/// `positions` (allPositions), as group_boxes.comp builds them, bit for bit.
+std::vector<float> allBoxes(const GpuGeometry& geometry, const std::vector<float>& positions);
 
 /// The items of one level. Item i belongs to owner[i] (a compact object id) and is drawn as the primitives
 /// prims[primBegin[i] .. primBegin[i + 1]) (a triangle index, or a box index | CULLIDE_PRIM_BOX_BIT) — or, in a level

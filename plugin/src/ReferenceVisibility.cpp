@@ -184,10 +184,13 @@ ReferenceVisibility::ReferenceVisibility(const Settings& settings) : m_settings(
 
 void ReferenceVisibility::upload(const GpuGeometry& geometry, Stats&) {
     m_geometry = &geometry;
-    if (geometry.mapped.empty()) return;
-    m_mapped = geometry;  // with the mapped meshes' vertices mapped here, as the GL backend maps them on the device
+    if (geometry.mapped.empty() && geometry.builtRanges.empty()) return;
+    // With the mapped meshes' vertices mapped and the built boxes built here, as the GL backend does on the device.
+    m_mapped = geometry;
     m_mapped.positions = allPositions(geometry);
     m_mapped.mapped.clear();
+    m_mapped.boxes = allBoxes(geometry, m_mapped.positions);
+    m_mapped.builtRanges.clear();
     m_geometry = &m_mapped;
 }
 

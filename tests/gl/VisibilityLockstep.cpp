@@ -21,7 +21,8 @@ public:
           m_devicePositions(std::move(devicePositions)), m_deviceBoxes(std::move(deviceBoxes)) {}
 
     /// Every upload: the positions the device holds against allPositions, bit for bit (the mapped meshes' are
-    /// mapped there by map.comp), and its boxes against the upload's (only what changed is sent).
+    /// mapped there by map.comp), and its boxes against allBoxes (only what changed is sent; the groups of meshes
+    /// that are not static are built there by group_boxes.comp).
     void upload(const GpuGeometry& geometry, Stats& stats) override {
         m_tested->upload(geometry, stats);
         m_reference->upload(geometry, m_scratch);
@@ -29,7 +30,8 @@ public:
         ++m_log->uploads;
         m_log->mappedVertices += expected.size() / 3 - geometry.positions.size() / 3;
         compareFloats(expected, *m_devicePositions, "position");
-        compareFloats(geometry.boxes, *m_deviceBoxes, "box");
+        compareFloats(allBoxes(geometry, expected), *m_deviceBoxes, "box");
+        m_log->builtBoxes += geometry.builtRanges.size() / 2;
     }
     void compareFloats(const std::vector<float>& expected, const std::vector<float>& got, const char* what) {
         std::size_t differing = 0;
@@ -249,7 +251,8 @@ private:
 std::string LockstepLog::summary() const {
     std::ostringstream s;
     s << levels << " levels, " << iterations << " iterations, " << itemsIn << " items in, " << itemsPruned
-      << " pruned, " << uploads << " uploads (" << mappedVertices << " vertices mapped on the device), "
+      << " pruned, " << uploads << " uploads (" << mappedVertices << " vertices mapped, " << builtBoxes
+      << " boxes built on the device), "
       << mismatches << " differences (" << itemsDiffering << " items)";
     for (const std::string& d : details) s << "\n  " << d;
     return s.str();
@@ -269,7 +272,8 @@ PruningBackendFactory lockstepFactory(std::shared_ptr<LockstepLog> log, GlBacken
 std::string lockstepName(const LockstepCase& c) {
     return std::string(c.pipeline == Pipeline::Paper ? "Paper" : "Auto") +
            (c.mode == Mode::Reliable ? "Reliable" : "Sampled") + (c.backend == Backend::Raster ? "Raster" : "Compute") +
-           std::to_string(c.resolution) + (c.axes == 7 ? "" : "Axes" + std::to_string(c.axes));
+           std::to_string(c.resolution) + (c.axes == 7 ? "" : "Axes" + std::to_string(c.axes)) +
+           (c.margin == 0.0 ? "" : "Margin");
 }
 
 void PrintTo(const LockstepCase& c, std::ostream* os) { *os << lockstepName(c); }
@@ -281,6 +285,7 @@ Settings lockstepSettings(const LockstepCase& c) {
     s.backend = c.backend;
     s.resolution = c.resolution;
     s.axes = c.axes;
+    s.margin = c.margin;
     s.gpuLevels = GpuLevels::Always;
     s.exactThreshold = 0;  // every level runs
     // The paper's pipeline iterates until the set stops changing (both stop rules of the chain are held to the

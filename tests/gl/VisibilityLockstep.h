@@ -25,8 +25,9 @@ struct LockstepLog {
     std::size_t levelsAhead = 0;  ///< of the levels, run ahead (their survivors compared through the next level's)
     std::size_t uploads = 0;         ///< geometry uploads, each checked: the device's positions bit for bit
     std::size_t mappedVertices = 0;  ///< of their vertices, mapped on the device (MappedMesh), summed
+    std::size_t builtBoxes = 0;      ///< of their boxes, built on the device (GpuGeometry::builtRanges), summed
     std::size_t mismatches = 0;   ///< differences found (an iteration's view or result, a level's survivors, an
-                                  ///< upload's positions)
+                                  ///< upload's positions or boxes)
     std::size_t itemsDiffering = 0;
     std::vector<std::string> details;  ///< the first few differences, for the failure message
     std::string summary() const;
@@ -43,9 +44,10 @@ struct LockstepCase {
     Backend backend;
     int resolution;
     unsigned axes = 7;  ///< Settings::axes
+    double margin = 0.0;  ///< Settings::margin
 };
 
-/// The case as a test-name part, e.g. "PaperReliableCompute64".
+/// The case as a test-name part, e.g. "PaperReliableCompute64" ("...Margin" with a margin).
 std::string lockstepName(const LockstepCase& c);
 void PrintTo(const LockstepCase& c, std::ostream* os);
 

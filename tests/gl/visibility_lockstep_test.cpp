@@ -54,7 +54,11 @@ INSTANTIATE_TEST_SUITE_P(
                       // Fewer views: an item is done after fewer invocations (flag.comp's count per item).
                       LockstepCase{Pipeline::Auto, Mode::Reliable, Backend::Compute, 64, 5},
                       LockstepCase{Pipeline::Paper, Mode::Sampled, Backend::Compute, 16, 2},
-                      LockstepCase{Pipeline::Auto, Mode::Reliable, Backend::Raster, 64, 5}),
+                      LockstepCase{Pipeline::Auto, Mode::Reliable, Backend::Raster, 64, 5},
+                      // A margin: boxes grown by it (the built group boxes' growth, group_boxes.comp), views fitted
+                      // with it.
+                      LockstepCase{Pipeline::Auto, Mode::Reliable, Backend::Compute, 64, 7, 0.01},
+                      LockstepCase{Pipeline::Paper, Mode::Reliable, Backend::Raster, 16, 7, 0.01}),
     caseName);
 
 }  // namespace

@@ -1,8 +1,9 @@
 // Where a pass needs more work groups than the device allows along x (GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]: 65,535 on
-// llvmpipe, so no test scene gets there) it is split: map.comp's and build.comp's dispatches into several, the
-// indirect passes into rows of work groups along z, over which the flag pass still finds its last work group. With
-// the limit lowered to 2 work groups (GlBackendOptions::maxWorkGroups), every level is held to the reference's
-// (lockstep), the mapped positions to the CPU's bit for bit and the pairs to the exact reference's.
+// llvmpipe, so no test scene gets there) it is split: map.comp's, group_boxes.comp's and build.comp's dispatches into
+// several, the indirect passes into rows of work groups along z, over which the flag pass still finds its last work
+// group. With the limit lowered to 2 work groups (GlBackendOptions::maxWorkGroups), every level is held to the
+// reference's (lockstep), the mapped positions and the built boxes to the CPU's bit for bit and the pairs to the exact
+// reference's.
 #include "Compare.h"
 #include "CullerBackends.h"
 #include "GlTestSupport.h"
@@ -20,7 +21,8 @@ namespace {
 
 TEST(WorkGroupLimit, SplitDispatchesKeepWhatTheReferenceKeeps) {
     for (const Backend backend : {Backend::Compute, Backend::Raster}) {
-        const Settings settings = lockstepSettings({Pipeline::Auto, Mode::Reliable, backend, 64});
+        Settings settings = lockstepSettings({Pipeline::Auto, Mode::Reliable, backend, 64});
+        settings.groupSize = 4;  // groups enough for group_boxes.comp's dispatch to be split
         CULLIDE_GPU_CULLER_OR_SKIP(probe, settings);
         GlBackendOptions options;
         options.maxWorkGroups = 2;
@@ -42,6 +44,7 @@ TEST(WorkGroupLimit, SplitDispatchesKeepWhatTheReferenceKeeps) {
         EXPECT_EQ(log->mismatches, 0u) << name << ": " << log->summary();
         // Beyond what 2 work groups hold (2 x 64 invocations): every split was taken.
         EXPECT_GT(log->mappedVertices, 4u * 128u) << name << ": " << log->summary();
+        EXPECT_GT(log->builtBoxes, log->uploads * 128u) << name << ": " << log->summary();
         EXPECT_GT(log->itemsIn, 4u * 128u) << name << ": " << log->summary();
         EXPECT_GT(log->itemsPruned, 0u) << name << ": " << log->summary();
         EXPECT_GT(pairs, 10u) << name << ": too sparse to test anything";

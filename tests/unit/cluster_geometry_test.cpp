@@ -68,7 +68,7 @@ TEST(ClusterGeometry, StaticMeshesAreSentOnceAndOthersEveryUpload) {
     Stats stats;
     for (int f = 0; f < 2; ++f) {
         frame.statics = lookUpAndCheck(cache, objects);
-        geometry.upload(frame, cluster, backend, pool, stats);
+        geometry.upload(frame, cluster, 0.0, backend, pool, stats);
     }
     ASSERT_EQ(backend.uploads.size(), 2u);
     const GpuGeometry& first = backend.uploads[0];
@@ -83,8 +83,10 @@ TEST(ClusterGeometry, StaticMeshesAreSentOnceAndOthersEveryUpload) {
     EXPECT_EQ(geometry.baseTriangle(2), ground.triangles.size());
     // The body's indices are global: they point past the ground's vertices.
     EXPECT_EQ(second.indices[3 * ground.triangles.size()], ground.vertices.size() + body.triangles[0][0]);
-    // Three object boxes and one group box, relative to the cluster's centre (0.5, 0.5, 0.45), rounded outwards.
-    ASSERT_EQ(second.boxes.size(), 4u * 6u);
+    // Three object boxes, relative to the cluster's centre (0.5, 0.5, 0.45), rounded outwards, and the body's group
+    // box after them, built on the device from its triangles (after the ground's in the spatial orders).
+    ASSERT_EQ(second.boxes.size(), 3u * 6u);
+    EXPECT_EQ(second.builtRanges, (std::vector<std::uint32_t>{static_cast<std::uint32_t>(ground.triangles.size()), 12}));
     EXPECT_EQ(geometry.objectBox(1), 1u);
     EXPECT_EQ(geometry.groupBox(0), 3u);
     EXPECT_FLOAT_EQ(second.boxes[6 + 0], 2.5f);
@@ -111,7 +113,7 @@ TEST(ClusterGeometry, OnlyWhatChangedSinceTheLastUploadIsSent) {
     Stats stats;
     const auto upload = [&] {
         frame.statics = lookUpAndCheck(cache, objects);
-        geometry.upload(frame, cluster, backend, pool, stats);
+        geometry.upload(frame, cluster, 0.0, backend, pool, stats);
         return backend.uploads.back();
     };
     upload();
@@ -137,9 +139,10 @@ TEST(ClusterGeometry, OnlyWhatChangedSinceTheLastUploadIsSent) {
 }
 
 /// The boxes hold every group of the cluster's static meshes (FrameState::allGroups), not only those the pre-pass
-/// keeps, ahead of the kept groups of the other meshes: when the kept set changes, no static mesh's box moves, so it
-/// keeps its boxes on the device (the GL back-end sends the boxes that changed). Cluster::groups map to their own.
-TEST(ClusterGeometry, StaticMeshesGroupBoxesStayInPlaceWhateverThePrepassKeeps) {
+/// keeps, and the device builds every group's box of the other meshes after them (GpuGeometry::builtRanges, one range
+/// of the spatial order each): when the kept set changes, no box moves and no range changes, so the device keeps them
+/// (the GL back-end sends what changed). Cluster::groups map to their own boxes.
+TEST(ClusterGeometry, GroupBoxesStayInPlaceWhateverThePrepassKeeps) {
     const TriangleMesh a = makeBox(Vec3::Constant(0.5));
     TriangleMesh b = makeBox(Vec3::Constant(0.5));
     transformMesh(b, Eigen::Affine3d(Eigen::Translation3d(0.6, 0, 0)));
@@ -168,21 +171,40 @@ TEST(ClusterGeometry, StaticMeshesGroupBoxesStayInPlaceWhateverThePrepassKeeps) 
         frame.statics = lookUpAndCheck(cache, objects);
         cluster.groups.clear();
         for (std::uint32_t k : kept) cluster.groups.push_back(frame.allGroups[k]);
-        geometry.upload(frame, cluster, backend, pool, stats);
+        geometry.upload(frame, cluster, 0.25, backend, pool, stats);
         const GpuGeometry& g = backend.uploads.back();
-        std::size_t movingKept = 0;
-        for (std::uint32_t k : kept) movingKept += k >= 3 ? 1 : 0;
-        ASSERT_EQ(g.boxes.size(), 6u * (2 + 3 + movingKept)) << "two object boxes, the static mesh's every group's";
-        const std::vector<float> front(g.boxes.begin(), g.boxes.begin() + 6 * 5);
-        if (staticBoxes.empty()) staticBoxes = front;
-        EXPECT_EQ(front, staticBoxes) << "a static box moved when the pre-pass kept other groups";
-        std::uint32_t nextMoving = 5;
+        ASSERT_EQ(g.boxes.size(), 6u * (2 + 3)) << "two object boxes, the static mesh's every group's";
+        if (staticBoxes.empty()) staticBoxes = g.boxes;
+        EXPECT_EQ(g.boxes, staticBoxes) << "a static box moved when the pre-pass kept other groups";
+        // The moving mesh's three groups, built: its triangles start after the static mesh's 12.
+        EXPECT_EQ(g.builtRanges, (std::vector<std::uint32_t>{12, 4, 16, 4, 20, 4}));
+        EXPECT_EQ(g.builtInflate, 0.125f);
         for (std::size_t i = 0; i < kept.size(); ++i) {
             const std::uint32_t box = geometry.groupBox(i);
-            EXPECT_EQ(box, kept[i] < 3 ? 2 + kept[i] : nextMoving++) << "group " << kept[i];
-            EXPECT_NEAR(g.boxes[6 * box], 0.1 * kept[i] - g.origin.x(), 1e-6) << "group " << kept[i];
+            EXPECT_EQ(box, 2 + kept[i]) << "group " << kept[i];
+            if (kept[i] < 3) {
+                EXPECT_NEAR(g.boxes[6 * box], 0.1 * kept[i] - g.origin.x(), 1e-6) << "group " << kept[i];
+            }
         }
     }
+}
+
+/// The CPU's copy of the boxes the device builds (allBoxes): each the box of its range's vertices grown by
+/// builtInflate, after the uploaded ones; the first of equal coordinates stays (-0 before +0 stays -0).
+TEST(ClusterGeometry, BuiltBoxesAreTheBoxesOfTheirTrianglesGrown) {
+    GpuGeometry g;
+    g.positions = {-0.0f, 0, 0, 1, 2, 3, 0.0f, -1, 5, 4, 4, 4};
+    g.indices = {0, 1, 2, 1, 2, 3};
+    g.ordered = {1, 0};
+    g.boxes = {9, 9, 9, 9, 9, 9};
+    g.builtRanges = {1, 1, 0, 2};  // triangle 0 alone, then both (triangle 1 first: the spatial order)
+    g.builtInflate = 0.5f;
+    const std::vector<float> all = allBoxes(g, g.positions);
+    const std::vector<float> expected = {9, 9, 9, 9, 9, 9, -0.5f, -1.5f, -0.5f, 1.5f, 2.5f, 5.5f,
+                                         -0.5f, -1.5f, -0.5f, 4.5f, 4.5f, 5.5f};
+    EXPECT_EQ(all, expected);
+    g.builtInflate = 0.0f;
+    EXPECT_TRUE(std::signbit(allBoxes(g, g.positions)[6])) << "the first of -0 and +0 is kept";
 }
 
 /// A mesh that came with a transform (and is not static) goes in its own frame: its own vertices are sent when they
@@ -220,8 +242,8 @@ TEST(ClusterGeometry, AMeshWithATransformGoesInItsOwnFrameAndMapsToItsWorldTwin)
         twinFrame.valid = valid;
         mappedFrame.statics = lookUpAndCheck(mappedCache, inputs);
         twinFrame.statics = lookUpAndCheck(twinCache, twins);
-        mappedGeometry.upload(mappedFrame, cluster, mappedBackend, pool, stats);
-        twinGeometry.upload(twinFrame, cluster, twinBackend, pool, stats);
+        mappedGeometry.upload(mappedFrame, cluster, 0.0, mappedBackend, pool, stats);
+        twinGeometry.upload(twinFrame, cluster, 0.0, twinBackend, pool, stats);
         const GpuGeometry& m = mappedBackend.uploads.back();
         const GpuGeometry& w = twinBackend.uploads.back();
         ASSERT_EQ(m.mapped.size(), 1u);

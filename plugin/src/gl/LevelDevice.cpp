@@ -119,6 +119,7 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
     buildProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "passes.glsl", "build.comp"})},
                                "the record build program");
     mapProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"map.comp"})}, "the mapped meshes' program");
+    boxesProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"group_boxes.comp"})}, "the group boxes program");
     if (settings.backend == Backend::Compute)
         bands = context.isSoftware() && !options.shortBands ? CULLIDE_BANDS_LONG : CULLIDE_BANDS_SHORT;
     glCreateVertexArrays(1, &vao);
@@ -137,7 +138,7 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
     if (options.maxWorkGroups > 0) maxGroups = std::min(maxGroups, options.maxWorkGroups);
     reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * CULLIDE_ALIVE_BITS);
     reserveBuffer(buffers[kViews], capacity[kViews], sizeof(ViewRecord) * (CULLIDE_MAX_ITERATIONS + 1));
-    for (Buffer b : {kParent, kParentAlive, kPrimBegin, kStash, kStashViews, kOrdered, kBands})
+    for (Buffer b : {kParent, kParentAlive, kPrimBegin, kStash, kStashViews, kOrdered, kBands, kBoxRanges})
         reserveBuffer(buffers[b], capacity[b], 4);
     checkGlError("creating the visibility pass");
     // Every call makes the context current on its own thread: the culler may be used from another thread than
@@ -159,6 +160,7 @@ LevelDevice::~LevelDevice() {
     if (flagProgram) glDeleteProgram(flagProgram);
     glDeleteProgram(buildProgram);
     glDeleteProgram(mapProgram);
+    glDeleteProgram(boxesProgram);
 }
 
 void LevelDevice::dispatchAll(std::size_t count) const {
@@ -209,6 +211,39 @@ void LevelDevice::uploadPositions(const GpuGeometry& g, Stats& stats) {
     // Read by the passes after it, and overwritten by the next upload's glNamedBufferSubData only after it.
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     readForTests(kPositions, 3 * g.vertexCount(), positionsAfterUpload.get());
+}
+
+void LevelDevice::uploadBoxes(const GpuGeometry& g, Stats& stats) {
+    const std::size_t built = g.builtRanges.size() / 2;
+    const std::size_t allBytes = g.boxes.size() * 4 + built * 24;
+    if (allBytes > capacity[kBoxes]) {  // a new store: nothing of the last upload is kept
+        reserveBuffer(buffers[kBoxes], capacity[kBoxes], allBytes);
+        heldBoxes.clear();
+    }
+    // A cluster at rest keeps its boxes; an object moving sends its own (its object box; a static mesh's groups').
+    stats.bytesUploaded += uploadChanged(buffers[kBoxes], capacity[kBoxes], heldBoxes, g.boxes.data(), g.boxes.size() * 4);
+    if (built > 0) {
+        stats.bytesUploaded += uploadChanged(buffers[kBoxRanges], capacity[kBoxRanges], heldRanges,
+                                             g.builtRanges.data(), g.builtRanges.size() * 4);
+        glUseProgram(boxesProgram);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_POSITIONS, buffers[kPositions]);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_INDICES, buffers[kIndices]);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_ORDERED, buffers[kOrdered]);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_BOX_RANGES, buffers[kBoxRanges]);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_BOXES, buffers[kBoxes]);
+        glUniform1ui(CULLIDE_LOC_BOX_FIRST, static_cast<GLuint>(g.boxes.size() / 6));
+        glUniform1ui(CULLIDE_LOC_BOX_COUNT, static_cast<GLuint>(built));
+        glUniform1f(CULLIDE_LOC_BOX_INFLATE, g.builtInflate);
+        const std::size_t groups = (built + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
+        for (std::size_t first = 0; first < groups; first += maxGroups) {
+            glUniform1ui(CULLIDE_LOC_BOX_BASE, static_cast<GLuint>(first * CULLIDE_COMPUTE_GROUP_SIZE));
+            glDispatchCompute(static_cast<GLuint>(std::min(maxGroups, groups - first)), 1, 1);
+            stats.draws += 1;
+        }
+        // Read by the passes after it, and overwritten by the next upload's glNamedBufferSubData only after it.
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    }
+    readForTests(kBoxes, g.boxes.size() + 6 * built, boxesAfterUpload.get());
 }
 
 void LevelDevice::readForTests(Buffer buffer, std::size_t floats, std::vector<float>* to) const {

@@ -49,6 +49,7 @@ enum Buffer {
     kLocal,       ///< the mapped meshes' own vertices (double)
     kMapped,      ///< their MappedRecords
     kOrdered,     ///< GpuGeometry::ordered
+    kBoxRanges,   ///< GpuGeometry::builtRanges
     kFrameResults,  ///< the deferred levels' counter words (chain, the level run ahead's chain, alive bits), in turn
     kFrameViews,    ///< ... and their views and those of the levels run ahead (where a trace is asked for)
     kBufferCount
@@ -99,13 +100,15 @@ struct LevelDevice {
     GLuint flagProgram = 0;    ///< compute back-end: the flag pass, which ends the iteration (flag.comp)
     GLuint buildProgram = 0;
     GLuint mapProgram = 0;
+    GLuint boxesProgram = 0;  ///< group_boxes.comp
     int bands = CULLIDE_BANDS_NONE;  ///< build.comp's CULLIDE_BANDS_* for this back-end and device
     GLuint vao = 0;
     GLuint framebuffer = 0;
     GLuint images[4] = {};
     GLuint buffers[kBufferCount] = {};
     std::size_t capacity[kBufferCount] = {};
-    std::vector<unsigned char> heldBoxes;  ///< the boxes the device holds, as last sent (uploadChanged)
+    std::vector<unsigned char> heldBoxes;   ///< the boxes the device holds, as last sent (uploadChanged)
+    std::vector<unsigned char> heldRanges;  ///< GpuGeometry::builtRanges as last sent
     std::size_t valid[kBufferCount] = {};  ///< bytes of the buffer that hold the last upload (positions, indices)
     bool hasTimers = false;      ///< timer queries (GL_TIME_ELAPSED) are there
     std::vector<GLuint> timers;  ///< one per span of the frame, made as needed
@@ -161,6 +164,9 @@ struct LevelDevice {
     /// Sends the upload's positions (those before the mapped meshes') and what changed of the mapped meshes' own
     /// vertices, then maps those to the positions after them (map.comp: one dispatch, their transforms sent).
     void uploadPositions(const GpuGeometry& geometry, Stats& stats);
+    /// Sends the boxes that changed since the last upload and builds the others from the positions
+    /// (group_boxes.comp: one dispatch, after uploadPositions), their ranges sent where they changed.
+    void uploadBoxes(const GpuGeometry& geometry, Stats& stats);
     /// GlBackendOptions::positionsAfterUpload and boxesAfterUpload: the first `floats` of `buffer` read back into `to`
     /// (tests only; nothing where `to` is null).
     void readForTests(Buffer buffer, std::size_t floats, std::vector<float>* to) const;

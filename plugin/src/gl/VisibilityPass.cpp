@@ -381,10 +381,7 @@ void VisibilityPass::upload(const GpuGeometry& geometry, Stats& stats) {
     stats.bytesUploaded += uploadAfterPrefix(s.buffers[kOrdered], s.capacity[kOrdered], s.valid[kOrdered],
                                              geometry.ordered.data(), geometry.ordered.size() * 4,
                                              geometry.keptOrdered * 4);
-    // A cluster at rest keeps its boxes; an object moving sends its own (its object box, its groups').
-    stats.bytesUploaded += uploadChanged(s.buffers[kBoxes], s.capacity[kBoxes], s.heldBoxes, geometry.boxes.data(),
-                                         geometry.boxes.size() * 4);
-    s.readForTests(kBoxes, geometry.boxes.size(), s.boxesAfterUpload.get());
+    s.uploadBoxes(geometry, stats);
     s.geometry = &geometry;
     s.ahead.reset();  // a cluster starts: a level run ahead before belongs to an abandoned frame
 }
@@ -403,6 +400,7 @@ void VisibilityPass::forgetUploads() {
     Impl& s = *m_impl;
     for (std::size_t& v : s.valid) v = 0;
     s.heldBoxes.clear();
+    s.heldRanges.clear();
     for (std::size_t& c : s.capacity) c = 0;
     s.recordCapacity = 0;
     s.places.clear();
