@@ -30,15 +30,9 @@
 #define CULLIDE_SSBO_VIEWS 15      /* ViewRecord[CULLIDE_MAX_ITERATIONS + 1] (view.glsl): iteration i's view (the first
                                       * written by the C++ side, each next one where the iteration before ends) and
                                       * what the iteration left */
-#define CULLIDE_SSBO_PARENT 16     /* uint[]: a level whose items inherit the last level's survivors (ordered by
-                                      * parent): parentBegin[parents + 1] (items parentBegin[p] .. parentBegin[p + 1]
-                                      * start alive when item p of that level survived it), then parentFirst[parents]
-                                      * where the level generates its primitives (CULLIDE_LOC_GENERATE: parent p's
-                                      * first child's place in CULLIDE_SSBO_ORDERED, or a box reference with
-                                      * CULLIDE_PRIM_BOX_BIT for a parent with one child), then the start bits
-                                      * (CULLIDE_LOC_START_BITS) */
-#define CULLIDE_SSBO_PARENT_ALIVE 17 /* uint[2 * parents]: the last level's alive set, then its owners (copies; the
-                                      * owners where the items' are their parents', CULLIDE_LOC_INHERIT_OWNERS) */
+#define CULLIDE_SSBO_RANGES 16     /* uint[]: a level described by its objects (start.comp): its ranges'
+                                      * records, then their partners' boxes (CULLIDE_RANGE_*) */
+#define CULLIDE_SSBO_PARENT_ALIVE 17 /* uint[parents]: the last level's alive set (a copy), where a level inherits it */
 /* The mapped meshes (map.comp): a rigid mesh's own vertices stay on the device, its transform is sent per upload. */
 #define CULLIDE_SSBO_LOCAL 19      /* double[3 * local vertices]: the mapped meshes' vertices in their own frames */
 #define CULLIDE_SSBO_MAPPED 20     /* MappedRecord[mapped meshes] (map.comp): transform, where its vertices are */
@@ -86,7 +80,7 @@
                                        * last one resets it) */
 #define CULLIDE_CHAIN_RECORDS_RUN 35  /* records the level's iterations ran over, summed */
 #define CULLIDE_CHAIN_RECORDED_VIEW 36 /* the view the records were built for (build.comp's APPEND or SINGLE pass) */
-#define CULLIDE_CHAIN_ALIVE_START 37 /* items alive at the level's start (all, or those whose parent survived) */
+#define CULLIDE_CHAIN_ALIVE_START 37 /* items alive at the level's start (all, or those start.comp keeps) */
 #define CULLIDE_CHAIN_MISCOUNTED 39 /* 1: an iteration decided fewer or more items than were alive at its start (a
                                      * device fault: the C++ side throws BackendError) */
 #define CULLIDE_CHAIN_PER_BAND 38   /* short bands: the pixels per band the level's last build found (float bits): the
@@ -97,7 +91,7 @@
  * (copied there before the read-back: one read-back brings both levels' chains). */
 #define CULLIDE_AHEAD 112
 /* Then the level's alive set, one bit per item (item i: bit i % 32 of word CULLIDE_ALIVE_BITS + i / 32): set at the
- * level's start (by the C++ side, or by build.comp where items inherit their parents'), cleared as
+ * level's start (by the C++ side, or by start.comp in a level described by its objects), cleared as
  * items leave. The level's one read-back brings it all. */
 #define CULLIDE_ALIVE_BITS 208
 
@@ -151,27 +145,37 @@
 #define CULLIDE_LOC_MARGIN 21       /* double: iteration.glsl: Settings::margin (the next view's fit) */
 #define CULLIDE_LOC_COORDINATE_BOUND 22 /* double: iteration.glsl: GpuGeometry::coordinateBound */
 #define CULLIDE_LOC_MIN_PRUNE_FRACTION 23 /* double: iteration.glsl: Settings::minPruneFraction */
-#define CULLIDE_LOC_PARENTS 24      /* uint: build.comp: items of the last level whose survivors the items inherit (0:
-                                     * they do not) */
 #define CULLIDE_LOC_ONE_PRIM_EACH 25 /* int: build.comp: 1 = item i is primitive i (CULLIDE_SSBO_PRIM_BEGIN not sent) */
-#define CULLIDE_LOC_INHERIT_OWNERS 26 /* int: build.comp: 1 = the items' owners are their parents' (not sent: the
-                                       * first build writes them) */
 #define CULLIDE_LOC_ORIGIN 27       /* dvec3: map.comp: the upload origin (world) */
 #define CULLIDE_LOC_MAPPED_BASE 28  /* uint: map.comp: the first mapped vertex of this dispatch (split at the
                                      * group-count limit) */
 #define CULLIDE_LOC_MAPPED_MESHES 31   /* uint: map.comp: the mapped meshes (records) */
 #define CULLIDE_LOC_MAPPED_VERTICES 32 /* uint: map.comp: their vertices, summed */
-#define CULLIDE_LOC_GENERATE 29     /* int: build.comp: 1 = the first build writes each item's primitive (one each)
-                                     * from its parent: ITEM_PRIMS[i] = ORDERED[PARENT_FIRST[p] + i - parentBegin[p]] */
 #define CULLIDE_LOC_PER_BAND 33     /* float: build.comp's SINGLE pass: pixels per band (CULLIDE_PIXELS_PER_INVOCATION
                                      * for long bands; for short ones an estimate from the last build in the place) */
+#define CULLIDE_LOC_RANGES 38       /* uint: start.comp: the level's object ranges (CULLIDE_SSBO_RANGES) */
+#define CULLIDE_LOC_GROUP_SIZE 39   /* uint: start.comp: triangles per parent (Settings::groupSize) */
+#define CULLIDE_LOC_INHERITS 40     /* int: start.comp: 1 = an item starts alive only where its parent survived */
+#define CULLIDE_LOC_SLACK 41        /* float: start.comp: the box pre-pass's slack (LevelItems::prepassSlack) */
+#define CULLIDE_LOC_ITEM_BASE 42    /* uint: start.comp: the first item of this dispatch (split at the group-count
+                                     * limit) */
 #define CULLIDE_LOC_BOX_BASE 34     /* uint: group_boxes.comp: the first built box of this dispatch (split at the
                                      * group-count limit) */
 #define CULLIDE_LOC_BOX_FIRST 35    /* uint: group_boxes.comp: where the built boxes start (after the uploaded ones) */
 #define CULLIDE_LOC_BOX_COUNT 36    /* uint: group_boxes.comp: the built boxes */
 #define CULLIDE_LOC_BOX_INFLATE 37  /* float: group_boxes.comp: GpuGeometry::builtInflate */
-#define CULLIDE_LOC_START_BITS 30   /* uint: build.comp: 0, or where in CULLIDE_SSBO_PARENT the start bits begin: an
-                                     * inheriting item i starts alive only where bit i % 32 of word i / 32 is set */
+#define CULLIDE_RANGE_WORDS 8
+#define CULLIDE_RANGE_ITEM_BEGIN 0    /* its first item */
+#define CULLIDE_RANGE_COUNT 1         /* its items */
+#define CULLIDE_RANGE_FIRST 2         /* its first item's box (boxes), or where its triangles start in ORDERED */
+#define CULLIDE_RANGE_PARENT 3        /* (inheriting) its first item's parent */
+#define CULLIDE_RANGE_PARTNER_BEGIN 4 /* its partners' boxes, after the records: [begin, end) */
+#define CULLIDE_RANGE_PARTNER_END 5
+#define CULLIDE_RANGE_OWNER 6
+#define CULLIDE_RANGE_KIND 7          /* CULLIDE_RANGE_BOXES or _TRIANGLES, | CULLIDE_RANGE_KEEP */
+#define CULLIDE_RANGE_BOXES 0u        /* item j: box FIRST + j; its parent PARENT + j */
+#define CULLIDE_RANGE_TRIANGLES 1u    /* item j: triangle ORDERED[FIRST + j]; its parent PARENT + j / group size */
+#define CULLIDE_RANGE_KEEP 2u         /* the box pre-pass keeps every item (a proxy; too many partners to test) */
 
 #define CULLIDE_BANDS_NONE 0        /* one record per primitive (raster back-end) */
 #define CULLIDE_BANDS_LONG 1        /* bands of CULLIDE_PIXELS_PER_INVOCATION pixels (software renderers) */

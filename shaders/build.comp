@@ -16,9 +16,8 @@
 //               renderer, or short bands estimated from the last build in the level's place (whose sum this pass
 //               leaves for the next one, CULLIDE_CHAIN_PER_BAND) — or where there are no bands (the raster
 //               back-end). A build is one dispatch there; only a place's first short-band build takes two.
-// A level that inherits its parents' survivors starts in its first build's first pass: each item alive where its
-// parent survived (and its start bit allows), its owner its parent's (CULLIDE_LOC_INHERIT_OWNERS) and its primitive
-// generated from its parent's range of the mesh's spatial order (CULLIDE_LOC_GENERATE) — nothing per item is sent.
+// A build runs over the items alive: all of them at a level's start, or those start.comp marked (a level described by
+// its objects, whose primitives and owners start.comp also wrote).
 // A work group whose records would not fit the buffers' capacity writes none: the build is then short, the iteration
 // runs over no record and prunes nothing, and the C++ side, which reads the needed total with the iteration's
 // counters, grows the buffers and builds again. The records come out in no particular order: every pass over them is
@@ -27,13 +26,9 @@ layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
 layout(std430, binding = CULLIDE_SSBO_POSITIONS) readonly buffer Positions { float positions[]; };
 layout(std430, binding = CULLIDE_SSBO_INDICES) readonly buffer Indices { uint indices[]; };
 layout(std430, binding = CULLIDE_SSBO_BOXES) readonly buffer Boxes { float boxes[]; };
-layout(std430, binding = CULLIDE_SSBO_ALIVE) buffer Alive { uint alive[]; };
-layout(std430, binding = CULLIDE_SSBO_PARENT) readonly buffer Parents { uint parents[]; };
-layout(std430, binding = CULLIDE_SSBO_PARENT_ALIVE) readonly buffer ParentState { uint parentState[]; };
-layout(std430, binding = CULLIDE_SSBO_ITEM_OWNER) writeonly buffer Owners { uint owners[]; };
+layout(std430, binding = CULLIDE_SSBO_ALIVE) readonly buffer Alive { uint alive[]; };
 layout(std430, binding = CULLIDE_SSBO_PRIM_BEGIN) readonly buffer PrimBegin { uint primBegin[]; };
-layout(std430, binding = CULLIDE_SSBO_ITEM_PRIMS) buffer ItemPrims { uint itemPrims[]; };  // written: u_generate
-layout(std430, binding = CULLIDE_SSBO_ORDERED) readonly buffer Ordered { uint ordered[]; };
+layout(std430, binding = CULLIDE_SSBO_ITEM_PRIMS) readonly buffer ItemPrims { uint itemPrims[]; };
 layout(std430, binding = CULLIDE_SSBO_BANDS) buffer Bands { uint bands[]; };
 layout(std430, binding = CULLIDE_SSBO_BUILD) coherent buffer Build { uint build[]; };
 layout(std430, binding = CULLIDE_SSBO_PRIMS) writeonly buffer Prims { uvec4 prims[]; };
@@ -47,11 +42,7 @@ layout(location = CULLIDE_LOC_BANDS) uniform int u_bands;
 layout(location = CULLIDE_LOC_GROUPS) uniform uint u_groups;
 layout(location = CULLIDE_LOC_CAPACITY) uniform uint u_capacity;
 layout(location = CULLIDE_LOC_WITH_BOUNDS) uniform int u_withBounds;
-layout(location = CULLIDE_LOC_PARENTS) uniform uint u_parents;
 layout(location = CULLIDE_LOC_ONE_PRIM_EACH) uniform int u_onePrimEach;
-layout(location = CULLIDE_LOC_INHERIT_OWNERS) uniform int u_inheritOwners;
-layout(location = CULLIDE_LOC_GENERATE) uniform int u_generate;
-layout(location = CULLIDE_LOC_START_BITS) uniform uint u_startBits;
 layout(location = CULLIDE_LOC_PER_BAND) uniform float u_perBand;
 
 const uint kLanes = uint(CULLIDE_COMPUTE_GROUP_SIZE);
@@ -213,40 +204,6 @@ uint itemOf(uint p) {
     return lo;
 }
 
-// The item of the last level that item `item` inherits from: the last p with parentBegin[p] <= item.
-uint parentOf(uint item) {
-    uint lo = 0u;
-    uint hi = u_parents;  // parentBegin[lo] <= item < parentBegin[hi]
-    while (hi - lo > 1u) {
-        uint mid = lo + (hi - lo) / 2u;
-        if (parents[mid] <= item) lo = mid; else hi = mid;
-    }
-    return lo;
-}
-
-// Item `item`'s primitive where the level generates them (u_generate): the j-th child of `parent` is the j-th
-// triangle of its group's range of ORDERED, or the parent's box.
-uint generatedPrim(uint item, uint parent) {
-    uint first = parents[u_parents + 1u + parent];
-    return (first & CULLIDE_PRIM_BOX_BIT) != 0u ? first : ordered[first + (item - parents[parent])];
-}
-
-// Whether an inheriting item may start alive at all (its parent's survival decides the rest).
-bool startsAlive(uint item) {
-    return u_startBits == 0u || ((parents[u_startBits + item / 32u] >> (item % 32u)) & 1u) != 0u;
-}
-
-// An item that inherits from its parent (the level's first build, by its first primitive): its owner where it is the
-// parent's, and its fate: alive when the parent survived the last level, counted and marked in the alive set (which
-// the C++ side cleared).
-void inherit(uint item, bool live) {
-    if (u_inheritOwners != 0) owners[item] = parentState[u_parents + parentOf(item)];
-    alive[item] = live ? 1u : 0u;
-    if (!live) return;
-    atomicOr(counters[CULLIDE_ALIVE_BITS + item / 32u], 1u << (item % 32u));
-    atomicAdd(counters[CULLIDE_CHAIN_ALIVE_START], 1u);
-}
-
 // The records of the work group's run of lanes whose primitives belong to `item` (an item's primitives lie together),
 // counted for the item with one atomic add by the run's first lane (`before`: the records of the lanes before it). A
 // whole-mesh item has thousands of primitives: one add per lane would all hit one word.
@@ -263,22 +220,9 @@ void main() {
     uint group = u_primBase / kLanes + gl_WorkGroupID.x;
     uint p = u_primBase + gl_GlobalInvocationID.x;
     uint item = p < u_primCount ? itemOf(p) : 0u;
-    // The level's first build, in its first pass (APPEND reads what it wrote): the items' start.
     bool single = u_pass == CULLIDE_BUILD_PASS_SINGLE;
-    bool inherits = u_withBounds != 0 && u_parents != 0u && u_pass != CULLIDE_BUILD_PASS_APPEND;
-    uint parent = inherits && p < u_primCount ? parentOf(item) : 0u;
-    bool live = p < u_primCount && (inherits ? parentState[parent] != 0u && startsAlive(item) : alive[item] != 0u);
-    if (inherits && p < u_primCount && (u_onePrimEach != 0 || p == primBegin[item])) inherit(item, live);
-    // The primitive: generated once, in this first pass (the passes after it read it back), or as sent.
-    uint prim = 0u;
-    if (p < u_primCount) {
-        if (inherits && u_generate != 0) {
-            prim = generatedPrim(item, parent);
-            itemPrims[p] = prim;
-        } else {
-            prim = itemPrims[p];
-        }
-    }
+    bool live = p < u_primCount && alive[item] != 0u;
+    uint prim = p < u_primCount ? itemPrims[p] : 0u;
     if (u_pass == CULLIDE_BUILD_PASS_FOOTPRINTS) {
         if (u_withBounds != 0 && p < u_primCount) addToItemBounds(prim, item);
         float pixels = live ? footprintOf(primExtent(prim)) : 0.0;

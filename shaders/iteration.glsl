@@ -8,18 +8,14 @@
 //     (finishIteration): it records what the iteration left, decides whether the level goes on and, if so, fits the
 //     next view and writes the next iteration's indirect arguments; otherwise it writes empty ones, so the iterations
 //     the C++ side issued beyond the last dispatch nothing.
-// Needs view.glsl, passes.glsl, common.glsl (alive, owners, u_resolution) and visit.glsl (flags) before it.
+// Needs view.glsl, passes.glsl, common.glsl (alive, owners, u_resolution), visit.glsl (flags) and gather.glsl before
+// it.
 layout(std430, binding = CULLIDE_SSBO_ITEM_BOUNDS) coherent buffer Bounds { uint bounds[]; };  // and record counts
 layout(location = CULLIDE_LOC_ITEM_COUNT) uniform uint u_itemCount;
 layout(location = CULLIDE_LOC_REQUIRED) uniform uint u_required;
 layout(location = CULLIDE_LOC_MAX_ITERATIONS) uniform uint u_maxIterations;
-layout(location = CULLIDE_LOC_MARGIN) uniform double u_margin;
-layout(location = CULLIDE_LOC_COORDINATE_BOUND) uniform double u_coordinateBound;
 layout(location = CULLIDE_LOC_MIN_PRUNE_FRACTION) uniform double u_minPruneFraction;
 
-// The three axes are written out: NVIDIA's GLSL compiler (driver 580.159) crashes the process linking a program with a
-// loop over shared and global counters indexed by the loop variable (found on an H100; docs/benchmarks.md).
-shared uint s_counters[CULLIDE_COUNTER_COUNT];
 shared bool s_last;
 
 // Whether an item alive at the iteration's start stays alive. Every pass counts the invocations over its limit, so the
@@ -28,59 +24,6 @@ bool staysAlive(uint item) {
     bool hidden = (flags[item] & u_required) == u_required;
     bool prunes = counters[CULLIDE_COUNTER_OVERFLOWS] == 0u && counters[CULLIDE_DISPATCH_SHORT] == 0u;
     return hidden || !prunes;
-}
-
-double orderedToDouble(uint key) {
-    uint bits = (key & 0x80000000u) != 0u ? (key & 0x7FFFFFFFu) : ~key;
-    return double(uintBitsToFloat(bits));
-}
-
-double maxAbs(double a, double b) { return max(abs(a), abs(b)); }
-
-// VisibilityLevel.cpp's fitView, operation for operation in double (precise: no fused multiply-add), into views[next]:
-// the view of items whose bounds are (lo, hi) as the counters hold them.
-void fitView(uint next, uint ownerMax) {
-    precise double bmin[3];
-    precise double bmax[3];
-    for (int a = 0; a < 3; ++a) {
-        bmin[a] = orderedToDouble(counters[CULLIDE_COUNTER_LO + a]);
-        bmax[a] = orderedToDouble(counters[CULLIDE_COUNTER_HI + a]);
-    }
-    precise double margin = 0.5lf * u_margin;
-    precise double scale = max(max(max(bmax[0] - bmin[0], bmax[1] - bmin[1]), bmax[2] - bmin[2]), 1e-30lf);
-    precise double largest = max(u_coordinateBound, max(max(maxAbs(bmin[0], bmax[0]), maxAbs(bmin[1], bmax[1])),
-                                                       maxAbs(bmin[2], bmax[2])));
-    precise double grow = margin + 1e-4lf * scale + ldexp(largest, -22);
-    for (int a = 0; a < 3; ++a) {
-        bmin[a] = bmin[a] - grow;
-        bmax[a] = bmax[a] + grow;
-    }
-    precise double minExtent = max(1e-6lf * max(max(bmax[0] - bmin[0], bmax[1] - bmin[1]), bmax[2] - bmin[2]),
-                                   1e-30lf);
-    for (int a = 0; a < 3; ++a) {
-        if (bmax[a] - bmin[a] < minExtent) {
-            bmin[a] = bmin[a] - 0.5lf * minExtent;
-            bmax[a] = bmax[a] + 0.5lf * minExtent;
-        }
-    }
-    precise double res = double(u_resolution);
-    precise double bound = max(u_coordinateBound, max(max(maxAbs(bmin[0], bmax[0]), maxAbs(bmin[1], bmax[1])),
-                                                      maxAbs(bmin[2], bmax[2])));
-    for (int a = 0; a < 3; ++a) {
-        precise double extent = bmax[a] - bmin[a];
-        precise double relative = ldexp(1.0lf, -18) * (1.0lf + bound / extent);
-        views[next].boxMin[a] = bmin[a];
-        views[next].boxMax[a] = bmax[a];
-        views[next].lo[a] = float(bmin[a]);
-        views[next].pixelScale[a] = float(res / extent);
-        views[next].depthScale[a] = float(1.0lf / extent);
-        views[next].halfSize[a] = float(0.5lf + margin * res / extent + 1e-3lf + relative * res);
-        views[next].depthPad[a] = float(margin / extent + relative + ldexp(1.0lf, -20));
-    }
-    // VisibilityLevel.cpp's idBitsFor
-    uint bits = 1u;
-    while (bits < 31u && (ownerMax >> bits) != 0u) ++bits;
-    views[next].idBits = bits;
 }
 
 // VisibilityPass.cpp's recordsStale: the view has shrunk to a quarter of the one the records were built for along
@@ -95,15 +38,6 @@ bool recordsStale(uint next) {
     return false;
 }
 
-// The work group's counters start empty (every lane calls it; a barrier must follow before they are added to).
-void clearGroupCounters() {
-    uint lane = gl_LocalInvocationID.x;
-    if (lane >= uint(CULLIDE_COUNTER_COUNT)) return;
-    bool minimum = lane == uint(CULLIDE_COUNTER_OWNER_MIN) || (lane >= uint(CULLIDE_COUNTER_LO) &&
-                                                               lane < uint(CULLIDE_COUNTER_HI));
-    s_counters[lane] = minimum ? 0xFFFFFFFFu : 0u;
-}
-
 // An item alive at the iteration's start, once all of its flags are in: it stays (counted in the work group's
 // counters) or leaves the set.
 void decideItem(uint item) {
@@ -113,31 +47,9 @@ void decideItem(uint item) {
         atomicAdd(s_counters[CULLIDE_COUNTER_PRUNED], 1u);
         return;
     }
-    atomicAdd(s_counters[CULLIDE_COUNTER_ALIVE], 1u);
-    atomicMin(s_counters[CULLIDE_COUNTER_OWNER_MIN], owners[item]);
-    atomicMax(s_counters[CULLIDE_COUNTER_OWNER_MAX], owners[item]);
-    atomicMin(s_counters[CULLIDE_COUNTER_LO + 0], bounds[3u * item + 0u]);
-    atomicMin(s_counters[CULLIDE_COUNTER_LO + 1], bounds[3u * item + 1u]);
-    atomicMin(s_counters[CULLIDE_COUNTER_LO + 2], bounds[3u * item + 2u]);
-    atomicMax(s_counters[CULLIDE_COUNTER_HI + 0], bounds[3u * (u_itemCount + item) + 0u]);
-    atomicMax(s_counters[CULLIDE_COUNTER_HI + 1], bounds[3u * (u_itemCount + item) + 1u]);
-    atomicMax(s_counters[CULLIDE_COUNTER_HI + 2], bounds[3u * (u_itemCount + item) + 2u]);
-}
-
-// The work group's counters into the iteration's (one lane, after a barrier).
-void addGroupCounters() {
-    if (s_counters[CULLIDE_COUNTER_PRUNED] != 0u)
-        atomicAdd(counters[CULLIDE_COUNTER_PRUNED], s_counters[CULLIDE_COUNTER_PRUNED]);
-    if (s_counters[CULLIDE_COUNTER_ALIVE] == 0u) return;
-    atomicAdd(counters[CULLIDE_COUNTER_ALIVE], s_counters[CULLIDE_COUNTER_ALIVE]);
-    atomicMin(counters[CULLIDE_COUNTER_OWNER_MIN], s_counters[CULLIDE_COUNTER_OWNER_MIN]);
-    atomicMax(counters[CULLIDE_COUNTER_OWNER_MAX], s_counters[CULLIDE_COUNTER_OWNER_MAX]);
-    atomicMin(counters[CULLIDE_COUNTER_LO + 0], s_counters[CULLIDE_COUNTER_LO + 0]);
-    atomicMin(counters[CULLIDE_COUNTER_LO + 1], s_counters[CULLIDE_COUNTER_LO + 1]);
-    atomicMin(counters[CULLIDE_COUNTER_LO + 2], s_counters[CULLIDE_COUNTER_LO + 2]);
-    atomicMax(counters[CULLIDE_COUNTER_HI + 0], s_counters[CULLIDE_COUNTER_HI + 0]);
-    atomicMax(counters[CULLIDE_COUNTER_HI + 1], s_counters[CULLIDE_COUNTER_HI + 1]);
-    atomicMax(counters[CULLIDE_COUNTER_HI + 2], s_counters[CULLIDE_COUNTER_HI + 2]);
+    uint top = 3u * (u_itemCount + item);
+    gatherAlive(owners[item], uvec3(bounds[3u * item], bounds[3u * item + 1u], bounds[3u * item + 2u]),
+                uvec3(bounds[top], bounds[top + 1u], bounds[top + 2u]));
 }
 
 // Whether this work group is the dispatch's last to finish (every lane calls it): what every group wrote before the
@@ -181,7 +93,7 @@ void finishIteration(uint ranOver, uint nextRecords, uint surviveOver) {
     else if (it + 1u >= u_maxIterations)
         stop = CULLIDE_STOP_DONE;
     if (stop == CULLIDE_STOP_NONE) {
-        fitView(it + 1u, ownerMax);
+        fitView(it + 1u, ownerMax, u_resolution);
         if (recordsStale(it + 1u)) stop = CULLIDE_STOP_REFIT;
     }
     views[it].alive = left;

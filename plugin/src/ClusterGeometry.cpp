@@ -5,6 +5,7 @@
 #include "KeptCapacity.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 namespace cullide {
@@ -45,43 +46,38 @@ void ClusterGeometry::upload(const FrameState& frame, const Cluster& cluster, do
     backend.upload(m_geometry, stats);
 }
 
-/// The groups' boxes: every group of the cluster's static meshes (FrameState::allGroups, in object order), whichever
-/// the pre-pass keeps, so that their boxes stay where the device holds them while other meshes move and the pre-pass
-/// keeps other groups; then every group of the other meshes, built on the device from their positions
-/// (GpuGeometry::builtRanges: a range of the spatial order each, which changes only with the layout). Cluster::groups
-/// map to their own; a group not in allGroups (made by hand) gets a box of its own, sent.
+/// The groups' boxes (FrameState::allGroups of the cluster's meshes): first every group's of the static meshes, in
+/// object order, sent, so that they stay where the device holds them while other meshes move; then every group's of
+/// the other meshes, built on the device from their positions (GpuGeometry::builtRanges: a range of the spatial order
+/// each, which changes only with the layout). Neither depends on which groups the box pre-pass keeps, and each
+/// object's boxes lie together (firstGroupBox).
 void ClusterGeometry::appendGroupBoxes(const FrameState& frame, const Cluster& cluster, double margin) {
     const std::vector<Group>& all = frame.allGroups;
     constexpr std::uint32_t kNone = 0xFFFFFFFFu, kBuilt = 0x80000000u;  // kBuilt | its place among the built boxes
-    m_allGroupBox.assign(all.size(), kNone);
+    m_firstGroupBox.assign(frame.valid.size(), kNone);
     m_geometry.builtRanges.clear();
     m_geometry.builtInflate = floatUp(0.5 * margin);
     const auto before = [](const Group& a, std::uint32_t object) { return a.object < object; };
     for (const bool built : {false, true}) {
         for (std::uint32_t o : cluster.objects) {
             const bool isStatic = !frame.statics.entry.empty() && frame.statics.entry[o] != nullptr;
-            if (isStatic == built) continue;
             auto g = std::lower_bound(all.begin(), all.end(), o, before);
+            if (isStatic == built || g == all.end() || g->object != o) continue;
+            m_firstGroupBox[o] = built ? kBuilt | static_cast<std::uint32_t>(m_geometry.builtRanges.size() / 2)
+                                       : static_cast<std::uint32_t>(m_geometry.boxes.size() / 6);
             for (; g != all.end() && g->object == o; ++g) {
                 if (!built) {
-                    m_allGroupBox[g->index] = appendBox(g->box);
+                    appendBox(g->box);
                     continue;
                 }
-                m_allGroupBox[g->index] = kBuilt | static_cast<std::uint32_t>(m_geometry.builtRanges.size() / 2);
                 m_geometry.builtRanges.push_back(m_baseTriangle[o] + g->first);
                 m_geometry.builtRanges.push_back(g->count);
             }
         }
     }
-    m_groupBox.resize(cluster.groups.size());
-    for (std::size_t g = 0; g < cluster.groups.size(); ++g) {
-        const Group& group = cluster.groups[g];
-        const bool placed = group.index < all.size() && m_allGroupBox[group.index] != kNone;
-        m_groupBox[g] = placed ? m_allGroupBox[group.index] : appendBox(group.box);
-    }
     const auto firstBuilt = static_cast<std::uint32_t>(m_geometry.boxes.size() / 6);  // the built ones follow
-    for (std::uint32_t& box : m_groupBox)
-        if ((box & kBuilt) != 0) box = firstBuilt + (box & ~kBuilt);
+    for (std::uint32_t& box : m_firstGroupBox)
+        if (box != kNone && (box & kBuilt) != 0) box = firstBuilt + (box & ~kBuilt);
 }
 
 namespace {
@@ -221,14 +217,9 @@ std::vector<float> allBoxes(const GpuGeometry& geometry, const std::vector<float
     return all;
 }
 
-std::vector<std::uint32_t> generatedPrims(const LevelItems& items, const std::vector<std::uint32_t>& ordered) {
-    std::vector<std::uint32_t> prims(items.size());
-    for (std::size_t p = 0; p + 1 < items.parentBegin.size(); ++p) {
-        const std::uint32_t first = items.parentFirst.at(p);
-        for (std::uint32_t i = items.parentBegin[p]; i < items.parentBegin[p + 1]; ++i)
-            prims.at(i) = (first & CULLIDE_PRIM_BOX_BIT) != 0 ? first : ordered.at(first + (i - items.parentBegin[p]));
-    }
-    return prims;
+float ClusterGeometry::prepassSlack(double grow) const {
+    const double bound = m_geometry.coordinateBound;
+    return floatUp(grow + std::ldexp(bound, -22) + std::ldexp(m_origin.cwiseAbs().maxCoeff() + bound, -50));
 }
 
 std::uint32_t ClusterGeometry::appendBox(const Aabb& worldBox) {

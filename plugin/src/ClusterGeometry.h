@@ -27,12 +27,17 @@ public:
     /// Starts a frame: what the device keeps between frames ages by frames, not by uploads (one per cluster).
     void beginFrame() { m_mappedVertices.beginFrame(); }
 
-    /// Of the last upload: where object o's triangles start in the index buffer, its box's index and group g's.
+    /// Of the last upload: where object o's triangles start in the index buffer (and in the spatial orders), its
+    /// box's index, and its first group's box (of FrameState::allGroups: its k-th group's is firstGroupBox(o) + k).
     std::uint32_t baseTriangle(std::uint32_t object) const { return m_baseTriangle[object]; }
     std::uint32_t objectBox(std::uint32_t object) const { return m_objectBox[object]; }
-    std::uint32_t groupBox(std::size_t group) const { return m_groupBox[group]; }
+    std::uint32_t firstGroupBox(std::uint32_t object) const { return m_firstGroupBox[object]; }
     /// The largest |coordinate| uploaded (GpuGeometry::coordinateBound), for the views' error bounds.
     double coordinateBound() const { return m_geometry.coordinateBound; }
+    /// How far a box pre-pass on the device must grow the boxes it compares, beyond `grow`, to keep whatever the CPU's
+    /// keeps in double: the float rounding of the positions and boxes as uploaded (2^-22 of the largest coordinate,
+    /// as fitView allows) and the double rounding of world - origin. Rounded up to float.
+    float prepassSlack(double grow) const;
     /// A world box relative to the upload's origin.
     Aabb relative(const Aabb& worldBox) const { return {worldBox.min - m_origin, worldBox.max - m_origin}; }
 
@@ -67,8 +72,7 @@ private:
     Vec3 m_origin = Vec3::Zero();
     std::vector<std::uint32_t> m_baseTriangle;
     std::vector<std::uint32_t> m_objectBox;
-    std::vector<std::uint32_t> m_groupBox;     ///< per group of the cluster (Cluster::groups)
-    std::vector<std::uint32_t> m_allGroupBox;  ///< per group of FrameState::allGroups (those of the cluster)
+    std::vector<std::uint32_t> m_firstGroupBox;  ///< per object
     std::vector<MeshSlot> m_written;  ///< the meshes written this upload
     std::vector<Changed> m_changed;   ///< per written mesh
 };

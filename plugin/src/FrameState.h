@@ -87,7 +87,8 @@ struct FrameState {
 /// sees.
 struct Cluster {
     std::vector<std::uint32_t> objects;  ///< sorted
-    std::vector<Group> groups;
+    std::vector<Group> groups;     ///< those the box pre-pass keeps (FrameState::groups)
+    std::vector<Group> allGroups;  ///< all of them (FrameState::allGroups), in object order
 };
 
 }  // namespace cullide

@@ -146,38 +146,74 @@ void keepSurvivors(const std::vector<std::uint8_t>& survivors, std::size_t first
     list.swap(kept);
 }
 
-/// The items of a triangle level that inherits the group level's survivors, described by their parents: every
-/// triangle of each group in order, then one item per proxy (a range of children per item of the group level), with
-/// each range's start in the upload's spatial orders (the backend generates the primitives), the owners (the group
-/// level's ids), which triangles the box pre-pass keeps (the others start pruned) and the box of those that may start
-/// alive. Nothing per triangle but its owner and start bit is built here.
-void addInheritingItems(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
+/// Partners beyond which the device's box pre-pass keeps every item of an object without testing it: a group is
+/// tested against up to this many (a loop per invocation; llvmpipe ends loops silently after 65,535 iterations), a
+/// triangle against up to 16, as the CPU's pre-pass does (TriangleSets.cpp).
+constexpr std::size_t kMaxGroupPartners = 4096;
+constexpr std::size_t kMaxTrianglePartners = 16;
+
+/// Adds a range of `count` items of `object` (LevelItems::objectRanges) with its partners' object boxes; `kind`
+/// CULLIDE_RANGE_*, and CULLIDE_RANGE_KEEP added where it has more than `maxPartners`.
+void addRange(LevelRun& run, std::uint32_t object, std::uint32_t count, std::uint32_t first, std::uint32_t parent,
+              std::uint32_t kind, std::size_t maxPartners) {
     LevelItems& items = run.items;
-    const std::vector<Group>& groups = run.cluster.groups;
-    items.parentBegin.assign(groups.size() + proxies.size() + 1, 0);
-    items.parentFirst.resize(groups.size() + proxies.size());
-    for (std::size_t g = 0; g < groups.size(); ++g) {
-        items.parentBegin[g + 1] = items.parentBegin[g] + groups[g].count;
-        items.parentFirst[g] = run.geometry.baseTriangle(groups[g].object) + groups[g].first;
+    ObjectRange r;
+    r.itemBegin = static_cast<std::uint32_t>(items.owner.size());
+    r.count = count;
+    r.first = first;
+    r.parent = parent;
+    r.owner = ownerOf(run, object);
+    r.kind = kind;
+    r.partnerBegin = r.partnerEnd = static_cast<std::uint32_t>(items.partnerBoxes.size());
+    const std::vector<std::uint32_t>& partners = run.frame.partners[object];
+    if (partners.size() > maxPartners) {
+        r.kind |= CULLIDE_RANGE_KEEP;
+    } else if ((kind & CULLIDE_RANGE_KEEP) == 0) {
+        for (std::uint32_t p : partners) items.partnerBoxes.push_back(run.geometry.objectBox(p));
+        r.partnerEnd = static_cast<std::uint32_t>(items.partnerBoxes.size());
     }
-    const std::size_t triangles = items.parentBegin[groups.size()];
-    resizeKeeping(items.owner, triangles + proxies.size());
-    run.pool.parallelFor(groups.size(), 256, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t g = begin; g < end; ++g)
-            std::fill(items.owner.begin() + items.parentBegin[g], items.owner.begin() + items.parentBegin[g + 1],
-                      run.ownerId[groups[g].object]);
-    });
-    items.startBits.assign((items.size() + 31) / 32, 0);
-    items.startBounds = run.geometry.relative(markPrepassTriangles(run.frame, groups, run.pool, items.startBits));
-    for (std::size_t j = 0; j < proxies.size(); ++j) {  // each starts as it ended the group level
-        const std::size_t p = groups.size() + j, i = triangles + j;
-        items.owner[i] = run.ownerId[proxies[j]];
-        items.parentBegin[p + 1] = items.parentBegin[p] + 1;
-        items.parentFirst[p] = run.geometry.objectBox(proxies[j]) | CULLIDE_PRIM_BOX_BIT;
-        items.startBits[i / 32] |= 1u << (i % 32);
-        items.startBounds.grow(run.geometry.relative(run.frame.valid[proxies[j]].box));
+    items.objectRanges.push_back(r);
+    items.owner.resize(items.owner.size() + count, r.owner);
+}
+
+/// The groups of each mesh of the cluster (Cluster::allGroups): their number per object, in object order.
+std::vector<std::pair<std::uint32_t, std::uint32_t>> groupsPerObject(const std::vector<Group>& groups) {
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> counts;
+    for (const Group& g : groups) {
+        if (counts.empty() || counts.back().first != g.object) counts.emplace_back(g.object, 0);
+        ++counts.back().second;
     }
-    items.ownersFromParents = true;  // the group level's owner ids went on
+    return counts;
+}
+
+/// The group level described by its objects: every group of each mesh of the cluster (Cluster::allGroups, whose
+/// boxes lie together per object), then one item per proxy. The device's box pre-pass keeps the groups whose box
+/// meets a partner's object box; a proxy starts alive.
+void addGroupRanges(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
+    for (const auto& [object, count] : groupsPerObject(run.cluster.allGroups))
+        addRange(run, object, count, run.geometry.firstGroupBox(object), 0, CULLIDE_RANGE_BOXES, kMaxGroupPartners);
+    for (std::uint32_t o : proxies)
+        addRange(run, o, 1, run.geometry.objectBox(o), 0, CULLIDE_RANGE_BOXES | CULLIDE_RANGE_KEEP, 0);
+    run.items.prepassSlack = run.geometry.prepassSlack(0.0);  // the boxes hold margin / 2 already
+}
+
+/// The triangle level described by its objects, inheriting the group level's survivors: every triangle of each mesh
+/// in its spatial order (its groups' one after the other), then the proxies. A triangle starts alive where its group
+/// survived and its box meets a partner's object box (grown by margin / 2: triangle boxes are not); a proxy where it
+/// survived.
+void addTriangleRanges(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
+    std::uint32_t parent = 0;  // the group level's item of the object's first group
+    for (const auto& [object, groups] : groupsPerObject(run.cluster.allGroups)) {
+        const auto triangles = static_cast<std::uint32_t>(run.frame.meshOf(object).triangles.size());
+        addRange(run, object, triangles, run.geometry.baseTriangle(object), parent, CULLIDE_RANGE_TRIANGLES,
+                 kMaxTrianglePartners);
+        parent += groups;
+    }
+    for (std::uint32_t o : proxies)
+        addRange(run, o, 1, run.geometry.objectBox(o), parent++, CULLIDE_RANGE_BOXES | CULLIDE_RANGE_KEEP, 0);
+    run.items.inheritsParents = true;
+    run.items.groupSize = static_cast<std::uint32_t>(run.settings.groupSize);
+    run.items.prepassSlack = run.geometry.prepassSlack(0.5 * run.settings.margin);
 }
 
 /// The triangles of run.triangles and the proxies (occluders only) as one level; the surviving triangles go to
@@ -197,14 +233,14 @@ void runTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies) 
 /// backend (returns true), its read-back waits for the end of the frame (collectDeferred).
 bool runInheritingTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies, bool defer) {
     beginLevel(run, true);
-    addInheritingItems(run, proxies);
+    addTriangleRanges(run, proxies);
     if (!defer) {
         prune(run, "triangles");
     } else if (pruneDeferred(run, "triangles")) {
         return true;
     }
     run.backend.settle(run.stats);  // a level run ahead that the triangle level did not wait for (no two owners)
-    addSurvivingGroupTriangles(run.frame, run.cluster.groups, run.survivors);
+    addSurvivingGroupTriangles(run.frame, run.cluster.allGroups, run.survivors);
     return false;
 }
 
@@ -222,15 +258,14 @@ bool runAutoPipeline(LevelRun& run, bool defer) {
     std::vector<Group> groups = run.cluster.groups;
     if (triangleCount(groups) > run.settings.exactThreshold) {
         beginLevel(run);
-        for (std::size_t g = 0; g < groups.size(); ++g)
-            addBoxItem(run, groups[g].object, run.geometry.groupBox(g), groups[g].box);
-        for (std::uint32_t o : proxies) addObjectBoxItem(run, o);
+        addGroupRanges(run, proxies);
         if (pruneAhead(run, "groups")) {
             // The device goes on with the groups while the triangle level is described here.
             return runInheritingTriangleLevel(run, proxies, defer);
         }
+        groups = run.cluster.allGroups;  // the items: the device's pre-pass did not run, the CPU's follows
         keepSurvivors(run.survivors, 0, groups);
-        keepSurvivors(run.survivors, run.cluster.groups.size(), proxies);
+        keepSurvivors(run.survivors, groups.size(), proxies);
     }
     collectTriangles(run.frame, groups, true, run.pool, run.scratch, run.triangles);
     if (run.triangles.size() > run.settings.exactThreshold)
@@ -303,6 +338,9 @@ void LevelPipelines::run(FrameState& frame, const Settings& settings, PruningBac
         cluster.groups.clear();
         for (const Group& g : frame.groups)
             if (member[g.object]) cluster.groups.push_back(g);
+        cluster.allGroups.clear();
+        for (const Group& g : frame.allGroups)
+            if (member[g.object]) cluster.allGroups.push_back(g);
         for (std::uint32_t o : objects) member[o] = 0;
         if (!rasterisable(frame, cluster)) {
             // Relative coordinates beyond what float positions and depths carry: no pruning (sound, and rare).
@@ -354,7 +392,7 @@ void LevelPipelines::collectDeferred(FrameState& frame, const Settings& settings
     for (std::size_t k = 0; k < m_deferred.size(); ++k) {
         const DeferredCluster& d = m_deferred[k];
         if (m_results[k].complete) {
-            addSurvivingGroupTriangles(frame, d.cluster.groups, m_results[k].survivors);
+            addSurvivingGroupTriangles(frame, d.cluster.allGroups, m_results[k].survivors);
             continue;
         }
         // A chain stopped early on the device (records to build again, more iterations than were issued): the

@@ -6,6 +6,7 @@
 #pragma once
 
 #include "Deadline.h"
+#include "bindings.h"
 #include "cullide/Stats.h"
 #include "cullide/Types.h"
 
@@ -36,7 +37,7 @@ struct GpuGeometry {
     std::vector<std::uint32_t> indices;  ///< 3 global vertex indices per triangle
     /// Per triangle: each mesh's triangles in its spatial order (FrameState::order), as global triangle indices —
     /// ordered[b + k] = b + order[k] for a mesh whose triangles start at b — so that a group's triangles are a range
-    /// of it (LevelItems::parentFirst).
+    /// of it (ObjectRange).
     std::vector<std::uint32_t> ordered;
     /// The first keptPositions floats of `positions`, keptIndices of `indices`, keptOrdered of `ordered` and
     /// keptLocal of `local` are the same as in the previous upload (static geometry, and meshes that did not change: a
@@ -83,42 +84,48 @@ std::vector<float> allPositions(const GpuGeometry& geometry);
 /// `positions` (allPositions), as group_boxes.comp builds them, bit for bit.
 std::vector<float> allBoxes(const GpuGeometry& geometry, const std::vector<float>& positions);
 
+/// A run of items of one object in a level described by its objects (LevelItems::objectRanges): item
+/// itemBegin + j (j < count) is box first + j (kind CULLIDE_RANGE_BOXES: a group's box, or a proxy's own), or the
+/// triangle ordered[first + j] of the upload (CULLIDE_RANGE_TRIANGLES: the object's triangles in its spatial order),
+/// owned by `owner`. In a level that inherits, its parent is item parent + j (boxes) or parent + j / groupSize
+/// (triangles: the j-th triangle is in the object's group j / groupSize) of the level before. The box pre-pass keeps
+/// it where its box meets one of its partners' boxes (partnerBoxes[partnerBegin .. partnerEnd), boxes of the upload)
+/// grown by the level's prepassSlack, or always (kind | CULLIDE_RANGE_KEEP). Laid out as start.comp reads it.
+struct ObjectRange {
+    std::uint32_t itemBegin = 0;
+    std::uint32_t count = 0;
+    std::uint32_t first = 0;
+    std::uint32_t parent = 0;
+    std::uint32_t partnerBegin = 0;
+    std::uint32_t partnerEnd = 0;
+    std::uint32_t owner = 0;
+    std::uint32_t kind = 0;
+};
+static_assert(sizeof(ObjectRange) == 4 * CULLIDE_RANGE_WORDS, "start.comp's range records");
+
 /// The items of one level. Item i belongs to owner[i] (a compact object id) and is drawn as the primitives
 /// prims[primBegin[i] .. primBegin[i + 1]) (a triangle index, or a box index | CULLIDE_PRIM_BOX_BIT) — or, in a level
-/// described by its parents (described()), as the one primitive parentFirst generates for it.
+/// described by its objects (describedByObjects()), as the one primitive its range gives it on the device.
 struct LevelItems {
     std::vector<std::uint32_t> owner;
     std::vector<std::uint32_t> primBegin{0};
     std::vector<std::uint32_t> prims;
     std::vector<Aabb> bounds;  ///< per item, relative to the upload origin, inflated by nothing
-    /// Empty: every item starts the level alive. Otherwise the items parentBegin[p] .. parentBegin[p + 1] are the
-    /// children of item p of the level the backend ran just before (pruneLevelAhead; parentBegin has one entry per
-    /// item of it and one more, the items are ordered by parent), and an item starts alive only when its parent
-    /// survived that level: the survivors never leave the device.
-    std::vector<std::uint32_t> parentBegin;
-    /// With parentBegin: owner[i] is the owner of item i's parent (its ids are the last level's), so a backend may take
-    /// the owners from there instead of sending them.
-    bool ownersFromParents = false;
-    /// With parentBegin, one primitive per item: where the backend may generate the items' primitives instead of
-    /// sending `prims` (which says the same): item i, the j-th child of parent p, is ordered[parentFirst[p] + j] of
-    /// the upload (GpuGeometry::ordered: a group's triangles), or parentFirst[p] itself where that names a box
-    /// (CULLIDE_PRIM_BOX_BIT; such a parent has one child). Empty: the backend reads `prims`.
-    std::vector<std::uint32_t> parentFirst;
-    /// Empty: every item starts as its parent ended. Otherwise item i may start alive only where bit i % 32 of word
-    /// i / 32 is set (the triangles whose box meets no partner object's box start pruned).
-    std::vector<std::uint32_t> startBits;
-    /// With parentFirst, `prims` and `bounds` may be left empty (primBegin {0}): a level described by its parents
-    /// (described()), whose primitives the backend generates (generatedPrims), one per item, and which starts with
-    /// the view fitted to startBounds, the box of the items that may start alive. Its owners are still listed.
-    Aabb startBounds;
-    bool described() const { return !parentFirst.empty() && prims.empty(); }
-    std::size_t primitiveCount() const { return described() ? size() : prims.size(); }
-    bool startsAlive(std::size_t i) const { return startBits.empty() || ((startBits[i / 32] >> (i % 32)) & 1u) != 0; }
-    /// The parent of item i (parentBegin non-empty): the last p with parentBegin[p] <= i.
-    std::uint32_t parentOf(std::size_t i) const {
-        const auto after = std::upper_bound(parentBegin.begin(), parentBegin.end(), static_cast<std::uint32_t>(i));
-        return static_cast<std::uint32_t>(after - parentBegin.begin() - 1);
-    }
+    /// Non-empty: a level described by its objects, in ranges of items ordered by itemBegin and covering every item.
+    /// The backend generates each item's primitive, owner and start — its parent's survival where `inheritsParents`
+    /// (the level the backend ran just before, pruneLevelAhead: its survivors never leave the device), and the box
+    /// pre-pass — and fits the first view to the items that start alive on the device, as an iteration's end fits the
+    /// next one: nothing per item and no view is sent (LevelStart::view is not used). `prims` and `bounds` are left
+    /// empty; `owner` lists every item's (its size is the level's).
+    std::vector<ObjectRange> objectRanges;
+    std::vector<std::uint32_t> partnerBoxes;
+    bool inheritsParents = false;
+    std::uint32_t groupSize = 1;  ///< triangles per parent (CULLIDE_RANGE_TRIANGLES ranges that inherit)
+    /// How far the pre-pass grows a partner's box (float, rounded up): the float error of the boxes and positions
+    /// as the device holds them, and for triangles the margin / 2 their boxes are not grown by.
+    float prepassSlack = 0.0f;
+    bool describedByObjects() const { return !objectRanges.empty(); }
+    std::size_t primitiveCount() const { return describedByObjects() ? size() : prims.size(); }
     std::size_t size() const { return owner.size(); }
     /// Whether item i is exactly primitive i (one primitive each): primBegin need not be sent.
     bool onePrimitiveEach() const {
@@ -131,17 +138,13 @@ struct LevelItems {
         primBegin.assign(1, 0);
         prims.clear();
         bounds.clear();
-        parentBegin.clear();
-        ownersFromParents = false;
-        parentFirst.clear();
-        startBits.clear();
-        startBounds = Aabb{};
+        objectRanges.clear();
+        partnerBoxes.clear();
+        inheritsParents = false;
+        groupSize = 1;
+        prepassSlack = 0.0f;
     }
 };
-
-/// The primitives of `items` as LevelItems::parentFirst generates them from `ordered` (GpuGeometry::ordered): what the
-/// GL back-end's first build writes on the device, and what `items.prims` must say.
-std::vector<std::uint32_t> generatedPrims(const LevelItems& items, const std::vector<std::uint32_t>& ordered);
 
 /// The orthographic view box of one iteration and the float parameters every view of it uses (the shaders'
 /// uniforms), per world axis. Made by fitView (VisibilityLevel.h).
@@ -232,7 +235,7 @@ public:
     virtual void pruneLevel(const LevelItems& items, const LevelStart& start, std::vector<std::uint8_t>& survivors,
                             LevelStats& level, Stats& stats, std::vector<IterationTrace>* trace) = 0;
     /// Runs a level as pruneLevel does, whose survivors stay with the backend for the next level's items to inherit
-    /// (LevelItems::parent). The GL back-end issues it and returns at once, unless the level in its place stopped
+    /// (LevelItems::inheritsParents). The GL back-end issues it and returns at once, unless the level in its place stopped
     /// early last time (then it waits, as pruneLevel): its stats (stats.levels[levelIndex]) and trace are complete
     /// once the next level has been waited for (pruneLevel, which may throw LevelsRerun) or settle().
     virtual void pruneLevelAhead(const LevelItems& items, const LevelStart& start, std::size_t levelIndex,

@@ -198,26 +198,15 @@ void ReferenceVisibility::pruneLevel(const LevelItems& items, const LevelStart& 
                                      std::vector<std::uint8_t>& survivors, LevelStats& level, Stats& stats,
                                      std::vector<IterationTrace>* trace) {
     m_items = &items;
-    if (items.parentBegin.empty()) {
-        m_alive.assign(items.size(), 1);
-    } else {
-        m_parentAlive.swap(m_alive);
-        m_alive.resize(items.size());
-        for (std::size_t i = 0; i < items.size(); ++i)
-            m_alive[i] = m_parentAlive.at(items.parentOf(i)) != 0 && items.startsAlive(i) ? 1 : 0;
-        if (items.described()) {  // its primitives, as the GL back-end generates them on the device
-            m_expanded = items;
-            m_expanded.prims = generatedPrims(items, m_geometry->ordered);
-            m_expanded.primBegin.resize(items.size() + 1);
-            for (std::size_t i = 0; i <= items.size(); ++i) m_expanded.primBegin[i] = static_cast<std::uint32_t>(i);
-            m_items = &m_expanded;
-            checkStartBounds(m_expanded, start.coordinateBound);
-        } else if (!items.parentFirst.empty() && generatedPrims(items, m_geometry->ordered) != items.prims) {
-            throw BackendError("LevelItems: prims differ from the primitives parentFirst generates");
-        }
-    }
     View view = start.view;
     std::uint32_t idBits = start.idBits;
+    if (items.describedByObjects()) {
+        if (items.inheritsParents) m_parentAlive.swap(m_alive);
+        startByObjects(items, start.coordinateBound, view, idBits);
+        m_items = &m_expanded;
+    } else {
+        m_alive.assign(items.size(), 1);
+    }
     std::size_t alive = static_cast<std::size_t>(std::count(m_alive.begin(), m_alive.end(), 1));
     if (!level.itemsPerIteration.empty()) level.itemsPerIteration.front() = alive;  // those that start alive
     for (int iteration = 0;; ++iteration) {
@@ -234,21 +223,72 @@ void ReferenceVisibility::pruneLevel(const LevelItems& items, const LevelStart& 
     survivors = m_alive;
 }
 
-void ReferenceVisibility::checkStartBounds(const LevelItems& items, double coordinateBound) const {
-    // The box of the start-alive items as rasterised (float vertices, boxes rounded outwards) and the one the CPU
-    // gave (its triangle boxes, inflated by margin / 2) differ by that inflation and float rounding only.
-    Aabb device;
-    for (std::size_t i = 0; i < items.size(); ++i)
-        if (items.startsAlive(i)) device.grow(deviceBoundsOf(*m_geometry, items, i));
-    if (device.isEmpty()) return;
-    const double tolerance = std::ldexp(std::max(1.0, coordinateBound), -21);
-    const Aabb inner = items.startBounds.inflated(tolerance);
-    const Aabb outer = device.inflated(0.5 * m_settings.margin + tolerance);
-    const bool holds = (inner.min.array() <= device.min.array()).all() && (device.max.array() <= inner.max.array()).all();
-    const bool tight = (outer.min.array() <= items.startBounds.min.array()).all() &&
-                       (items.startBounds.max.array() <= outer.max.array()).all();
-    if (!holds || !tight)
-        throw BackendError("LevelItems: startBounds is not the box of the items that may start alive");
+namespace {
+
+/// start.comp meets(): whether (lo, hi) meets box `box` grown by `slack` on each side, in float.
+bool meetsGrown(const float lo[3], const float hi[3], const float* box, float slack) {
+    for (int a = 0; a < 3; ++a) {
+        const float boxLo = box[a] - slack;
+        const float boxHi = box[3 + a] + slack;
+        if (!(lo[a] <= boxHi && boxLo <= hi[a])) return false;
+    }
+    return true;
+}
+
+}  // namespace
+
+void ReferenceVisibility::startByObjects(const LevelItems& items, double coordinateBound, View& view,
+                                         std::uint32_t& idBits) {
+    const GpuGeometry& g = *m_geometry;
+    const std::size_t n = items.size();
+    m_expanded.clear();
+    m_expanded.owner.resize(n);
+    m_expanded.prims.resize(n);
+    m_expanded.primBegin.resize(n + 1);
+    for (std::size_t i = 0; i <= n; ++i) m_expanded.primBegin[i] = static_cast<std::uint32_t>(i);
+    m_alive.assign(n, 0);
+    Aabb bounds;
+    std::uint32_t ownerMax = 0;
+    for (const ObjectRange& r : items.objectRanges) {
+        const bool isBox = (r.kind & 1u) == CULLIDE_RANGE_BOXES;
+        for (std::uint32_t j = 0; j < r.count; ++j) {
+            const std::size_t i = std::size_t{r.itemBegin} + j;
+            const std::uint32_t prim = isBox ? (r.first + j) | CULLIDE_PRIM_BOX_BIT : g.ordered.at(r.first + j);
+            m_expanded.prims.at(i) = prim;
+            m_expanded.owner.at(i) = r.owner;
+            const std::uint32_t parent = r.parent + (isBox ? j : j / items.groupSize);
+            bool live = !items.inheritsParents || m_parentAlive.at(parent) != 0;
+            float lo[3], hi[3];
+            if (isBox) {
+                const float* b = &g.boxes.at(6 * std::size_t{r.first + j});
+                std::copy_n(b, 3, lo);
+                std::copy_n(b + 3, 3, hi);
+            } else {
+                const auto corner = [&](int k, int a) {
+                    return g.positions.at(3 * std::size_t{g.indices.at(3 * std::size_t{prim} + k)} + a);
+                };
+                for (int a = 0; a < 3; ++a) {
+                    lo[a] = std::min(std::min(corner(0, a), corner(1, a)), corner(2, a));
+                    hi[a] = std::max(std::max(corner(0, a), corner(1, a)), corner(2, a));
+                }
+            }
+            if (live && (r.kind & CULLIDE_RANGE_KEEP) == 0) {
+                bool kept = false;
+                for (std::uint32_t p = r.partnerBegin; p < r.partnerEnd && !kept; ++p)
+                    kept = meetsGrown(lo, hi, &g.boxes.at(6 * std::size_t{items.partnerBoxes.at(p)}),
+                                      items.prepassSlack);
+                live = kept;
+            }
+            if (!live) continue;
+            m_alive[i] = 1;
+            bounds.grow(Vec3(lo[0], lo[1], lo[2]));
+            bounds.grow(Vec3(hi[0], hi[1], hi[2]));
+            ownerMax = std::max(ownerMax, r.owner);
+        }
+    }
+    if (bounds.isEmpty()) bounds = Aabb{Vec3::Zero(), Vec3::Zero()};  // none alive: the view of the origin
+    view = fitView(bounds, m_settings, coordinateBound);
+    idBits = idBitsFor(ownerMax);
 }
 
 void ReferenceVisibility::pruneLevelAhead(const LevelItems& items, const LevelStart& start, std::size_t levelIndex,

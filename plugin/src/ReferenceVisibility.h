@@ -45,14 +45,15 @@ private:
     IterationResult iterate(const View& view, std::uint32_t idBits, LevelStats& level, Stats& stats);
 
     Settings m_settings;
-    /// A level described by its parents: its startBounds against the box of its start-alive items as uploaded
-    /// (throws BackendError where the CPU's box misses one or is larger than the margin explains: the frame then
-    /// prunes nothing).
-    void checkStartBounds(const LevelItems& items, double coordinateBound) const;
+
+    /// start.comp's copy: a level described by its objects expanded into m_expanded (a primitive and an owner per
+    /// item), the items that start alive into m_alive (m_parentAlive holding the last level's where it inherits), and
+    /// the first view and owner-id bits fitted to them.
+    void startByObjects(const LevelItems& items, double coordinateBound, View& view, std::uint32_t& idBits);
 
     const GpuGeometry* m_geometry = nullptr;
     GpuGeometry m_mapped;  ///< the upload with its mapped meshes' positions, where it has some
-    LevelItems m_expanded;  ///< a level described by its parents (LevelItems::described), with its primitives
+    LevelItems m_expanded;  ///< a level described by its objects, with its primitives and owners
     const LevelItems* m_items = nullptr;
     std::vector<std::uint8_t> m_alive;        ///< of the level being run; after it, of the last level
     std::vector<std::uint8_t> m_parentAlive;  ///< the last level's, while a level inherits it

@@ -106,43 +106,6 @@ bool keptByPrepass(const FrameState& frame, std::uint32_t object, std::uint32_t 
 
 }  // namespace
 
-Aabb markPrepassTriangles(const FrameState& frame, const std::vector<Group>& groups, TaskPool& pool,
-                          std::vector<std::uint32_t>& bits) {
-    constexpr std::size_t kWordsPerTask = 64;
-    std::vector<std::uint32_t> begin(groups.size() + 1, 0);  // item index of each group's first triangle
-    for (std::size_t g = 0; g < groups.size(); ++g) begin[g + 1] = begin[g] + groups[g].count;
-    const std::size_t items = begin.back();
-    const std::size_t words = (items + 31) / 32;
-    if (bits.size() < words) bits.resize(words);
-    std::vector<Aabb> kept((words + kWordsPerTask - 1) / kWordsPerTask);
-    pool.parallelFor(kept.size(), 1, [&](std::size_t first, std::size_t last) {
-        for (std::size_t task = first; task < last; ++task) {
-            const std::size_t from = 32 * kWordsPerTask * task;
-            const std::size_t to = std::min(items, from + 32 * kWordsPerTask);
-            // The group of item `from`: the last g with begin[g] <= from.
-            std::size_t g = static_cast<std::size_t>(
-                std::upper_bound(begin.begin(), begin.end(), static_cast<std::uint32_t>(from)) - begin.begin() - 1);
-            std::uint32_t word = 0;
-            for (std::size_t i = from; i < to; ++i) {
-                while (i >= begin[g + 1]) ++g;
-                const Group& group = groups[g];
-                const std::uint32_t t = (*frame.order[group.object])[group.first + (i - begin[g])];
-                if (keptByPrepass(frame, group.object, t)) {
-                    word |= 1u << (i % 32);
-                    kept[task].grow((*frame.boxesOf[group.object])[t]);
-                }
-                if (i % 32 == 31 || i + 1 == to) {
-                    bits[i / 32] = word;
-                    word = 0;
-                }
-            }
-        }
-    });
-    Aabb all;
-    for (const Aabb& b : kept) all.grow(b);
-    return all;
-}
-
 void collectTriangles(const FrameState& frame, const std::vector<Group>& groups, bool prepass, TaskPool& pool,
                       TriangleScratch& scratch, std::vector<FrameTriangle>& triangles) {
     constexpr std::size_t kGroupsPerTask = 256;

@@ -40,13 +40,6 @@ void buildTriangleBoxesAndGroups(FrameState& frame, std::uint32_t groupSize, dou
 void collectTriangles(const FrameState& frame, const std::vector<Group>& groups, bool prepass, TaskPool& pool,
                       TriangleScratch& scratch, std::vector<FrameTriangle>& triangles);
 
-/// The triangles of `groups` as items, in group order (each group's in the object's spatial order): bit i % 32 of
-/// bits[i / 32] set where the box pre-pass keeps item i (as collectTriangles with `prepass` does); bits holds at
-/// least (items + 31) / 32 words, the last one's bits past the end clear. Returns the box of the kept triangles'
-/// boxes.
-Aabb markPrepassTriangles(const FrameState& frame, const std::vector<Group>& groups, TaskPool& pool,
-                          std::vector<std::uint32_t>& bits);
-
 /// The CPU path (no GPU levels), in one pass on every worker: each active mesh's triangle boxes (those not kept from
 /// an earlier frame) and its surviving triangles into frame.surviving — those whose box overlaps a partner's box
 /// (with more than 16 partners, every triangle of a run of `groupSize` whose joint box does, as the group filter
@@ -54,8 +47,8 @@ Aabb markPrepassTriangles(const FrameState& frame, const std::vector<Group>& gro
 void collectDirect(FrameState& frame, std::uint32_t groupSize, double margin, TaskPool& pool,
                    TriangleScratch& scratch);
 
-/// The triangles of `groups` as items (as markPrepassTriangles numbers them) with alive[i] set, added to
-/// frame.surviving; each list kept sorted.
+/// The triangles of `groups` as items (in group order, each group's in the object's spatial order) with alive[i] set,
+/// added to frame.surviving; each list kept sorted.
 void addSurvivingGroupTriangles(FrameState& frame, const std::vector<Group>& groups,
                                 const std::vector<std::uint8_t>& alive);
 

@@ -119,19 +119,18 @@ bool startLevel(const LevelItems& items, const Settings& settings, double coordi
         level.itemsPerIteration.push_back(0);
         return false;
     }
-    Aabb bounds = items.startBounds;  // of the items that may start alive (a clear start bit: it never takes part)
-    if (!items.described())
-        for (std::size_t i = 0; i < n; ++i)
-            if (items.startsAlive(i)) bounds.grow(items.bounds[i]);
-    if (bounds.isEmpty()) {  // no item may start alive: nothing to run
+    start.coordinateBound = coordinateBound;
+    start.place = place;
+    if (items.describedByObjects()) return true;  // the backend finds the items that start alive and fits the view
+    Aabb bounds;
+    for (const Aabb& b : items.bounds) bounds.grow(b);
+    if (bounds.isEmpty()) {  // no item has a box: nothing to run
         std::fill(survivors.begin(), survivors.end(), 0);
         level.itemsPerIteration.push_back(0);
         return false;
     }
     start.view = fitView(bounds, settings, coordinateBound);
     start.idBits = idBitsFor(*std::max_element(items.owner.begin(), items.owner.end()));
-    start.coordinateBound = coordinateBound;
-    start.place = place;
     return true;
 }
 

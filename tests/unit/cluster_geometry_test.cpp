@@ -86,9 +86,10 @@ TEST(ClusterGeometry, StaticMeshesAreSentOnceAndOthersEveryUpload) {
     // Three object boxes, relative to the cluster's centre (0.5, 0.5, 0.45), rounded outwards, and the body's group
     // box after them, built on the device from its triangles (after the ground's in the spatial orders).
     ASSERT_EQ(second.boxes.size(), 3u * 6u);
-    EXPECT_EQ(second.builtRanges, (std::vector<std::uint32_t>{static_cast<std::uint32_t>(ground.triangles.size()), 12}));
+    const auto groundTriangles = static_cast<std::uint32_t>(ground.triangles.size());
+    EXPECT_EQ(second.builtRanges, (std::vector<std::uint32_t>{groundTriangles, 12}));
     EXPECT_EQ(geometry.objectBox(1), 1u);
-    EXPECT_EQ(geometry.groupBox(0), 3u);
+    EXPECT_EQ(geometry.firstGroupBox(2), 3u);
     EXPECT_FLOAT_EQ(second.boxes[6 + 0], 2.5f);
     EXPECT_FLOAT_EQ(second.boxes[6 + 5], 0.55f);
     EXPECT_DOUBLE_EQ(second.coordinateBound, 4.5);
@@ -141,7 +142,7 @@ TEST(ClusterGeometry, OnlyWhatChangedSinceTheLastUploadIsSent) {
 /// The boxes hold every group of the cluster's static meshes (FrameState::allGroups), not only those the pre-pass
 /// keeps, and the device builds every group's box of the other meshes after them (GpuGeometry::builtRanges, one range
 /// of the spatial order each): when the kept set changes, no box moves and no range changes, so the device keeps them
-/// (the GL back-end sends what changed). Cluster::groups map to their own boxes.
+/// (the GL back-end sends what changed). Each object's group boxes lie together (firstGroupBox).
 TEST(ClusterGeometry, GroupBoxesStayInPlaceWhateverThePrepassKeeps) {
     const TriangleMesh a = makeBox(Vec3::Constant(0.5));
     TriangleMesh b = makeBox(Vec3::Constant(0.5));
@@ -179,11 +180,11 @@ TEST(ClusterGeometry, GroupBoxesStayInPlaceWhateverThePrepassKeeps) {
         // The moving mesh's three groups, built: its triangles start after the static mesh's 12.
         EXPECT_EQ(g.builtRanges, (std::vector<std::uint32_t>{12, 4, 16, 4, 20, 4}));
         EXPECT_EQ(g.builtInflate, 0.125f);
-        for (std::size_t i = 0; i < kept.size(); ++i) {
-            const std::uint32_t box = geometry.groupBox(i);
-            EXPECT_EQ(box, 2 + kept[i]) << "group " << kept[i];
-            if (kept[i] < 3) {
-                EXPECT_NEAR(g.boxes[6 * box], 0.1 * kept[i] - g.origin.x(), 1e-6) << "group " << kept[i];
+        for (std::uint32_t k = 0; k < 6; ++k) {
+            const std::uint32_t box = geometry.firstGroupBox(k < 3 ? 0 : 1) + k % 3;
+            EXPECT_EQ(box, 2 + k) << "group " << k;
+            if (k < 3) {
+                EXPECT_NEAR(g.boxes[6 * box], 0.1 * k - g.origin.x(), 1e-6) << "group " << k;
             }
         }
     }

@@ -94,8 +94,8 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
                                                                        "passes.glsl", "scan.glsl", "second.comp"})},
                                     "the second pass program");
         flagProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl",
-                                                                     "passes.glsl", "iteration.glsl", "scan.glsl",
-                                                                     "flag.comp"})},
+                                                                     "passes.glsl", "gather.glsl", "iteration.glsl",
+                                                                     "scan.glsl", "flag.comp"})},
                                   "the flag pass program");
     } else {
         setupProgram = linkProgram(
@@ -112,14 +112,17 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
         }
         program = linkProgram({vs, fs}, "the visibility raster program");
         surviveProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl",
-                                                                        "passes.glsl", "iteration.glsl", "pack.glsl",
-                                                                        "survive.comp"})},
+                                                                        "passes.glsl", "gather.glsl", "iteration.glsl",
+                                                                        "pack.glsl", "survive.comp"})},
                                      "the survivor program");
     }
     buildProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "passes.glsl", "build.comp"})},
                                "the record build program");
     mapProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"map.comp"})}, "the mapped meshes' program");
     boxesProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"group_boxes.comp"})}, "the group boxes program");
+    startProgram = linkProgram(
+        {compileShader(GL_COMPUTE_SHADER, {"view.glsl", "passes.glsl", "gather.glsl", "start.comp"})},
+        "the level start program");
     if (settings.backend == Backend::Compute)
         bands = context.isSoftware() && !options.shortBands ? CULLIDE_BANDS_LONG : CULLIDE_BANDS_SHORT;
     glCreateVertexArrays(1, &vao);
@@ -138,7 +141,7 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
     if (options.maxWorkGroups > 0) maxGroups = std::min(maxGroups, options.maxWorkGroups);
     reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * CULLIDE_ALIVE_BITS);
     reserveBuffer(buffers[kViews], capacity[kViews], sizeof(ViewRecord) * (CULLIDE_MAX_ITERATIONS + 1));
-    for (Buffer b : {kParent, kParentAlive, kPrimBegin, kStash, kStashViews, kOrdered, kBands, kBoxRanges})
+    for (Buffer b : {kRanges, kParentAlive, kPrimBegin, kStash, kStashViews, kOrdered, kBands, kBoxRanges})
         reserveBuffer(buffers[b], capacity[b], 4);
     checkGlError("creating the visibility pass");
     // Every call makes the context current on its own thread: the culler may be used from another thread than
@@ -161,15 +164,18 @@ LevelDevice::~LevelDevice() {
     glDeleteProgram(buildProgram);
     glDeleteProgram(mapProgram);
     glDeleteProgram(boxesProgram);
+    glDeleteProgram(startProgram);
 }
 
-void LevelDevice::dispatchAll(std::size_t count) const {
+std::size_t LevelDevice::dispatchAll(std::size_t count, GLint baseLocation) const {
     const std::size_t groups = (count + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
-    for (std::size_t first = 0; first < groups; first += maxGroups) {
-        glUniform1ui(CULLIDE_LOC_PRIM_BASE, static_cast<GLuint>(first * CULLIDE_COMPUTE_GROUP_SIZE));
+    std::size_t dispatches = 0;
+    for (std::size_t first = 0; first < groups; first += maxGroups, ++dispatches) {
+        glUniform1ui(baseLocation, static_cast<GLuint>(first * CULLIDE_COMPUTE_GROUP_SIZE));
         glDispatchCompute(static_cast<GLuint>(std::min<std::size_t>(maxGroups, groups - first)), 1, 1);
     }
-    glUniform1ui(CULLIDE_LOC_PRIM_BASE, 0);
+    glUniform1ui(baseLocation, 0);
+    return dispatches;
 }
 
 void LevelDevice::uploadPositions(const GpuGeometry& g, Stats& stats) {
@@ -202,12 +208,7 @@ void LevelDevice::uploadPositions(const GpuGeometry& g, Stats& stats) {
     glUniform3d(CULLIDE_LOC_ORIGIN, g.origin.x(), g.origin.y(), g.origin.z());
     glUniform1ui(CULLIDE_LOC_MAPPED_MESHES, static_cast<GLuint>(records.size()));
     glUniform1ui(CULLIDE_LOC_MAPPED_VERTICES, static_cast<GLuint>(vertices));
-    const std::size_t groups = (vertices + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
-    for (std::size_t first = 0; first < groups; first += maxGroups) {
-        glUniform1ui(CULLIDE_LOC_MAPPED_BASE, static_cast<GLuint>(first * CULLIDE_COMPUTE_GROUP_SIZE));
-        glDispatchCompute(static_cast<GLuint>(std::min(maxGroups, groups - first)), 1, 1);
-        stats.draws += 1;
-    }
+    stats.draws += dispatchAll(vertices, CULLIDE_LOC_MAPPED_BASE);
     // Read by the passes after it, and overwritten by the next upload's glNamedBufferSubData only after it.
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     readForTests(kPositions, 3 * g.vertexCount(), positionsAfterUpload.get());
@@ -221,7 +222,8 @@ void LevelDevice::uploadBoxes(const GpuGeometry& g, Stats& stats) {
         heldBoxes.clear();
     }
     // A cluster at rest keeps its boxes; an object moving sends its own (its object box; a static mesh's groups').
-    stats.bytesUploaded += uploadChanged(buffers[kBoxes], capacity[kBoxes], heldBoxes, g.boxes.data(), g.boxes.size() * 4);
+    stats.bytesUploaded +=
+        uploadChanged(buffers[kBoxes], capacity[kBoxes], heldBoxes, g.boxes.data(), g.boxes.size() * 4);
     if (built > 0) {
         stats.bytesUploaded += uploadChanged(buffers[kBoxRanges], capacity[kBoxRanges], heldRanges,
                                              g.builtRanges.data(), g.builtRanges.size() * 4);
@@ -234,12 +236,7 @@ void LevelDevice::uploadBoxes(const GpuGeometry& g, Stats& stats) {
         glUniform1ui(CULLIDE_LOC_BOX_FIRST, static_cast<GLuint>(g.boxes.size() / 6));
         glUniform1ui(CULLIDE_LOC_BOX_COUNT, static_cast<GLuint>(built));
         glUniform1f(CULLIDE_LOC_BOX_INFLATE, g.builtInflate);
-        const std::size_t groups = (built + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
-        for (std::size_t first = 0; first < groups; first += maxGroups) {
-            glUniform1ui(CULLIDE_LOC_BOX_BASE, static_cast<GLuint>(first * CULLIDE_COMPUTE_GROUP_SIZE));
-            glDispatchCompute(static_cast<GLuint>(std::min(maxGroups, groups - first)), 1, 1);
-            stats.draws += 1;
-        }
+        stats.draws += dispatchAll(built, CULLIDE_LOC_BOX_BASE);
         // Read by the passes after it, and overwritten by the next upload's glNamedBufferSubData only after it.
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     }
@@ -290,63 +287,36 @@ void LevelDevice::setLevelUniforms(double coordinateBound) const {
     glProgramUniform1d(s, CULLIDE_LOC_MIN_PRUNE_FRACTION, settings.minPruneFraction);
 }
 
-void LevelDevice::sendParents(const LevelItems& items, Stats& stats) {
-    const std::size_t parents = lastItemCount;
-    if (items.parentBegin.size() != parents + 1)
-        throw BackendError("a level's parents are not the items of the level before it");
-    // The last level's alive set and owners, before this level's replace them.
-    reserveBuffer(buffers[kParentAlive], capacity[kParentAlive], std::max<std::size_t>(1, 2 * parents) * 4);
-    glCopyNamedBufferSubData(buffers[kAlive], buffers[kParentAlive], 0, 0, static_cast<GLsizeiptr>(parents * 4));
-    if (items.ownersFromParents)
-        glCopyNamedBufferSubData(buffers[kOwners], buffers[kParentAlive], 0, static_cast<GLintptr>(parents * 4),
-                                 static_cast<GLsizeiptr>(parents * 4));
-    parentWords.assign(items.parentBegin.begin(), items.parentBegin.end());
-    if (generatePrims) parentWords.insert(parentWords.end(), items.parentFirst.begin(), items.parentFirst.end());
-    startBitsAt = withStartBits ? static_cast<std::uint32_t>(parentWords.size()) : 0u;
-    if (withStartBits) parentWords.insert(parentWords.end(), items.startBits.begin(), items.startBits.end());
-    uploadBuffer(buffers[kParent], capacity[kParent], parentWords.data(), parentWords.size() * 4);
-    stats.bytesUploaded += parentWords.size() * 4;
-}
-
 void LevelDevice::uploadItems(const LevelItems& items, const LevelStart& start, LevelStats& level, Stats& stats) {
     const std::size_t n = items.size();
-    const bool inherits = !items.parentBegin.empty();
+    const bool byObjects = items.describedByObjects();
     const auto send = Clock::now();
-    onePrimEach = items.onePrimitiveEach();
+    onePrimEach = byObjects || items.onePrimitiveEach();
     // flag.comp decides an item once its last record is done: an item without one would never be.
     const auto& begin = items.primBegin;
     if (settings.backend == Backend::Compute && !onePrimEach &&
         std::adjacent_find(begin.begin(), begin.end(), std::equal_to<std::uint32_t>()) != begin.end())
         throw BackendError("a level item without primitives");
-    inheritOwners = inherits && items.ownersFromParents;
-    generatePrims = inherits && onePrimEach && !items.parentFirst.empty();
-    if (items.described() && !generatePrims) throw BackendError("a level described by its parents that inherits none");
-    withStartBits = inherits && !items.startBits.empty();
-    if (inherits) sendParents(items, stats);
-    lastItemCount = n;
-    if (inheritOwners) {
+    if (byObjects) {  // start.comp writes the items' owners and primitives and the first view
+        sendRanges(items, stats);
         reserveBuffer(buffers[kOwners], capacity[kOwners], n * 4);
+        reserveBuffer(buffers[kItemPrims], capacity[kItemPrims], n * 4);
     } else {
         uploadBuffer(buffers[kOwners], capacity[kOwners], items.owner.data(), n * 4);
-        stats.bytesUploaded += n * 4;
+        uploadBuffer(buffers[kItemPrims], capacity[kItemPrims], items.prims.data(), items.prims.size() * 4);
+        const ViewRecord first = toViewRecord(start.view, start.idBits);
+        glNamedBufferSubData(buffers[kViews], 0, sizeof first, &first);
+        stats.bytesUploaded += n * 4 + items.prims.size() * 4 + sizeof first;
     }
+    lastItemCount = n;
     if (!onePrimEach) {
         uploadBuffer(buffers[kPrimBegin], capacity[kPrimBegin], items.primBegin.data(), items.primBegin.size() * 4);
         stats.bytesUploaded += items.primBegin.size() * 4;
     }
-    if (generatePrims) {  // the first build writes them
-        reserveBuffer(buffers[kItemPrims], capacity[kItemPrims], n * 4);
-    } else {
-        uploadBuffer(buffers[kItemPrims], capacity[kItemPrims], items.prims.data(), items.prims.size() * 4);
-        stats.bytesUploaded += items.prims.size() * 4;
-    }
-    const ViewRecord first = toViewRecord(start.view, start.idBits);
-    glNamedBufferSubData(buffers[kViews], 0, sizeof first, &first);
-    stats.bytesUploaded += sizeof first;
     reserveBuffer(buffers[kCounters], capacity[kCounters], 4 * counterWords(n));
-    // Every item alive, or (inheriting) none until build.comp's first pass marks those whose parent survived.
-    const GLuint zero = 0, startAlive = inherits ? 0u : static_cast<GLuint>(n);
-    const GLuint aliveWord = inherits ? 0u : 0xFFFFFFFFu, aliveItem = inherits ? 0u : 1u;
+    // Every item alive, or none until start.comp marks those that start alive.
+    const GLuint zero = 0, startAlive = byObjects ? 0u : static_cast<GLuint>(n);
+    const GLuint aliveWord = byObjects ? 0u : 0xFFFFFFFFu, aliveItem = byObjects ? 0u : 1u;
     glClearNamedBufferSubData(buffers[kCounters], GL_R32UI, 4 * CULLIDE_CHAIN_RAN,
                               4 * (CULLIDE_ALIVE_BITS - CULLIDE_CHAIN_RAN), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
     glNamedBufferSubData(buffers[kCounters], 4 * CULLIDE_CHAIN_ALIVE_START, 4, &startAlive);
@@ -363,7 +333,61 @@ void LevelDevice::uploadItems(const LevelItems& items, const LevelStart& start, 
                               GL_UNSIGNED_INT, &empty[0]);
     glClearNamedBufferSubData(buffers[kItemBounds], GL_R32UI, static_cast<GLintptr>(n * 12),
                               static_cast<GLsizeiptr>(n * 12), GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
+    if (byObjects) startItems(items, start.coordinateBound, level, stats);
     level.setupSendMs += msSince(send);
+}
+
+void LevelDevice::sendRanges(const LevelItems& items, Stats& stats) {
+    const std::vector<ObjectRange>& ranges = items.objectRanges;
+    const std::size_t n = items.size();
+    for (const ObjectRange& r : ranges) {
+        const std::size_t lastParent =
+            (r.kind & 1u) == CULLIDE_RANGE_BOXES ? r.count - 1 : (r.count - 1) / items.groupSize;
+        const bool fits = r.count > 0 && std::size_t{r.itemBegin} + r.count <= n && r.partnerBegin <= r.partnerEnd &&
+                          r.partnerEnd <= items.partnerBoxes.size() &&
+                          (!items.inheritsParents || std::size_t{r.parent} + lastParent < lastItemCount);
+        if (!fits) throw BackendError("a level's object ranges do not fit its items, partners or parents");
+    }
+    if (items.inheritsParents) {  // the last level's alive set, before this level's replaces it
+        reserveBuffer(buffers[kParentAlive], capacity[kParentAlive], std::max<std::size_t>(1, lastItemCount) * 4);
+        glCopyNamedBufferSubData(buffers[kAlive], buffers[kParentAlive], 0, 0,
+                                 static_cast<GLsizeiptr>(lastItemCount * 4));
+    }
+    rangeWords.resize(ranges.size() * CULLIDE_RANGE_WORDS);
+    std::memcpy(rangeWords.data(), ranges.data(), ranges.size() * sizeof(ObjectRange));
+    rangeWords.insert(rangeWords.end(), items.partnerBoxes.begin(), items.partnerBoxes.end());
+    uploadBuffer(buffers[kRanges], capacity[kRanges], rangeWords.data(), rangeWords.size() * 4);
+    stats.bytesUploaded += rangeWords.size() * 4;
+}
+
+void LevelDevice::clearIterationCounters() const {
+    GLuint counters[CULLIDE_COUNTER_COUNT] = {};
+    counters[CULLIDE_COUNTER_OWNER_MIN] = 0xFFFFFFFFu;
+    for (int a = 0; a < 3; ++a) counters[CULLIDE_COUNTER_LO + a] = 0xFFFFFFFFu;
+    glNamedBufferSubData(buffers[kCounters], 0, sizeof counters, counters);
+}
+
+void LevelDevice::startItems(const LevelItems& items, double coordinateBound, LevelStats& level, Stats& stats) {
+    const std::size_t n = items.size();
+    clearIterationCounters();
+    bindBuffers();
+    glUseProgram(startProgram);
+    const std::size_t groups = (n + CULLIDE_COMPUTE_GROUP_SIZE - 1) / CULLIDE_COMPUTE_GROUP_SIZE;
+    glUniform1i(CULLIDE_LOC_RESOLUTION, settings.resolution);
+    glUniform1d(CULLIDE_LOC_MARGIN, settings.margin);
+    glUniform1d(CULLIDE_LOC_COORDINATE_BOUND, coordinateBound);
+    glUniform1ui(CULLIDE_LOC_ITEM_COUNT, static_cast<GLuint>(n));
+    glUniform1ui(CULLIDE_LOC_GROUPS, static_cast<GLuint>(groups));
+    glUniform1ui(CULLIDE_LOC_RANGES, static_cast<GLuint>(items.objectRanges.size()));
+    glUniform1ui(CULLIDE_LOC_GROUP_SIZE, items.groupSize);
+    glUniform1i(CULLIDE_LOC_INHERITS, items.inheritsParents ? 1 : 0);
+    glUniform1f(CULLIDE_LOC_SLACK, items.prepassSlack);
+    startTiming();
+    const std::size_t dispatches = dispatchAll(n, CULLIDE_LOC_ITEM_BASE);
+    level.draws += dispatches;
+    stats.draws += dispatches;
+    // The build reads the items' primitives, owners and alive set and the first view.
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
 }
 
 void LevelDevice::bindBuffers() const {
@@ -375,7 +399,7 @@ void LevelDevice::bindBuffers() const {
         {CULLIDE_SSBO_ITEM_BOUNDS, kItemBounds}, {CULLIDE_SSBO_PRIM_BEGIN, kPrimBegin},
         {CULLIDE_SSBO_ITEM_PRIMS, kItemPrims},  {CULLIDE_SSBO_BANDS, kBands},
         {CULLIDE_SSBO_BUILD, kBuild},           {CULLIDE_SSBO_VIEWS, kViews},
-        {CULLIDE_SSBO_PARENT, kParent},         {CULLIDE_SSBO_PARENT_ALIVE, kParentAlive},
+        {CULLIDE_SSBO_RANGES, kRanges},         {CULLIDE_SSBO_PARENT_ALIVE, kParentAlive},
         {CULLIDE_SSBO_ORDERED, kOrdered}};
     for (const auto& [binding, buffer] : bindings)
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffers[buffer]);
@@ -383,10 +407,10 @@ void LevelDevice::bindBuffers() const {
 
 void LevelDevice::buildPass(int pass, std::size_t invocations, LevelStats& level, Stats& stats) const {
     glUniform1i(CULLIDE_LOC_PASS, pass);
-    dispatchAll(invocations);
+    const std::size_t dispatches = dispatchAll(invocations, CULLIDE_LOC_PRIM_BASE);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-    level.draws += 1;
-    stats.draws += 1;
+    level.draws += dispatches;
+    stats.draws += dispatches;
 }
 
 void LevelDevice::buildRecords(int iteration, bool withBounds, LevelStats& level, Stats& stats) {
@@ -420,12 +444,7 @@ void LevelDevice::buildRecords(int iteration, bool withBounds, LevelStats& level
     glUniform1ui(CULLIDE_LOC_CAPACITY, static_cast<GLuint>(recordCapacity));
     glUniform1ui(CULLIDE_LOC_MAX_GROUPS, static_cast<GLuint>(maxGroups));
     glUniform1i(CULLIDE_LOC_WITH_BOUNDS, withBounds ? 1 : 0);
-    const std::size_t parents = levelItems->parentBegin.empty() ? 0 : levelItems->parentBegin.size() - 1;
-    glUniform1ui(CULLIDE_LOC_PARENTS, static_cast<GLuint>(parents));
     glUniform1i(CULLIDE_LOC_ONE_PRIM_EACH, onePrimEach ? 1 : 0);
-    glUniform1i(CULLIDE_LOC_INHERIT_OWNERS, inheritOwners ? 1 : 0);
-    glUniform1i(CULLIDE_LOC_GENERATE, generatePrims ? 1 : 0);
-    glUniform1ui(CULLIDE_LOC_START_BITS, startBitsAt);
     startTiming();
     if (twoPasses) {  // the pixels per band come from every primitive's footprint
         buildPass(CULLIDE_BUILD_PASS_FOOTPRINTS, primCount, level, stats);
@@ -494,10 +513,7 @@ void LevelDevice::prepareIteration(std::size_t itemCount) {
     // flag.comp's count of the invocations done per item
     glClearNamedBufferSubData(buffers[kItemBounds], GL_R32UI, static_cast<GLintptr>(itemCount * 28),
                               static_cast<GLsizeiptr>(itemCount * 4), GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
-    GLuint counters[CULLIDE_COUNTER_COUNT] = {};
-    counters[CULLIDE_COUNTER_OWNER_MIN] = 0xFFFFFFFFu;
-    for (int a = 0; a < 3; ++a) counters[CULLIDE_COUNTER_LO + a] = 0xFFFFFFFFu;
-    glNamedBufferSubData(buffers[kCounters], 0, sizeof counters, counters);
+    clearIterationCounters();
     for (GLuint unit = 0; unit < 4; ++unit)
         glBindImageTexture(unit, images[unit], 0, GL_FALSE, 0, GL_READ_WRITE, GL_R32UI);
     bindBuffers();

@@ -42,8 +42,8 @@ enum Buffer {
     kBands,
     kBuild,
     kViews,
-    kParent,       ///< parentBegin, then parentFirst (a level that generates its primitives), then startBits
-    kParentAlive,  ///< the last level's alive set, then its owners (copied on the device)
+    kRanges,       ///< a level described by its objects: its ranges, then their partners' boxes
+    kParentAlive,  ///< the last level's alive set (copied on the device), where a level inherits it
     kStash,       ///< a level run ahead: words CULLIDE_DISPATCH_RECORDS .. CULLIDE_AHEAD of its counters
     kStashViews,  ///< ... and its views (where a trace is asked for)
     kLocal,       ///< the mapped meshes' own vertices (double)
@@ -101,6 +101,7 @@ struct LevelDevice {
     GLuint buildProgram = 0;
     GLuint mapProgram = 0;
     GLuint boxesProgram = 0;  ///< group_boxes.comp
+    GLuint startProgram = 0;  ///< start.comp: the start of a level described by its objects
     int bands = CULLIDE_BANDS_NONE;  ///< build.comp's CULLIDE_BANDS_* for this back-end and device
     GLuint vao = 0;
     GLuint framebuffer = 0;
@@ -118,11 +119,7 @@ struct LevelDevice {
     const LevelItems* levelItems = nullptr;  ///< the level being pruned
     std::size_t lastItemCount = 0;  ///< of the last level (what the next level's items may inherit)
     bool onePrimEach = false;       ///< the level's item i is primitive i: its primBegin is not sent
-    bool inheritOwners = false;     ///< the level's owners are its items' parents': not sent, the first build writes them
-    bool generatePrims = false;     ///< the level's primitives come from its parents (LevelItems::parentFirst): not sent
-    bool withStartBits = false;     ///< LevelItems::startBits sent
-    std::uint32_t startBitsAt = 0;  ///< where they start in kParent (0: none)
-    std::vector<std::uint32_t> parentWords;  ///< kParent's words, gathered before they are sent
+    std::vector<std::uint32_t> rangeWords;  ///< kRanges' words, gathered before they are sent
     /// Short bands: the pixels per band the level's builds take, from the last build in its place (0: none).
     float perBandEstimate = 0.0f;
     /// Records the record buffers (kPrims, kPrimsNext; kRecords on the raster back-end) hold: kept between levels and
@@ -144,9 +141,10 @@ struct LevelDevice {
     LevelDevice(const LevelDevice&) = delete;
     LevelDevice& operator=(const LevelDevice&) = delete;
 
-    /// `count` invocations in dispatches of at most GL_MAX_COMPUTE_WORK_GROUP_COUNT[0] groups each; the program
-    /// reads its first index from CULLIDE_LOC_PRIM_BASE (build.comp: the passes over records are indirect).
-    void dispatchAll(std::size_t count) const;
+    /// `count` invocations in dispatches of at most GL_MAX_COMPUTE_WORK_GROUP_COUNT[0] groups each (at least one
+    /// where count > 0) of the current program, which reads its first invocation's index from uniform
+    /// `baseLocation` (left at 0 after). Returns the dispatches (build.comp's passes over records are indirect).
+    std::size_t dispatchAll(std::size_t count, GLint baseLocation) const;
 
     /// One pass over the iteration's records (their count and the arguments are on the device).
     void draw(int pass, LevelStats& level, Stats& stats) const;
@@ -155,10 +153,10 @@ struct LevelDevice {
     /// iteration sets only its index: its view is views[iteration] on the device).
     void setLevelUniforms(double coordinateBound) const;
 
-    /// Sends what the record build and the iterations need of the level's items (their primitives and owners, and
-    /// parentBegin where they inherit) and the first view; clears their boxes (built by buildRecords) and the chain,
-    /// and sets the alive set: every item alive, or (inheriting) none until the first build marks those whose parent
-    /// survived (the last level's alive set is copied aside first).
+    /// Sends what the record build and the iterations need of the level's items (their primitives and owners) and the
+    /// first view, clears their boxes (built by buildRecords) and the chain, and sets the alive set: every item alive.
+    /// A level described by its objects sends its ranges instead, and start.comp writes all of that on the device
+    /// (startItems).
     void uploadItems(const LevelItems& items, const LevelStart& start, LevelStats& level, Stats& stats);
 
     /// Sends the upload's positions (those before the mapped meshes') and what changed of the mapped meshes' own
@@ -171,9 +169,14 @@ struct LevelDevice {
     /// (tests only; nothing where `to` is null).
     void readForTests(Buffer buffer, std::size_t floats, std::vector<float>* to) const;
 
-    /// An inheriting level's view of the last level: its alive set and owners copied aside on the device, and
-    /// parentBegin, parentFirst and startBits sent as one buffer (kParent).
-    void sendParents(const LevelItems& items, Stats& stats);
+    /// A level described by its objects: its ranges and partner boxes sent as one buffer (kRanges), and (inheriting)
+    /// the last level's alive set copied aside on the device.
+    void sendRanges(const LevelItems& items, Stats& stats);
+    /// start.comp over a level described by its objects: its items' primitives, owners and start, and the first
+    /// view (one dispatch, with nothing read back).
+    void startItems(const LevelItems& items, double coordinateBound, LevelStats& level, Stats& stats);
+    /// The counters an iteration (and start.comp) gathers into, emptied.
+    void clearIterationCounters() const;
 
     /// Binds the shader storage buffers every program reads and writes.
     void bindBuffers() const;

@@ -1,0 +1,134 @@
+// The start of a level described by its objects (LevelItems::objectRanges, plugin/src/PruningBackend.h), on the
+// device: nothing per item and no view is sent. Per item (one invocation each), from its object's range: its primitive
+// (a box of the upload, or a triangle of the mesh's spatial order), its owner, and whether it starts alive — where the
+// level inherits, its parent survived the level before; and the box pre-pass keeps it: its box (a group's box, or the
+// triangle's box of the positions) meets one of its partner objects' boxes grown by u_slack, or its range keeps every
+// item (a proxy; an object with too many partners to test). The items that start alive are counted (with their owner
+// range and boxes: gather.glsl), and the last work group fits the first view to them as an iteration's end fits the
+// next (none alive: to the origin). ReferenceVisibility.cpp's startByObjects is the CPU's copy, float for float.
+layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
+layout(std430, binding = CULLIDE_SSBO_POSITIONS) readonly buffer Positions { float positions[]; };
+layout(std430, binding = CULLIDE_SSBO_INDICES) readonly buffer Indices { uint indices[]; };
+layout(std430, binding = CULLIDE_SSBO_BOXES) readonly buffer Boxes { float boxes[]; };
+layout(std430, binding = CULLIDE_SSBO_ORDERED) readonly buffer Ordered { uint ordered[]; };
+layout(std430, binding = CULLIDE_SSBO_RANGES) readonly buffer Ranges { uint ranges[]; };  // then the partner boxes
+layout(std430, binding = CULLIDE_SSBO_PARENT_ALIVE) readonly buffer ParentState { uint parentState[]; };
+layout(std430, binding = CULLIDE_SSBO_ITEM_OWNER) writeonly buffer Owners { uint owners[]; };
+layout(std430, binding = CULLIDE_SSBO_ITEM_PRIMS) writeonly buffer ItemPrims { uint itemPrims[]; };
+layout(std430, binding = CULLIDE_SSBO_ALIVE) writeonly buffer Alive { uint alive[]; };
+layout(location = CULLIDE_LOC_RESOLUTION) uniform int u_resolution;
+layout(location = CULLIDE_LOC_ITEM_BASE) uniform uint u_itemBase;
+layout(location = CULLIDE_LOC_ITEM_COUNT) uniform uint u_itemCount;
+layout(location = CULLIDE_LOC_GROUPS) uniform uint u_groups;  // of all of the start's dispatches
+layout(location = CULLIDE_LOC_RANGES) uniform uint u_rangeCount;
+layout(location = CULLIDE_LOC_GROUP_SIZE) uniform uint u_groupSize;
+layout(location = CULLIDE_LOC_INHERITS) uniform int u_inherits;
+layout(location = CULLIDE_LOC_SLACK) uniform float u_slack;
+
+shared bool s_last;
+
+uint field(uint range, int word) { return ranges[uint(CULLIDE_RANGE_WORDS) * range + uint(word)]; }
+
+// The range of item i: the last r with ITEM_BEGIN <= i.
+uint rangeOf(uint i) {
+    uint lo = 0u;
+    uint hi = u_rangeCount;  // field(lo) <= i < field(hi)
+    while (hi - lo > 1u) {
+        uint mid = lo + (hi - lo) / 2u;
+        if (field(mid, CULLIDE_RANGE_ITEM_BEGIN) <= i) lo = mid; else hi = mid;
+    }
+    return lo;
+}
+
+vec3 vertexAt(uint i) { return vec3(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]); }
+
+// The box of a primitive: a box of the upload, or a triangle of the positions.
+void primBox(uint ref, out vec3 lo, out vec3 hi) {
+    if ((ref & CULLIDE_PRIM_BOX_BIT) != 0u) {
+        uint b = (ref & ~CULLIDE_PRIM_BOX_BIT) * 6u;
+        lo = vec3(boxes[b], boxes[b + 1u], boxes[b + 2u]);
+        hi = vec3(boxes[b + 3u], boxes[b + 4u], boxes[b + 5u]);
+        return;
+    }
+    vec3 a = vertexAt(indices[3u * ref]);
+    vec3 b = vertexAt(indices[3u * ref + 1u]);
+    vec3 c = vertexAt(indices[3u * ref + 2u]);
+    lo = min(min(a, b), c);
+    hi = max(max(a, b), c);
+}
+
+// Whether (lo, hi) meets box `b` grown by u_slack on each side (closed intervals).
+bool meets(vec3 lo, vec3 hi, uint b) {
+    uint at = 6u * b;
+    precise vec3 bLo = vec3(boxes[at], boxes[at + 1u], boxes[at + 2u]) - vec3(u_slack);
+    precise vec3 bHi = vec3(boxes[at + 3u], boxes[at + 4u], boxes[at + 5u]) + vec3(u_slack);
+    return all(lessThanEqual(lo, bHi)) && all(lessThanEqual(bLo, hi));
+}
+
+// Float bits whose unsigned order is the floats' order (build.comp's).
+uint orderedBits(float f) {
+    uint u = floatBitsToUint(f);
+    return (u & 0x80000000u) != 0u ? ~u : (u | 0x80000000u);
+}
+
+// Whether this work group is the last of all of the start's to finish (every lane calls it).
+bool lastToFinish() {
+    memoryBarrierBuffer();
+    barrier();
+    if (gl_LocalInvocationID.x == 0u) s_last = atomicAdd(counters[CULLIDE_CHAIN_SURVIVE_DONE], 1u) == u_groups - 1u;
+    barrier();
+    memoryBarrierBuffer();
+    return s_last;
+}
+
+void main() {
+    uint i = u_itemBase + gl_GlobalInvocationID.x;
+    clearGroupCounters();
+    barrier();
+    if (i < u_itemCount) {
+        uint r = rangeOf(i);
+        uint j = i - field(r, CULLIDE_RANGE_ITEM_BEGIN);
+        uint kind = field(r, CULLIDE_RANGE_KIND);
+        bool isBox = (kind & 1u) == CULLIDE_RANGE_BOXES;
+        uint first = field(r, CULLIDE_RANGE_FIRST);
+        uint prim = isBox ? (first + j) | CULLIDE_PRIM_BOX_BIT : ordered[first + j];
+        uint owner = field(r, CULLIDE_RANGE_OWNER);
+        uint parent = field(r, CULLIDE_RANGE_PARENT) + (isBox ? j : j / u_groupSize);
+        bool live = u_inherits == 0 || parentState[parent] != 0u;
+        vec3 lo;
+        vec3 hi;
+        primBox(prim, lo, hi);
+        if (live && (kind & CULLIDE_RANGE_KEEP) == 0u) {
+            bool kept = false;
+            uint end = field(r, CULLIDE_RANGE_PARTNER_END);
+            uint partners = uint(CULLIDE_RANGE_WORDS) * u_rangeCount;
+            for (uint p = field(r, CULLIDE_RANGE_PARTNER_BEGIN); p < end && !kept; ++p)
+                kept = meets(lo, hi, ranges[partners + p]);
+            live = kept;
+        }
+        itemPrims[i] = prim;
+        owners[i] = owner;
+        alive[i] = live ? 1u : 0u;
+        if (live) {
+            atomicOr(counters[CULLIDE_ALIVE_BITS + i / 32u], 1u << (i % 32u));
+            gatherAlive(owner, uvec3(orderedBits(lo.x), orderedBits(lo.y), orderedBits(lo.z)),
+                        uvec3(orderedBits(hi.x), orderedBits(hi.y), orderedBits(hi.z)));
+        }
+    }
+    barrier();
+    if (gl_LocalInvocationID.x == 0u) addGroupCounters();
+    if (!lastToFinish() || gl_LocalInvocationID.x != 0u) return;
+    uint started = counters[CULLIDE_COUNTER_ALIVE];
+    counters[CULLIDE_CHAIN_ALIVE_START] = started;
+    counters[CULLIDE_CHAIN_SURVIVE_DONE] = 0u;
+    if (started == 0u) {  // nothing to fit: the view of the origin (the chain stops at its first iteration)
+        uint origin = orderedBits(0.0);  // the axes written out (gather.glsl)
+        counters[CULLIDE_COUNTER_LO + 0] = origin;
+        counters[CULLIDE_COUNTER_LO + 1] = origin;
+        counters[CULLIDE_COUNTER_LO + 2] = origin;
+        counters[CULLIDE_COUNTER_HI + 0] = origin;
+        counters[CULLIDE_COUNTER_HI + 1] = origin;
+        counters[CULLIDE_COUNTER_HI + 2] = origin;
+    }
+    fitView(0u, counters[CULLIDE_COUNTER_OWNER_MAX], u_resolution);
+}
