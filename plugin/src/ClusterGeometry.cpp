@@ -91,8 +91,8 @@ bool isMapped(const FrameState& frame, std::uint32_t o) {
 }  // namespace
 
 /// The origin (ResidentRegion::fit), then static meshes where the region holds them (or appended to it), every other
-/// mesh after the region in object order, and the mapped meshes after those; m_written lists what must be written
-/// this upload.
+/// mesh at its place after the region (MeshSlots: the mapped ones' vertices after the others'); m_written lists what
+/// must be written this upload.
 void ClusterGeometry::placeMeshes(const FrameState& frame, const Cluster& cluster) {
     Aabb all;
     std::size_t staticTriangles = 0;
@@ -113,27 +113,26 @@ void ClusterGeometry::placeMeshes(const FrameState& frame, const Cluster& cluste
         if (p.appended) m_written.push_back({o, p.baseVertex, p.baseTriangle});
         m_baseTriangle[o] = p.baseTriangle;
     }
-    std::size_t vertices = m_region.vertices();
-    std::size_t triangles = m_region.triangles();
+    m_slots.beginUpload(m_region.vertices(), m_region.triangles());
     m_localStartedOver = m_mappedVertices.beginUpload(m_geometry.local);
-    for (const bool mapped : {false, true}) {
-        if (mapped) resizeKeeping(m_geometry.positions, 3 * vertices);  // the region's front is kept as it is
+    for (const bool mapped : {false, true}) {  // the plain meshes first: a place for one may move the mapped ones'
         for (std::uint32_t o : cluster.objects) {
             if (!frame.isMesh(o) || frame.statics.entry[o] != nullptr || isMapped(frame, o) != mapped) continue;
-            MeshSlot slot{o, static_cast<std::uint32_t>(vertices), static_cast<std::uint32_t>(triangles), mapped};
+            const TriangleMesh& mesh = frame.meshOf(o);
+            const MeshSlots::Slot place = m_slots.place(o, mesh, mapped);
+            MeshSlot slot{o, place.baseVertex, place.baseTriangle, mapped};
             if (mapped) {
                 const MappedVertices::Slot local = m_mappedVertices.place(*(*frame.inputs)[o].mesh, m_geometry.local);
                 slot.localBase = local.base;
                 slot.writeLocal = !local.placedBefore;
             }
             m_written.push_back(slot);
-            m_baseTriangle[o] = static_cast<std::uint32_t>(triangles);
-            vertices += frame.meshOf(o).vertices.size();
-            triangles += frame.meshOf(o).triangles.size();
+            m_baseTriangle[o] = place.baseTriangle;
         }
     }
-    resizeKeeping(m_geometry.indices, 3 * triangles);
-    resizeKeeping(m_geometry.ordered, triangles);
+    resizeKeeping(m_geometry.positions, 3 * m_slots.plainVertexEnd());
+    resizeKeeping(m_geometry.indices, 3 * m_slots.triangleEnd());
+    resizeKeeping(m_geometry.ordered, m_slots.triangleEnd());
 }
 
 /// A mesh's vertices (world positions as the device holds them, or a mapped mesh's own) and its triangles' global

@@ -1,12 +1,14 @@
 // The device's copy of one cluster (FrameState.h): positions and indices of its meshes and the boxes of its objects
 // and groups, relative to an origin near the cluster's centre, in float. Static meshes sit in the resident region at
-// the front of the buffers and are sent once (MeshCache.h); of the other meshes, only what changed since the last
-// upload is sent again (a deforming mesh's positions, not its indices). A mesh that came with a transform goes in
+// the front of the buffers and are sent once (MeshCache.h); the other meshes keep their places after it across uploads
+// and frames (MeshSlots.h), and of them only what changed since the last upload is sent again (a deforming mesh's
+// positions, not its indices, whatever other meshes come and go). A mesh that came with a transform goes in
 // its own frame, mapped by the backend (MappedMesh): while it moves rigidly only its transform is sent.
 #pragma once
 
 #include "FrameState.h"
 #include "MappedVertices.h"
+#include "MeshSlots.h"
 #include "MeshCache.h"
 #include "PruningBackend.h"
 #include "cullide/TaskPool.h"
@@ -25,7 +27,10 @@ public:
                 TaskPool& pool, Stats& stats);
 
     /// Starts a frame: what the device keeps between frames ages by frames, not by uploads (one per cluster).
-    void beginFrame() { m_mappedVertices.beginFrame(); }
+    void beginFrame() {
+        m_mappedVertices.beginFrame();
+        m_slots.beginFrame();
+    }
 
     /// Of the last upload: where object o's triangles start in the index buffer (and in the spatial orders), its
     /// box's index, and its first group's box (of FrameState::allGroups: its k-th group's is firstGroupBox(o) + k).
@@ -66,6 +71,7 @@ private:
     void appendGroupBoxes(const FrameState& frame, const Cluster& cluster, double margin);
 
     ResidentRegion m_region;
+    MeshSlots m_slots;  ///< where the other meshes lie after the region
     MappedVertices m_mappedVertices;  ///< the slots of m_geometry.local
     bool m_localStartedOver = false;  ///< this upload: nothing of m_geometry.local is on the device
     GpuGeometry m_geometry;  ///< the backend reads it until the next upload

@@ -77,7 +77,9 @@ inline void devicePosition(const Vec3& world, const Vec3& origin, float out[3]) 
 }
 
 /// Every vertex of `geometry` as the device holds it: `positions`, then the mapped meshes' vertices mapped on the CPU
-/// (the reference backend's copy of what the GL one maps on the device).
+/// (the reference backend's copy of what the GL one maps on the device). Between the mapped meshes lie the places of
+/// meshes mapped by other uploads (MeshSlots), which the device still holds and which are 0 here: only `positions`
+/// and the mapped meshes' own vertices are this upload's.
 std::vector<float> allPositions(const GpuGeometry& geometry);
 
 /// Every box of `geometry` as the device holds it: `boxes`, then the built ones (GpuGeometry::builtRanges) from

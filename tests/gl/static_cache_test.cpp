@@ -91,11 +91,11 @@ TEST(StaticCache, StaticMeshesStayOnTheDeviceWhileTheOriginHolds) {
         }
         uploaded.push_back(result.stats.bytesUploaded);
     }
-    // Frame 0 sends the static mesh, frames 1-3 do not (the rest — moving meshes, boxes, level items — varies a
-    // little with the survivors); frame 4 moves the origin away, frame 5 back: the static mesh is sent again.
+    // Frame 0 sends the static mesh, frames 1-3 do not (the rest — moving meshes, boxes — varies a little); frame 4
+    // moves the origin away, frame 5 back: the static mesh is sent again, in one of them (as the clusters come).
     for (int frame = 1; frame <= 3; ++frame)
         EXPECT_LT(double(uploaded[frame]), double(uploaded[0]) - 0.9 * staticBytes) << frame;
-    EXPECT_GT(double(uploaded[5]), double(uploaded[3]) + 0.9 * staticBytes);
+    EXPECT_GT(double(uploaded[4] + uploaded[5]), 2.0 * double(uploaded[3]) + 0.9 * staticBytes);
     // A new version of the static mesh is sent again, and the culler sees it where it now is.
     for (Vec3& v : meshes[0].vertices) v += Vec3(0.05, 0.0, 0.0);
     objects[0].version = 2;

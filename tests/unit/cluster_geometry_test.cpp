@@ -139,6 +139,44 @@ TEST(ClusterGeometry, OnlyWhatChangedSinceTheLastUploadIsSent) {
     EXPECT_EQ(g.keptPositions, g.positions.size());
 }
 
+/// A mesh that is not static keeps its place while others leave the cluster and come back (MeshSlots): the indices
+/// and spatial orders the device holds stay valid, so only positions that changed are sent.
+TEST(ClusterGeometry, MeshesKeepTheirPlacesWhileOthersComeAndGo) {
+    std::vector<TriangleMesh> meshes = {makeBox(Vec3::Constant(0.5)), makeBox(Vec3::Constant(0.4)),
+                                        makeBox(Vec3::Constant(0.3))};
+    std::vector<Object> objects(3);
+    FrameState frame;
+    frame.objects = &objects;
+    for (std::size_t i = 0; i < 3; ++i) {
+        objects[i].mesh = &meshes[i];
+        frame.valid.push_back(ValidatedObject{true, true, {Vec3::Constant(-0.5), Vec3::Constant(0.5)}});
+    }
+    StaticMeshCache cache;
+    ClusterGeometry geometry;
+    RecordingBackend backend;
+    TaskPool pool(1);
+    Stats stats;
+    std::vector<std::uint32_t> firstBase;
+    for (const std::vector<std::uint32_t>& present : {std::vector<std::uint32_t>{0, 1, 2},
+                                                      std::vector<std::uint32_t>{0, 2},
+                                                      std::vector<std::uint32_t>{0, 1, 2}}) {
+        frame.statics = lookUpAndCheck(cache, objects);
+        Cluster cluster;
+        cluster.objects = present;
+        geometry.beginFrame();
+        geometry.upload(frame, cluster, 0.0, backend, pool, stats);
+        const GpuGeometry& g = backend.uploads.back();
+        if (firstBase.empty()) {
+            for (std::uint32_t o = 0; o < 3; ++o) firstBase.push_back(geometry.baseTriangle(o));
+            continue;
+        }
+        for (std::uint32_t o : present) EXPECT_EQ(geometry.baseTriangle(o), firstBase[o]) << "object " << o;
+        EXPECT_EQ(g.keptIndices, g.indices.size()) << present.size() << " objects: no index sent again";
+        EXPECT_EQ(g.keptOrdered, g.ordered.size());
+        EXPECT_EQ(g.keptPositions, g.positions.size()) << "nothing moved";
+    }
+}
+
 /// The boxes hold every group of the cluster's static meshes (FrameState::allGroups), not only those the pre-pass
 /// keeps, and the device builds every group's box of the other meshes after them (GpuGeometry::builtRanges, one range
 /// of the spatial order each): when the kept set changes, no box moves and no range changes, so the device keeps them
@@ -253,8 +291,12 @@ TEST(ClusterGeometry, AMeshWithATransformGoesInItsOwnFrameAndMapsToItsWorldTwin)
         EXPECT_EQ(m.local.size(), 3 * local.vertices.size());
         EXPECT_EQ(m.mapped[0].transform.translation, t.translation);
         EXPECT_EQ(m.indices, w.indices);
+        // The body's place: after the ground, mapped (m) or not (w: its world twin).
         const std::vector<float> mapped = allPositions(m);
-        ASSERT_EQ(mapped.size(), w.positions.size());
+        const std::size_t groundFloats = 3 * ground.vertices.size(), bodyFloats = 3 * local.vertices.size();
+        ASSERT_EQ(m.mapped[0].baseVertex, ground.vertices.size());
+        ASSERT_EQ(mapped.size(), groundFloats + bodyFloats);
+        ASSERT_GE(w.positions.size(), groundFloats + bodyFloats);
         EXPECT_EQ(std::memcmp(mapped.data(), w.positions.data(), 4 * mapped.size()), 0) << "frame " << f;
         if (f > 0) {
             EXPECT_EQ(m.keptLocal, m.local.size()) << "it moved rigidly: its own vertices stay on the device";

@@ -29,12 +29,9 @@ void uploadBuffer(GLuint buffer, std::size_t& capacity, const void* data, std::s
     if (bytes > 0) glNamedBufferSubData(buffer, 0, static_cast<GLsizeiptr>(bytes), data);
 }
 
-std::size_t uploadAfterPrefix(GLuint buffer, std::size_t& capacity, std::size_t& valid, const void* data,
+std::size_t uploadAfterPrefix(GLuint& buffer, std::size_t& capacity, std::size_t& valid, const void* data,
                               std::size_t bytes, std::size_t keepBytes) {
-    if (bytes > capacity || capacity == 0) {
-        reserveBuffer(buffer, capacity, bytes);
-        keepBytes = 0;
-    }
+    if (bytes > capacity || capacity == 0) growKeeping(buffer, capacity, std::min(valid, keepBytes), bytes);
     keepBytes = std::min({keepBytes, valid, bytes});
     if (bytes > keepBytes)
         glNamedBufferSubData(buffer, static_cast<GLintptr>(keepBytes), static_cast<GLsizeiptr>(bytes - keepBytes),
@@ -43,15 +40,12 @@ std::size_t uploadAfterPrefix(GLuint buffer, std::size_t& capacity, std::size_t&
     return bytes - keepBytes;
 }
 
-std::size_t uploadChanged(GLuint buffer, std::size_t& capacity, std::vector<unsigned char>& held, const void* data,
+std::size_t uploadChanged(GLuint& buffer, std::size_t& capacity, std::vector<unsigned char>& held, const void* data,
                           std::size_t bytes) {
     constexpr std::size_t kBlock = 64;   // compared as a whole
     constexpr std::size_t kGap = 1024;   // unchanged bytes between two runs worth a call of their own
     const auto* in = static_cast<const unsigned char*>(data);
-    if (bytes > capacity || capacity == 0) {
-        reserveBuffer(buffer, capacity, bytes);
-        held.clear();
-    }
+    if (bytes > capacity || capacity == 0) growKeeping(buffer, capacity, held.size(), bytes);
     const auto changed = [&](std::size_t at) {
         const std::size_t end = std::min(at + kBlock, bytes);
         return end > held.size() || std::memcmp(in + at, held.data() + at, end - at) != 0;

@@ -19,14 +19,16 @@ void growKeeping(GLuint& buffer, std::size_t& capacity, std::size_t used, std::s
 void uploadBuffer(GLuint buffer, std::size_t& capacity, const void* data, std::size_t bytes);
 
 /// Uploads `data` except its first `keepBytes`, which the buffer already holds (`valid` bytes of it are from the
-/// previous upload); a buffer that has to grow loses its contents and is filled whole. Returns the bytes sent.
-std::size_t uploadAfterPrefix(GLuint buffer, std::size_t& capacity, std::size_t& valid, const void* data,
+/// previous upload); a buffer that has to grow keeps them (growKeeping: `buffer` may be replaced). Returns the bytes
+/// sent.
+std::size_t uploadAfterPrefix(GLuint& buffer, std::size_t& capacity, std::size_t& valid, const void* data,
                               std::size_t bytes, std::size_t keepBytes);
 
 /// Uploads the parts of `data` that differ from `held` (what the buffer holds, as last sent, kept on the CPU): each
-/// run of changed 64-byte blocks (runs less than 1 KiB apart sent as one); everything where the buffer grows or
-/// nothing is held. `held` becomes `data`. Returns the bytes sent.
-std::size_t uploadChanged(GLuint buffer, std::size_t& capacity, std::vector<unsigned char>& held, const void* data,
+/// run of changed 64-byte blocks (runs less than 1 KiB apart sent as one); everything where nothing is held. A
+/// buffer that has to grow keeps what it holds (growKeeping: `buffer` may be replaced). `held` becomes `data`.
+/// Returns the bytes sent.
+std::size_t uploadChanged(GLuint& buffer, std::size_t& capacity, std::vector<unsigned char>& held, const void* data,
                           std::size_t bytes);
 
 }  // namespace cullide::gl

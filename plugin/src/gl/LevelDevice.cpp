@@ -179,11 +179,8 @@ std::size_t LevelDevice::dispatchAll(std::size_t count, GLint baseLocation) cons
 }
 
 void LevelDevice::uploadPositions(const GpuGeometry& g, Stats& stats) {
-    const std::size_t allBytes = g.vertexCount() * 12;
-    if (allBytes > capacity[kPositions]) {  // a new store: nothing of the last upload is kept
-        reserveBuffer(buffers[kPositions], capacity[kPositions], allBytes);
-        valid[kPositions] = 0;
-    }
+    const std::size_t allBytes = g.vertexCount() * 12;  // the mapped meshes' too
+    growKeeping(buffers[kPositions], capacity[kPositions], valid[kPositions], allBytes);
     stats.bytesUploaded += uploadAfterPrefix(buffers[kPositions], capacity[kPositions], valid[kPositions],
                                              g.positions.data(), g.positions.size() * 4, g.keptPositions * 4);
     // The local vertices even without mapped meshes (nothing is sent then unless they changed): what the device
@@ -216,11 +213,7 @@ void LevelDevice::uploadPositions(const GpuGeometry& g, Stats& stats) {
 
 void LevelDevice::uploadBoxes(const GpuGeometry& g, Stats& stats) {
     const std::size_t built = g.builtRanges.size() / 2;
-    const std::size_t allBytes = g.boxes.size() * 4 + built * 24;
-    if (allBytes > capacity[kBoxes]) {  // a new store: nothing of the last upload is kept
-        reserveBuffer(buffers[kBoxes], capacity[kBoxes], allBytes);
-        heldBoxes.clear();
-    }
+    growKeeping(buffers[kBoxes], capacity[kBoxes], heldBoxes.size(), g.boxes.size() * 4 + built * 24);
     // A cluster at rest keeps its boxes; an object moving sends its own (its object box; a static mesh's groups').
     stats.bytesUploaded +=
         uploadChanged(buffers[kBoxes], capacity[kBoxes], heldBoxes, g.boxes.data(), g.boxes.size() * 4);
