@@ -158,7 +158,7 @@ void addRange(LevelRun& run, std::uint32_t object, std::uint32_t count, std::uin
               std::uint32_t kind, std::size_t maxPartners) {
     LevelItems& items = run.items;
     ObjectRange r;
-    r.itemBegin = static_cast<std::uint32_t>(items.owner.size());
+    r.itemBegin = static_cast<std::uint32_t>(items.objectItems);
     r.count = count;
     r.first = first;
     r.parent = parent;
@@ -173,7 +173,7 @@ void addRange(LevelRun& run, std::uint32_t object, std::uint32_t count, std::uin
         r.partnerEnd = static_cast<std::uint32_t>(items.partnerBoxes.size());
     }
     items.objectRanges.push_back(r);
-    items.owner.resize(items.owner.size() + count, r.owner);
+    items.objectItems += count;
 }
 
 /// The groups of each mesh of the cluster (Cluster::allGroups): their number per object, in object order.

@@ -117,10 +117,11 @@ struct LevelItems {
     /// The backend generates each item's primitive, owner and start — its parent's survival where `inheritsParents`
     /// (the level the backend ran just before, pruneLevelAhead: its survivors never leave the device), and the box
     /// pre-pass — and fits the first view to the items that start alive on the device, as an iteration's end fits the
-    /// next one: nothing per item and no view is sent (LevelStart::view is not used). `prims` and `bounds` are left
-    /// empty; `owner` lists every item's (its size is the level's).
+    /// next one: nothing per item and no view is sent (LevelStart::view is not used). `owner`, `prims` and `bounds`
+    /// are left empty: nothing is built per item on the CPU either.
     std::vector<ObjectRange> objectRanges;
     std::vector<std::uint32_t> partnerBoxes;
+    std::size_t objectItems = 0;  ///< the ranges' items, summed (the level's size)
     bool inheritsParents = false;
     std::uint32_t groupSize = 1;  ///< triangles per parent (CULLIDE_RANGE_TRIANGLES ranges that inherit)
     /// How far the pre-pass grows a partner's box (float, rounded up): the float error of the boxes and positions
@@ -128,7 +129,7 @@ struct LevelItems {
     float prepassSlack = 0.0f;
     bool describedByObjects() const { return !objectRanges.empty(); }
     std::size_t primitiveCount() const { return describedByObjects() ? size() : prims.size(); }
-    std::size_t size() const { return owner.size(); }
+    std::size_t size() const { return describedByObjects() ? objectItems : owner.size(); }
     /// Whether item i is exactly primitive i (one primitive each): primBegin need not be sent.
     bool onePrimitiveEach() const {
         for (std::size_t i = 0; i < primBegin.size(); ++i)
@@ -142,6 +143,7 @@ struct LevelItems {
         bounds.clear();
         objectRanges.clear();
         partnerBoxes.clear();
+        objectItems = 0;
         inheritsParents = false;
         groupSize = 1;
         prepassSlack = 0.0f;

@@ -58,15 +58,19 @@ std::uint32_t requiredFlags(unsigned axes) {
 
 std::size_t distinctOwners(const LevelItems& items) {
     if (items.size() == 0) return 0;
-    const std::uint32_t maxOwner = *std::max_element(items.owner.begin(), items.owner.end());
+    std::vector<std::uint32_t> rangeOwners;  // a level described by its objects: an owner per range
+    for (const ObjectRange& r : items.objectRanges)
+        if (r.count > 0) rangeOwners.push_back(r.owner);
+    const std::vector<std::uint32_t>& owners = items.describedByObjects() ? rangeOwners : items.owner;
+    const std::uint32_t maxOwner = *std::max_element(owners.begin(), owners.end());
     if (maxOwner >= 65536) return 0;
     std::vector<std::uint8_t> seen(maxOwner + std::size_t{1}, 0);
-    std::size_t owners = 0;
-    for (std::uint32_t o : items.owner) {
-        if (!seen[o]) ++owners;
+    std::size_t distinct = 0;
+    for (std::uint32_t o : owners) {
+        if (!seen[o]) ++distinct;
         seen[o] = 1;
     }
-    return owners;
+    return distinct;
 }
 
 Aabb deviceBoundsOf(const GpuGeometry& geometry, const LevelItems& items, std::size_t i) {

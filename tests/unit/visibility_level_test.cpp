@@ -76,6 +76,20 @@ TEST(VisibilityLevel, OwnerPackingAndSurvivalRule) {
     items.owner[0] = 70000;  // beyond 16 bits: the level prunes nothing
     EXPECT_EQ(distinctOwners(items), 0u);
     EXPECT_EQ(distinctOwners(LevelItems{}), 0u);
+    // A level described by its objects: an owner per range (its items are not listed), its size the ranges' sum.
+    LevelItems ranges;
+    for (std::uint32_t o : {2u, 2u, 5u}) {
+        ObjectRange r;
+        r.itemBegin = static_cast<std::uint32_t>(ranges.objectItems);
+        r.count = 10;
+        r.owner = o;
+        ranges.objectRanges.push_back(r);
+        ranges.objectItems += r.count;
+    }
+    EXPECT_EQ(ranges.size(), 30u);
+    EXPECT_EQ(distinctOwners(ranges), 2u);
+    ranges.objectRanges.back().owner = 2;
+    EXPECT_EQ(distinctOwners(ranges), 1u) << "one owner: nothing to collide with";
 }
 
 /// The boxes the views are fitted to are those of the primitives as uploaded: an item of two triangles, one of a
