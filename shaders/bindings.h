@@ -28,8 +28,8 @@
 #define CULLIDE_SSBO_BANDS 13      /* uint[itemPrimCount]: each primitive's footprint (float bits), then its bands */
 #define CULLIDE_SSBO_BUILD 14      /* uint[CULLIDE_BUILD_GROUPS + work groups]: see CULLIDE_BUILD_* */
 #define CULLIDE_SSBO_VIEWS 15      /* ViewRecord[CULLIDE_MAX_ITERATIONS + 1] (view.glsl): iteration i's view (the first
-                                      * written by the C++ side, each next one where the iteration before ends) and
-                                      * what the iteration left */
+                                      * written by the C++ side or start.comp, each next one where the iteration
+                                      * before ends) and what the iteration left */
 #define CULLIDE_SSBO_RANGES 16     /* uint[]: a level described by its objects (start.comp): its ranges'
                                       * records, then their partners' boxes (CULLIDE_RANGE_*) */
 #define CULLIDE_SSBO_PARENT_ALIVE 17 /* uint[parents]: the last level's alive set (a copy), where a level inherits it */
@@ -42,7 +42,7 @@
 #define CULLIDE_SSBO_BOX_RANGES 18 /* uint[2 * built boxes]: per box, its group's first triangle in CULLIDE_SSBO_ORDERED
                                       * and its triangle count (GpuGeometry::builtRanges), kept between uploads */
 
-/* Counters, reset before every iteration. */
+/* Counters, reset before every iteration (and before start.comp, which gathers the items that start alive in them). */
 #define CULLIDE_COUNTER_OVERFLOWS 0 /* compute invocations that would exceed CULLIDE_MAX_LOOP_ITERATIONS */
 #define CULLIDE_COUNTER_ALIVE 1     /* items alive after the iteration (iteration.glsl) */
 #define CULLIDE_COUNTER_OWNER_MIN 2 /* smallest and largest owner id among them */
@@ -53,7 +53,7 @@
                                      * alive (survive.comp), or (cull.comp's nearest pass) alive at the iteration's
                                      * start, which its second and flag passes run over */
 #define CULLIDE_COUNTER_PRUNED 11   /* items the iteration pruned (with CULLIDE_COUNTER_ALIVE: every item decided) */
-#define CULLIDE_COUNTER_COUNT 12   /* the counters the C++ side resets before every iteration */
+#define CULLIDE_COUNTER_COUNT 12   /* the counters the C++ side resets before every iteration and start.comp */
 
 /* After the counters, in the same buffer (one read-back returns both): what the record-sized passes of the next
  * iteration (cull.comp, or cull_setup.comp, the draws and survive.comp) run over, dispatched indirectly. Written by
@@ -76,8 +76,8 @@
  * the work group that ends an iteration, iteration.glsl, decides whether the next one runs and fits its view): */
 #define CULLIDE_CHAIN_RAN 32        /* iterations run (the last one's index + 1) */
 #define CULLIDE_CHAIN_STOP 33       /* CULLIDE_STOP_*: why the chain stopped after the last iteration run */
-#define CULLIDE_CHAIN_SURVIVE_DONE 34 /* work groups of the pass that ends the iteration that have finished (the
-                                       * last one resets it) */
+#define CULLIDE_CHAIN_SURVIVE_DONE 34 /* work groups of the pass that ends the iteration (or of start.comp) that
+                                       * have finished (the last one resets it) */
 #define CULLIDE_CHAIN_RECORDS_RUN 35  /* records the level's iterations ran over, summed */
 #define CULLIDE_CHAIN_RECORDED_VIEW 36 /* the view the records were built for (build.comp's APPEND or SINGLE pass) */
 #define CULLIDE_CHAIN_ALIVE_START 37 /* items alive at the level's start (all, or those start.comp keeps) */

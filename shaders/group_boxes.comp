@@ -23,8 +23,8 @@ void main() {
     if (box >= u_count) return;
     uint first = ranges[2u * box];
     uint count = ranges[2u * box + 1u];  // at least 1 (a group of k triangles, Settings::groupSize <= 4096)
-    vec3 lo = vertexAt(indices[3u * ordered[first]]);
-    vec3 hi = lo;
+    precise vec3 lo = vertexAt(indices[3u * ordered[first]]);  // precise: no compare-and-select made a min or max
+    precise vec3 hi = lo;
     for (uint k = 0u; k < count; ++k) {
         uint t = 3u * ordered[first + k];
         for (uint c = 0u; c < 3u; ++c) {

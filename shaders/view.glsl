@@ -1,6 +1,6 @@
 // The views of a level's iterations (CULLIDE_SSBO_VIEWS): views[i] is what iteration i's passes read (u_iteration),
-// written by the C++ side for the first iteration (fitView) and by the work group that ends the iteration before
-// (iteration.glsl) for each next one (the same fit in double, operation for operation); after the iteration that work
+// written for the first iteration by the C++ side (fitView) or, in a level described by its objects, by start.comp's
+// last work group, and by the work group that ends the iteration before (iteration.glsl) for each next one (the same fit in double, operation for operation); after the iteration that work
 // group adds what it left. Mirrored by plugin/src/gl/ViewRecords.h.
 struct ViewRecord {
     double boxMin[3];     // the view box (relative to the upload origin)

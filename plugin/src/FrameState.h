@@ -67,7 +67,8 @@ struct FrameState {
     /// Every group of k triangles of every active mesh, with its box, in object order (GPU levels only): the device
     /// holds all of their boxes, so that a mesh at rest keeps its own whichever groups the pre-pass keeps.
     std::vector<Group> allGroups;
-    /// The groups the levels start from: those of allGroups the box pre-pass keeps (GPU levels only).
+    /// Those of allGroups the CPU's box pre-pass keeps (GPU levels only): which clusters are worth the levels
+    /// (Settings::exactThreshold), and what the CPU path filters where the levels do not run.
     std::vector<Group> groups;
     /// Per object: its triangles that may touch another object's, sorted (what the exact stage tests).
     std::vector<std::vector<std::uint32_t>> surviving;
@@ -87,8 +88,12 @@ struct FrameState {
 /// sees.
 struct Cluster {
     std::vector<std::uint32_t> objects;  ///< sorted
-    std::vector<Group> groups;     ///< those the box pre-pass keeps (FrameState::groups)
-    std::vector<Group> allGroups;  ///< all of them (FrameState::allGroups), in object order
+    std::vector<Group> groups;  ///< those the box pre-pass keeps (FrameState::groups)
+    /// The groups the `Auto` levels' items cover (FrameState::allGroups), in object order: per mesh, every group from
+    /// the first to the last the CPU's box pre-pass keeps — a run of its spatial order, within which the device's
+    /// pre-pass decides. The groups before and after it meet no partner's box, so a large mesh far from most of its
+    /// partners costs the levels its run near them, not all of its triangles.
+    std::vector<Group> levelGroups;
 };
 
 }  // namespace cullide

@@ -176,38 +176,50 @@ void addRange(LevelRun& run, std::uint32_t object, std::uint32_t count, std::uin
     items.objectItems += count;
 }
 
-/// The groups of each mesh of the cluster (Cluster::allGroups): their number per object, in object order.
-std::vector<std::pair<std::uint32_t, std::uint32_t>> groupsPerObject(const std::vector<Group>& groups) {
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> counts;
+/// A mesh's run of Cluster::levelGroups: its first group's first triangle in the mesh's spatial order, its groups and
+/// their triangles.
+struct GroupRun {
+    std::uint32_t object = 0;
+    std::uint32_t first = 0;
+    std::uint32_t groups = 0;
+    std::uint32_t triangles = 0;
+};
+
+/// The runs of `groups` (Cluster::levelGroups: one per mesh, in object order).
+std::vector<GroupRun> groupRuns(const std::vector<Group>& groups) {
+    std::vector<GroupRun> runs;
     for (const Group& g : groups) {
-        if (counts.empty() || counts.back().first != g.object) counts.emplace_back(g.object, 0);
-        ++counts.back().second;
+        if (runs.empty() || runs.back().object != g.object) runs.push_back(GroupRun{g.object, g.first, 0, 0});
+        runs.back().groups += 1;
+        runs.back().triangles += g.count;
     }
-    return counts;
+    return runs;
 }
 
-/// The group level described by its objects: every group of each mesh of the cluster (Cluster::allGroups, whose
-/// boxes lie together per object), then one item per proxy. The device's box pre-pass keeps the groups whose box
+/// The group level described by its objects: the run of groups of each mesh of the cluster (Cluster::levelGroups;
+/// a mesh's group boxes lie together), then one item per proxy. The device's box pre-pass keeps the groups whose box
 /// meets a partner's object box; a proxy starts alive.
 void addGroupRanges(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
-    for (const auto& [object, count] : groupsPerObject(run.cluster.allGroups))
-        addRange(run, object, count, run.geometry.firstGroupBox(object), 0, CULLIDE_RANGE_BOXES, kMaxGroupPartners);
+    const auto k = static_cast<std::uint32_t>(run.settings.groupSize);
+    for (const GroupRun& r : groupRuns(run.cluster.levelGroups)) {
+        const std::uint32_t firstBox = run.geometry.firstGroupBox(r.object) + r.first / k;  // its place among the mesh's
+        addRange(run, r.object, r.groups, firstBox, 0, CULLIDE_RANGE_BOXES, kMaxGroupPartners);
+    }
     for (std::uint32_t o : proxies)
         addRange(run, o, 1, run.geometry.objectBox(o), 0, CULLIDE_RANGE_BOXES | CULLIDE_RANGE_KEEP, 0);
     run.items.prepassSlack = run.geometry.prepassSlack(0.0);  // the boxes hold margin / 2 already
 }
 
-/// The triangle level described by its objects, inheriting the group level's survivors: every triangle of each mesh
-/// in its spatial order (its groups' one after the other), then the proxies. A triangle starts alive where its group
+/// The triangle level described by its objects, inheriting the group level's survivors: every triangle of each
+/// mesh's run of groups in its spatial order (its groups' one after the other), then the proxies. A triangle starts alive where its group
 /// survived and its box meets a partner's object box (grown by margin / 2: triangle boxes are not); a proxy where it
 /// survived.
 void addTriangleRanges(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
-    std::uint32_t parent = 0;  // the group level's item of the object's first group
-    for (const auto& [object, groups] : groupsPerObject(run.cluster.allGroups)) {
-        const auto triangles = static_cast<std::uint32_t>(run.frame.meshOf(object).triangles.size());
-        addRange(run, object, triangles, run.geometry.baseTriangle(object), parent, CULLIDE_RANGE_TRIANGLES,
-                 kMaxTrianglePartners);
-        parent += groups;
+    std::uint32_t parent = 0;  // the group level's item of the run's first group
+    for (const GroupRun& r : groupRuns(run.cluster.levelGroups)) {
+        addRange(run, r.object, r.triangles, run.geometry.baseTriangle(r.object) + r.first, parent,
+                 CULLIDE_RANGE_TRIANGLES, kMaxTrianglePartners);
+        parent += r.groups;
     }
     for (std::uint32_t o : proxies)
         addRange(run, o, 1, run.geometry.objectBox(o), parent++, CULLIDE_RANGE_BOXES | CULLIDE_RANGE_KEEP, 0);
@@ -240,7 +252,7 @@ bool runInheritingTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>&
         return true;
     }
     run.backend.settle(run.stats);  // a level run ahead that the triangle level did not wait for (no two owners)
-    addSurvivingGroupTriangles(run.frame, run.cluster.allGroups, run.survivors);
+    addSurvivingGroupTriangles(run.frame, run.cluster.levelGroups, run.survivors);
     return false;
 }
 
@@ -250,8 +262,9 @@ std::size_t triangleCount(const std::vector<Group>& groups) {
     return n;
 }
 
-/// CPU pre-pass (done in buildTriangleBoxesAndGroups), group boxes, then the triangles of the surviving groups; a
-/// level whose input is at most Settings::exactThreshold triangles goes straight to the exact stage. `defer`: the
+/// CPU pre-pass (done in buildTriangleBoxesAndGroups), then the group level and the triangle level on the device, each
+/// described by its objects (the device's pre-pass within each mesh's run of groups); a cluster whose kept triangles
+/// are at most Settings::exactThreshold goes straight to the exact stage. `defer`: the
 /// triangle level's read-back may wait for the end of the frame; returns true where it does.
 bool runAutoPipeline(LevelRun& run, bool defer) {
     std::vector<std::uint32_t> proxies = clusterProxies(run);
@@ -263,7 +276,7 @@ bool runAutoPipeline(LevelRun& run, bool defer) {
             // The device goes on with the groups while the triangle level is described here.
             return runInheritingTriangleLevel(run, proxies, defer);
         }
-        groups = run.cluster.allGroups;  // the items: the device's pre-pass did not run, the CPU's follows
+        groups = run.cluster.levelGroups;  // the level's items; the CPU's pre-pass filters their triangles
         keepSurvivors(run.survivors, 0, groups);
         keepSurvivors(run.survivors, groups.size(), proxies);
     }
@@ -314,6 +327,18 @@ void runPaperPipeline(LevelRun& run) {
     runTriangleLevel(run, proxies);
 }
 
+/// Cluster::levelGroups from the cluster's kept groups (in object order, each object's in its order).
+void levelGroupsOf(const FrameState& frame, const std::vector<Group>& kept, std::vector<Group>& levelGroups) {
+    levelGroups.clear();
+    for (std::size_t i = 0; i < kept.size();) {
+        std::size_t last = i;
+        while (last + 1 < kept.size() && kept[last + 1].object == kept[i].object) ++last;
+        levelGroups.insert(levelGroups.end(), frame.allGroups.begin() + kept[i].index,
+                           frame.allGroups.begin() + kept[last].index + 1);
+        i = last + 1;
+    }
+}
+
 bool rasterisable(const FrameState& frame, const Cluster& cluster) {
     Aabb box;
     for (std::uint32_t o : cluster.objects) box.grow(frame.valid[o].box);
@@ -338,9 +363,7 @@ void LevelPipelines::run(FrameState& frame, const Settings& settings, PruningBac
         cluster.groups.clear();
         for (const Group& g : frame.groups)
             if (member[g.object]) cluster.groups.push_back(g);
-        cluster.allGroups.clear();
-        for (const Group& g : frame.allGroups)
-            if (member[g.object]) cluster.allGroups.push_back(g);
+        levelGroupsOf(frame, cluster.groups, cluster.levelGroups);
         for (std::uint32_t o : objects) member[o] = 0;
         if (!rasterisable(frame, cluster)) {
             // Relative coordinates beyond what float positions and depths carry: no pruning (sound, and rare).
@@ -392,7 +415,7 @@ void LevelPipelines::collectDeferred(FrameState& frame, const Settings& settings
     for (std::size_t k = 0; k < m_deferred.size(); ++k) {
         const DeferredCluster& d = m_deferred[k];
         if (m_results[k].complete) {
-            addSurvivingGroupTriangles(frame, d.cluster.allGroups, m_results[k].survivors);
+            addSurvivingGroupTriangles(frame, d.cluster.levelGroups, m_results[k].survivors);
             continue;
         }
         // A chain stopped early on the device (records to build again, more iterations than were issued): the

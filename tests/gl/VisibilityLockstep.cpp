@@ -21,8 +21,8 @@ public:
           m_devicePositions(std::move(devicePositions)), m_deviceBoxes(std::move(deviceBoxes)) {}
 
     /// Every upload: the positions the device holds against allPositions, bit for bit (the mapped meshes' are
-    /// mapped there by map.comp), and its boxes against allBoxes (only what changed is sent; the groups of meshes
-    /// that are not static are built there by group_boxes.comp).
+    /// mapped there by map.comp), and its boxes against allBoxes by value (only what changed is sent; the groups of
+    /// meshes that are not static are built there by group_boxes.comp).
     void upload(const GpuGeometry& geometry, Stats& stats) override {
         m_tested->upload(geometry, stats);
         m_reference->upload(geometry, m_scratch);
@@ -30,7 +30,7 @@ public:
         ++m_log->uploads;
         m_log->mappedVertices += expected.size() / 3 - geometry.positions.size() / 3;
         compareFloats(thisUpload(geometry, expected), thisUpload(geometry, *m_devicePositions), "position");
-        compareFloats(allBoxes(geometry, expected), *m_deviceBoxes, "box");
+        compareFloats(allBoxes(geometry, expected), *m_deviceBoxes, "box", true);
         m_log->builtBoxes += geometry.builtRanges.size() / 2;
     }
     /// The positions of this upload's meshes: `positions`, then each mapped mesh's (the places between them belong to
@@ -44,10 +44,14 @@ public:
         }
         return kept;
     }
-    void compareFloats(const std::vector<float>& expected, const std::vector<float>& got, const char* what) {
+    /// Bit for bit, or (`byValue`: boxes, whose -0 and +0 nothing tells apart) by value.
+    void compareFloats(const std::vector<float>& expected, const std::vector<float>& got, const char* what,
+                       bool byValue = false) {
         std::size_t differing = 0;
-        for (std::size_t i = 0; i < expected.size() && i < got.size(); ++i)
-            differing += std::memcmp(&expected[i], &got[i], 4) != 0 ? 1 : 0;
+        for (std::size_t i = 0; i < expected.size() && i < got.size(); ++i) {
+            const bool same = byValue ? expected[i] == got[i] : std::memcmp(&expected[i], &got[i], 4) == 0;
+            differing += same ? 0 : 1;
+        }
         if (differing != 0 || expected.size() != got.size())
             note(0, "upload " + std::to_string(m_log->uploads) + ": " + std::to_string(differing) + " of " +
                         std::to_string(expected.size()) + " " + what + " floats differ on the device");
@@ -69,6 +73,8 @@ public:
                     LevelStats& level, Stats& stats, std::vector<IterationTrace>* trace) override {
         m_got.clear();
         m_expected.clear();
+        m_scratchLevel = LevelStats{};
+        m_scratchLevel.itemsPerIteration.push_back(items.size());  // as startLevel does: the items alive at the start
         m_reference->pruneLevel(items, start, m_expectedAlive, m_scratchLevel, m_scratch, &m_expected);
         try {
             m_tested->pruneLevel(items, start, survivors, level, stats, &m_got);
@@ -76,9 +82,10 @@ public:
             m_ahead.reset();  // both levels run again
             throw;
         }
-        compareAhead();
+        compareAhead(stats);
         ++m_log->levels;
-        compare(m_got, m_expected, items.size(), &survivors, m_expectedAlive);
+        compare(m_got, m_expected, {startOf(level, items.size()), startOf(m_scratchLevel, items.size())}, &survivors,
+                m_expectedAlive);
         if (trace) trace->insert(trace->end(), m_got.begin(), m_got.end());
     }
 
@@ -88,15 +95,18 @@ public:
                          std::vector<IterationTrace>* trace) override {
         m_ahead = std::make_unique<Ahead>();  // the tested trace's address stays valid until a deferred level's collect
         m_ahead->items = items.size();
+        m_ahead->levelIndex = levelIndex;
         m_scratch.levels.assign(1, LevelStats{});
+        m_scratch.levels[0].itemsPerIteration.push_back(items.size());
         m_reference->pruneLevelAhead(items, start, 0, m_scratch, &m_ahead->expected);
+        m_ahead->expectedStart = startOf(m_scratch.levels[0], items.size());
         m_tested->pruneLevelAhead(items, start, levelIndex, stats, &m_ahead->got);
         (void)trace;  // the culler asks for none (the tested trace comes with the next level)
     }
 
     void settle(Stats& stats) override {
         m_tested->settle(stats);
-        compareAhead();
+        compareAhead(stats);
     }
 
     /// The reference runs the level now, the tested backend defers it: both are compared at collect().
@@ -104,8 +114,11 @@ public:
                             std::vector<IterationTrace>* trace) override {
         auto d = std::make_unique<Deferred>();
         d->items = items.size();
+        d->levelIndex = levelIndex;
         m_scratch.levels.assign(1, LevelStats{});
+        m_scratch.levels[0].itemsPerIteration.push_back(items.size());
         m_reference->pruneLevel(items, start, d->expectedAlive, m_scratch.levels[0], m_scratch, &d->expected);
+        d->expectedStart = startOf(m_scratch.levels[0], items.size());
         try {
             m_tested->pruneLevelDeferred(items, start, levelIndex, stats, &d->got);
         } catch (const LevelsRerun&) {
@@ -128,9 +141,11 @@ public:
             Deferred& d = *deferred[k];
             ++m_log->levelsDeferred;
             if (!results[k].complete) continue;
-            if (d.ahead) compareAheadOf(*d.ahead);
+            if (d.ahead) compareAheadOf(*d.ahead, stats);
             ++m_log->levels;
-            compare(d.got, d.expected, d.items, &results[k].survivors, d.expectedAlive);
+            const std::size_t gotStart =
+                d.levelIndex < stats.levels.size() ? startOf(stats.levels[d.levelIndex], d.items) : d.items;
+            compare(d.got, d.expected, {gotStart, d.expectedStart}, &results[k].survivors, d.expectedAlive);
         }
         return true;
     }
@@ -139,38 +154,58 @@ private:
     /// A level run ahead: its traces (the tested one complete after the next level's read-back).
     struct Ahead {
         std::size_t items = 0;
+        std::size_t levelIndex = 0;     ///< its stats' place (Stats::levels), complete when compared
+        std::size_t expectedStart = 0;  ///< the items alive at its start in the reference
         std::vector<IterationTrace> got;
         std::vector<IterationTrace> expected;
     };
     /// A deferred level: the reference's result, and the tested trace filled at collect().
     struct Deferred {
         std::size_t items = 0;
+        std::size_t levelIndex = 0;
+        std::size_t expectedStart = 0;
         std::vector<IterationTrace> got;
         std::vector<IterationTrace> expected;
         std::vector<std::uint8_t> expectedAlive;
         std::unique_ptr<Ahead> ahead;
     };
 
-    void compareAhead() {
+    void compareAhead(const Stats& stats) {
         if (!m_ahead) return;
         const std::unique_ptr<Ahead> ahead = std::move(m_ahead);
-        compareAheadOf(*ahead);
+        compareAheadOf(*ahead, stats);
     }
 
-    void compareAheadOf(const Ahead& ahead) {
+    void compareAheadOf(const Ahead& ahead, const Stats& stats) {
         ++m_log->levels;
         ++m_log->levelsAhead;
-        compare(ahead.got, ahead.expected, ahead.items, nullptr, {});
+        const std::size_t gotStart =
+            ahead.levelIndex < stats.levels.size() ? startOf(stats.levels[ahead.levelIndex], ahead.items) : ahead.items;
+        compare(ahead.got, ahead.expected, {gotStart, ahead.expectedStart}, nullptr, {});
     }
 
-    /// Iteration by iteration: the view the tested backend used (fitted on the device after the first) and what it
-    /// left, against the reference's; then the alive sets at the level's end, item by item (`gotAlive`, where the
-    /// level was waited for).
-    void compare(const std::vector<IterationTrace>& got, const std::vector<IterationTrace>& expected,
-                 std::size_t itemCount, const std::vector<std::uint8_t>* gotAliveOrNull,
-                 const std::vector<std::uint8_t>& expectedAlive) {
+    /// The items alive at a level's start (all, or those its start kept: a level described by its objects).
+    static std::size_t startOf(const LevelStats& level, std::size_t items) {
+        return level.itemsPerIteration.empty() ? items : level.itemsPerIteration.front();
+    }
+
+    /// The items alive at a level's start: GL's, the reference's.
+    struct Starts {
+        std::size_t got;
+        std::size_t expected;
+    };
+
+    /// The items alive at the level's start; iteration by iteration, the view the tested backend used (fitted on the
+    /// device after the first, and for the first too in a level described by its objects) and what it left, against
+    /// the reference's; then the alive sets at the level's end, item by item (`gotAlive`, where the level was waited
+    /// for).
+    void compare(const std::vector<IterationTrace>& got, const std::vector<IterationTrace>& expected, Starts starts,
+                 const std::vector<std::uint8_t>* gotAliveOrNull, const std::vector<std::uint8_t>& expectedAlive) {
         LockstepLog& log = *m_log;
-        std::size_t aliveBefore = itemCount;
+        if (starts.got != starts.expected)
+            note(0, "GL starts the level with " + std::to_string(starts.got) + " items alive, the reference with " +
+                        std::to_string(starts.expected));
+        std::size_t aliveBefore = starts.got;
         const std::size_t iterations = std::max(got.size(), expected.size());
         for (std::size_t i = 0; i < iterations; ++i) {
             ++log.iterations;

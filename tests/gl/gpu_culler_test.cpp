@@ -70,6 +70,33 @@ TEST(GpuCuller, MarginReportsEveryPairWithinDistance) {
     }
 }
 
+// The device's box pre-pass keeps what the CPU's keeps at the edge of the margin (ClusterGeometry::prepassSlack):
+// pairs of single triangles, far from the world origin, each facing the other at a distance short of the margin by
+// 10^-10 to 4 * 10^-9 — less than the float rounding of their coordinates relative to the cluster's origin — so that
+// a triangle's box meets its partner's box, inflated by margin / 2, only within that rounding.
+TEST(GpuCuller, MarginPairsAtTheEdgeSurviveTheDevicesPrepass) {
+    const double margin = 0.01;
+    Settings s = reliable(64);
+    s.margin = margin;
+    CULLIDE_GPU_CULLER_OR_SKIP(culler, s);
+    std::vector<TriangleMesh> meshes;
+    for (int k = 1; k <= 40; ++k) {
+        const Vec3 at(1e6 + 3.0 * k, -2e6 + 0.37 * k, 0.013 * k);
+        for (const double dz : {0.0, margin - 1e-10 * k}) {
+            TriangleMesh m;
+            m.vertices = {at + Vec3(0, 0, dz), at + Vec3(0.01, 0, dz), at + Vec3(0, 0.01, dz)};
+            m.triangles = {{0, 1, 2}};
+            meshes.push_back(m);
+        }
+    }
+    Comparison cmp;
+    const Result r = runBoth(*culler, asObjects(meshes), margin, cmp);
+    EXPECT_EQ(r.stats.gpuFallbacks, 0u) << r.stats.gpuError;
+    EXPECT_GE(r.stats.clusters, 40u) << "a cluster per pair";
+    EXPECT_EQ(cmp.expected, 40u) << "every pair lies within the margin";
+    EXPECT_EQ(cmp.missed, 0u) << cmp.firstMissed;
+}
+
 TEST(GpuCuller, DeformingAppearingAndDisappearingObjects) {
     CULLIDE_GPU_CULLER_OR_SKIP(culler, reliable(128));
     auto meshes = randomSoups(21, 14, 50, 0.2);

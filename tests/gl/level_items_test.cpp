@@ -1,6 +1,7 @@
 // What a GL back-end takes as a level's items (PruningBackend::pruneLevel's contract): the compute back-end decides
 // an item when its last record is done, so an item without primitives, which has no record, is refused with a
-// BackendError (the culler then finishes the frame on the CPU) instead of being left alive and uncounted.
+// BackendError (the culler then finishes the frame on the CPU) instead of being left alive and uncounted; so is a
+// level described by its objects whose ranges leave an item out or name what the upload does not hold.
 #include "CullerBackends.h"
 #include "GlTestSupport.h"
 #include "PruningBackend.h"
@@ -59,6 +60,56 @@ TEST(LevelItems, TheComputeBackEndRefusesAnItemWithoutPrimitives) {
         } else {
             ASSERT_NO_THROW(run());
             EXPECT_EQ(survivors, (std::vector<std::uint8_t>{1, 1}));  // they overlap
+        }
+    }
+}
+
+/// The two boxes as a level described by its objects: a range each, the other's box its partner. `breakIt`
+/// breaks one thing: start.comp would read out of bounds or miss an item.
+LevelItems boxRanges(int breakIt) {
+    LevelItems items;
+    for (std::uint32_t o = 0; o < 2; ++o) {
+        ObjectRange r;
+        r.itemBegin = o;
+        r.count = 1;
+        r.first = o;
+        r.owner = o;
+        r.kind = CULLIDE_RANGE_BOXES;
+        r.partnerBegin = o;
+        r.partnerEnd = o + 1;
+        items.objectRanges.push_back(r);
+        items.partnerBoxes.push_back(1 - o);
+    }
+    items.objectItems = 2;
+    if (breakIt == 1) items.objectRanges[1].itemBegin = 2;  // a gap: item 1 in no range
+    if (breakIt == 2) items.objectRanges[1].first = 2;      // a box the upload does not hold
+    if (breakIt == 3) items.partnerBoxes[0] = 7;             // a partner box it does not hold either
+    if (breakIt == 4) items.objectItems = 3;                 // more items than the ranges cover
+    return items;
+}
+
+TEST(LevelItems, ALevelDescribedByItsObjectsIsRefusedWhereItsRangesDoNotFit) {
+    Settings settings;
+    settings.gpuLevels = GpuLevels::Always;
+    settings.resolution = 64;
+    CULLIDE_GPU_CULLER_OR_SKIP(probe, settings);
+    auto backend = createGlPruningBackend(settings);
+    const GpuGeometry geometry = twoBoxes();
+    Stats stats;
+    backend->upload(geometry, stats);
+    for (int breakIt = 0; breakIt <= 4; ++breakIt) {
+        const LevelItems items = boxRanges(breakIt);
+        std::vector<std::uint8_t> survivors;
+        stats.levels.assign(1, LevelStats{});
+        const auto run = [&] {
+            pruneLevel(*backend, items, settings, geometry.coordinateBound, 0, survivors, stats.levels[0], stats);
+        };
+        if (breakIt != 0) {
+            EXPECT_THROW(run(), BackendError) << breakIt;
+        } else {
+            ASSERT_NO_THROW(run());
+            EXPECT_EQ(survivors, (std::vector<std::uint8_t>{1, 1})) << "they overlap";
+            EXPECT_EQ(stats.levels[0].itemsPerIteration.front(), 2u) << "each meets its partner: both start alive";
         }
     }
 }

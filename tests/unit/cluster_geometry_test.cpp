@@ -244,6 +244,9 @@ TEST(ClusterGeometry, BuiltBoxesAreTheBoxesOfTheirTrianglesGrown) {
     EXPECT_EQ(all, expected);
     g.builtInflate = 0.0f;
     EXPECT_TRUE(std::signbit(allBoxes(g, g.positions)[6])) << "the first of -0 and +0 is kept";
+    g.positions[0] = 0.0f;  // +0 first, then -0: +0 stays (no min or max, which may take either)
+    g.positions[6] = -0.0f;
+    EXPECT_FALSE(std::signbit(allBoxes(g, g.positions)[6]));
 }
 
 /// A mesh that came with a transform (and is not static) goes in its own frame: its own vertices are sent when they

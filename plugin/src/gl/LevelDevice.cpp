@@ -331,16 +331,25 @@ void LevelDevice::uploadItems(const LevelItems& items, const LevelStart& start, 
 }
 
 void LevelDevice::sendRanges(const LevelItems& items, Stats& stats) {
+    // start.comp reads what the ranges name: they must cover the items in order and name what the upload holds.
     const std::vector<ObjectRange>& ranges = items.objectRanges;
-    const std::size_t n = items.size();
+    if (geometry == nullptr) throw BackendError("a level described by its objects before any upload");
+    const std::size_t boxCount = geometry->boxes.size() / 6 + geometry->builtRanges.size() / 2;
+    const std::size_t triangleCount = geometry->ordered.size();
+    std::size_t next = 0;  // the item the next range must begin with
     for (const ObjectRange& r : ranges) {
-        const std::size_t lastParent =
-            (r.kind & 1u) == CULLIDE_RANGE_BOXES ? r.count - 1 : (r.count - 1) / items.groupSize;
-        const bool fits = r.count > 0 && std::size_t{r.itemBegin} + r.count <= n && r.partnerBegin <= r.partnerEnd &&
-                          r.partnerEnd <= items.partnerBoxes.size() &&
+        const bool isBox = (r.kind & 1u) == CULLIDE_RANGE_BOXES;
+        const std::size_t lastParent = isBox ? r.count - 1 : (r.count - 1) / items.groupSize;
+        const std::size_t named = isBox ? boxCount : triangleCount;
+        const bool fits = r.count > 0 && r.itemBegin == next && r.first + std::size_t{r.count} <= named &&
+                          r.partnerBegin <= r.partnerEnd && r.partnerEnd <= items.partnerBoxes.size() &&
                           (!items.inheritsParents || std::size_t{r.parent} + lastParent < lastItemCount);
-        if (!fits) throw BackendError("a level's object ranges do not fit its items, partners or parents");
+        if (!fits) throw BackendError("a level's object ranges do not fit its items, the upload or the level before");
+        next += r.count;
     }
+    const bool partnersFit = std::all_of(items.partnerBoxes.begin(), items.partnerBoxes.end(),
+                                         [&](std::uint32_t b) { return b < boxCount; });
+    if (next != items.size() || !partnersFit) throw BackendError("a level's object ranges do not cover its items");
     if (items.inheritsParents) {  // the last level's alive set, before this level's replaces it
         reserveBuffer(buffers[kParentAlive], capacity[kParentAlive], std::max<std::size_t>(1, lastItemCount) * 4);
         glCopyNamedBufferSubData(buffers[kAlive], buffers[kParentAlive], 0, 0,

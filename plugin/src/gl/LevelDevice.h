@@ -1,5 +1,6 @@
 // The device side of CULLIDE's visibility levels (OpenGL 4.5 through headless EGL): the programs, buffers and images,
-// and the steps a level is made of — its items and first view sent, its records built (build.comp), an iteration
+// and the steps a level is made of — its items and first view sent (or its ranges, and start.comp), its records built
+// (build.comp), an iteration
 // issued (three passes, and on the raster back-end a set-up and a survivor pass, dispatched indirectly: nothing
 // waits), the chain read back. gl::VisibilityPass
 // decides which steps run and when it waits. GL code: only under plugin/src/gl.
@@ -160,10 +161,10 @@ struct LevelDevice {
     void uploadItems(const LevelItems& items, const LevelStart& start, LevelStats& level, Stats& stats);
 
     /// Sends the upload's positions (those before the mapped meshes') and what changed of the mapped meshes' own
-    /// vertices, then maps those to the positions after them (map.comp: one dispatch, their transforms sent).
+    /// vertices, then maps those to the positions after them (map.comp, their transforms sent).
     void uploadPositions(const GpuGeometry& geometry, Stats& stats);
     /// Sends the boxes that changed since the last upload and builds the others from the positions
-    /// (group_boxes.comp: one dispatch, after uploadPositions), their ranges sent where they changed.
+    /// (group_boxes.comp, after uploadPositions), their ranges sent where they changed.
     void uploadBoxes(const GpuGeometry& geometry, Stats& stats);
     /// GlBackendOptions::positionsAfterUpload and boxesAfterUpload: the first `floats` of `buffer` read back into `to`
     /// (tests only; nothing where `to` is null).
@@ -173,7 +174,7 @@ struct LevelDevice {
     /// the last level's alive set copied aside on the device.
     void sendRanges(const LevelItems& items, Stats& stats);
     /// start.comp over a level described by its objects: its items' primitives, owners and start, and the first
-    /// view (one dispatch, with nothing read back).
+    /// view (nothing read back).
     void startItems(const LevelItems& items, double coordinateBound, LevelStats& level, Stats& stats);
     /// The counters an iteration (and start.comp) gathers into, emptied.
     void clearIterationCounters() const;
