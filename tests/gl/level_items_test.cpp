@@ -102,13 +102,14 @@ LevelItems boxRanges(int breakIt) {
     if (breakIt == 2) items.objectRanges[1].first = 2;      // a box the upload does not hold
     if (breakIt == 3) items.partnerBoxes[0] = 7;             // a partner box it does not hold either
     if (breakIt == 4) items.objectItems = 3;                 // more items than the ranges cover
+    if (breakIt == 5) items.groupSize = 0;                   // no triangle per parent
     return items;
 }
 
 TEST(LevelItems, ALevelDescribedByItsObjectsIsRefusedWhereItsRangesDoNotFit) {
     CULLIDE_GPU_CULLER_OR_SKIP(probe, levelSettings());
     TwoBoxesOnTheDevice device(levelSettings());
-    for (int breakIt = 0; breakIt <= 4; ++breakIt) {
+    for (int breakIt = 0; breakIt <= 5; ++breakIt) {
         std::vector<std::uint8_t> survivors;
         const bool taken = device.run(boxRanges(breakIt), survivors);
         EXPECT_EQ(taken, breakIt == 0) << breakIt;

@@ -334,6 +334,7 @@ void LevelDevice::sendRanges(const LevelItems& items, Stats& stats) {
     // start.comp reads what the ranges name: they must cover the items in order and name what the upload holds.
     const std::vector<ObjectRange>& ranges = items.objectRanges;
     if (geometry == nullptr) throw BackendError("a level described by its objects before any upload");
+    if (items.groupSize == 0) throw BackendError("a level described by its objects with groups of no triangle");
     const std::size_t boxCount = geometry->boxes.size() / 6 + geometry->builtRanges.size() / 2;
     const std::size_t triangleCount = geometry->ordered.size();
     std::size_t next = 0;  // the item the next range must begin with
