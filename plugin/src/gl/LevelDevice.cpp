@@ -312,7 +312,8 @@ void LevelDevice::uploadItems(const LevelItems& items, const LevelStart& start, 
     const GLuint aliveWord = byObjects ? 0u : 0xFFFFFFFFu, aliveItem = byObjects ? 0u : 1u;
     glClearNamedBufferSubData(buffers[kCounters], GL_R32UI, 4 * CULLIDE_CHAIN_RAN,
                               4 * (CULLIDE_ALIVE_BITS - CULLIDE_CHAIN_RAN), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-    glNamedBufferSubData(buffers[kCounters], 4 * CULLIDE_CHAIN_ALIVE_START, 4, &startAlive);
+    glClearNamedBufferSubData(buffers[kCounters], GL_R32UI, 4 * CULLIDE_CHAIN_ALIVE_START, 4, GL_RED_INTEGER,
+                              GL_UNSIGNED_INT, &startAlive);
     glClearNamedBufferSubData(buffers[kCounters], GL_R32UI, 4 * CULLIDE_ALIVE_BITS,
                               static_cast<GLsizeiptr>(4 * (counterWords(n) - CULLIDE_ALIVE_BITS)), GL_RED_INTEGER,
                               GL_UNSIGNED_INT, &aliveWord);
@@ -364,10 +365,15 @@ void LevelDevice::sendRanges(const LevelItems& items, Stats& stats) {
 }
 
 void LevelDevice::clearIterationCounters() const {
-    GLuint counters[CULLIDE_COUNTER_COUNT] = {};
-    counters[CULLIDE_COUNTER_OWNER_MIN] = 0xFFFFFFFFu;
-    for (int a = 0; a < 3; ++a) counters[CULLIDE_COUNTER_LO + a] = 0xFFFFFFFFu;
-    glNamedBufferSubData(buffers[kCounters], 0, sizeof counters, counters);
+    // Cleared, not sent: every counter 0, then the minima (the smallest owner, the boxes' minimum) all ones.
+    const GLuint zero = 0, ones = 0xFFFFFFFFu;
+    const auto clear = [&](int first, int count, const GLuint& value) {
+        glClearNamedBufferSubData(buffers[kCounters], GL_R32UI, 4 * first, 4 * count, GL_RED_INTEGER, GL_UNSIGNED_INT,
+                                  &value);
+    };
+    clear(0, CULLIDE_COUNTER_COUNT, zero);
+    clear(CULLIDE_COUNTER_OWNER_MIN, 1, ones);
+    clear(CULLIDE_COUNTER_LO, 3, ones);
 }
 
 void LevelDevice::startItems(const LevelItems& items, double coordinateBound, LevelStats& level, Stats& stats) {
