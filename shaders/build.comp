@@ -23,9 +23,6 @@
 // counters, grows the buffers and builds again. The records come out in no particular order: every pass over them is
 // order-independent (atomic min, max and or).
 layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
-layout(std430, binding = CULLIDE_SSBO_POSITIONS) readonly buffer Positions { float positions[]; };
-layout(std430, binding = CULLIDE_SSBO_INDICES) readonly buffer Indices { uint indices[]; };
-layout(std430, binding = CULLIDE_SSBO_BOXES) readonly buffer Boxes { float boxes[]; };
 layout(std430, binding = CULLIDE_SSBO_ALIVE) readonly buffer Alive { uint alive[]; };
 layout(std430, binding = CULLIDE_SSBO_PRIM_BEGIN) readonly buffer PrimBegin { uint primBegin[]; };
 layout(std430, binding = CULLIDE_SSBO_ITEM_PRIMS) readonly buffer ItemPrims { uint itemPrims[]; };
@@ -97,35 +94,11 @@ bool lastToFinish(uint doneCounter, bool inBuild) {
     return s_last;
 }
 
-vec3 vertexAt(uint i) { return vec3(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]); }
-
-// The box of a primitive: a box of the upload, or a triangle of its positions.
-void primBox(uint ref, out vec3 lo, out vec3 hi) {
-    if ((ref & CULLIDE_PRIM_BOX_BIT) != 0u) {
-        uint b = (ref & ~CULLIDE_PRIM_BOX_BIT) * 6u;
-        lo = vec3(boxes[b], boxes[b + 1u], boxes[b + 2u]);
-        hi = vec3(boxes[b + 3u], boxes[b + 4u], boxes[b + 5u]);
-        return;
-    }
-    uint t = ref * 3u;
-    vec3 a = vertexAt(indices[t]);
-    vec3 b = vertexAt(indices[t + 1u]);
-    vec3 c = vertexAt(indices[t + 2u]);
-    lo = min(min(a, b), c);
-    hi = max(max(a, b), c);
-}
-
 vec3 primExtent(uint ref) {
     vec3 lo;
     vec3 hi;
     primBox(ref, lo, hi);
     return hi - lo;
-}
-
-// Float bits whose unsigned order is the floats' order (for atomicMin / atomicMax; iteration.glsl gathers them).
-uint orderedBits(float f) {
-    uint u = floatBitsToUint(f);
-    return (u & 0x80000000u) != 0u ? ~u : (u | 0x80000000u);
 }
 
 // Pixels of the largest of a primitive's three footprints: its bounding rectangle grown by the tested square and a

@@ -7,9 +7,6 @@
 // range and boxes: gather.glsl), and the last work group fits the first view to them as an iteration's end fits the
 // next (none alive: to the origin). ReferenceVisibility.cpp's startByObjects is the CPU's copy, float for float.
 layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
-layout(std430, binding = CULLIDE_SSBO_POSITIONS) readonly buffer Positions { float positions[]; };
-layout(std430, binding = CULLIDE_SSBO_INDICES) readonly buffer Indices { uint indices[]; };
-layout(std430, binding = CULLIDE_SSBO_BOXES) readonly buffer Boxes { float boxes[]; };
 layout(std430, binding = CULLIDE_SSBO_ORDERED) readonly buffer Ordered { uint ordered[]; };
 layout(std430, binding = CULLIDE_SSBO_RANGES) readonly buffer Ranges { uint ranges[]; };  // then the partner boxes
 layout(std430, binding = CULLIDE_SSBO_PARENT_ALIVE) readonly buffer ParentState { uint parentState[]; };
@@ -40,35 +37,12 @@ uint rangeOf(uint i) {
     return lo;
 }
 
-vec3 vertexAt(uint i) { return vec3(positions[3u * i], positions[3u * i + 1u], positions[3u * i + 2u]); }
-
-// The box of a primitive: a box of the upload, or a triangle of the positions.
-void primBox(uint ref, out vec3 lo, out vec3 hi) {
-    if ((ref & CULLIDE_PRIM_BOX_BIT) != 0u) {
-        uint b = (ref & ~CULLIDE_PRIM_BOX_BIT) * 6u;
-        lo = vec3(boxes[b], boxes[b + 1u], boxes[b + 2u]);
-        hi = vec3(boxes[b + 3u], boxes[b + 4u], boxes[b + 5u]);
-        return;
-    }
-    vec3 a = vertexAt(indices[3u * ref]);
-    vec3 b = vertexAt(indices[3u * ref + 1u]);
-    vec3 c = vertexAt(indices[3u * ref + 2u]);
-    lo = min(min(a, b), c);
-    hi = max(max(a, b), c);
-}
-
 // Whether (lo, hi) meets box `b` grown by u_slack on each side (closed intervals).
 bool meets(vec3 lo, vec3 hi, uint b) {
     uint at = 6u * b;
     precise vec3 bLo = vec3(boxes[at], boxes[at + 1u], boxes[at + 2u]) - vec3(u_slack);
     precise vec3 bHi = vec3(boxes[at + 3u], boxes[at + 4u], boxes[at + 5u]) + vec3(u_slack);
     return all(lessThanEqual(lo, bHi)) && all(lessThanEqual(bLo, hi));
-}
-
-// Float bits whose unsigned order is the floats' order (build.comp's).
-uint orderedBits(float f) {
-    uint u = floatBitsToUint(f);
-    return (u & 0x80000000u) != 0u ? ~u : (u | 0x80000000u);
 }
 
 // Whether this work group is the last of all of the start's to finish (every lane calls it).

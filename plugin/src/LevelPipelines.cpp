@@ -211,9 +211,9 @@ void addGroupRanges(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
 }
 
 /// The triangle level described by its objects, inheriting the group level's survivors: every triangle of each
-/// mesh's run of groups in its spatial order (its groups' one after the other), then the proxies. A triangle starts alive where its group
-/// survived and its box meets a partner's object box (grown by margin / 2: triangle boxes are not); a proxy where it
-/// survived.
+/// mesh's run of groups in its spatial order (its groups' one after the other), then the proxies. A triangle starts
+/// alive where its group survived and its box meets a partner's object box (grown by margin / 2: triangle boxes are
+/// not); a proxy where it survived.
 void addTriangleRanges(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
     std::uint32_t parent = 0;  // the group level's item of the run's first group
     for (const GroupRun& r : groupRuns(run.cluster.levelGroups)) {

@@ -225,12 +225,13 @@ void ReferenceVisibility::pruneLevel(const LevelItems& items, const LevelStart& 
 
 namespace {
 
-/// start.comp meets(): whether (lo, hi) meets box `box` grown by `slack` on each side, in float.
-bool meetsGrown(const float lo[3], const float hi[3], const float* box, float slack) {
+/// start.comp meets(): whether `item` (float bounds, as deviceBoundsOf gives them) meets box `box` grown by `slack` on
+/// each side, in float.
+bool meetsGrown(const Aabb& item, const float* box, float slack) {
     for (int a = 0; a < 3; ++a) {
         const float boxLo = box[a] - slack;
         const float boxHi = box[3 + a] + slack;
-        if (!(lo[a] <= boxHi && boxLo <= hi[a])) return false;
+        if (!(static_cast<float>(item.min[a]) <= boxHi && boxLo <= static_cast<float>(item.max[a]))) return false;
     }
     return true;
 }
@@ -258,31 +259,16 @@ void ReferenceVisibility::startByObjects(const LevelItems& items, double coordin
             m_expanded.owner.at(i) = r.owner;
             const std::uint32_t parent = r.parent + (isBox ? j : j / items.groupSize);
             bool live = !items.inheritsParents || m_parentAlive.at(parent) != 0;
-            float lo[3], hi[3];
-            if (isBox) {
-                const float* b = &g.boxes.at(6 * std::size_t{r.first + j});
-                std::copy_n(b, 3, lo);
-                std::copy_n(b + 3, 3, hi);
-            } else {
-                const auto corner = [&](int k, int a) {
-                    return g.positions.at(3 * std::size_t{g.indices.at(3 * std::size_t{prim} + k)} + a);
-                };
-                for (int a = 0; a < 3; ++a) {
-                    lo[a] = std::min(std::min(corner(0, a), corner(1, a)), corner(2, a));
-                    hi[a] = std::max(std::max(corner(0, a), corner(1, a)), corner(2, a));
-                }
-            }
+            const Aabb box = deviceBoundsOf(g, m_expanded, i);
             if (live && (r.kind & CULLIDE_RANGE_KEEP) == 0) {
                 bool kept = false;
                 for (std::uint32_t p = r.partnerBegin; p < r.partnerEnd && !kept; ++p)
-                    kept = meetsGrown(lo, hi, &g.boxes.at(6 * std::size_t{items.partnerBoxes.at(p)}),
-                                      items.prepassSlack);
+                    kept = meetsGrown(box, &g.boxes.at(6 * std::size_t{items.partnerBoxes.at(p)}), items.prepassSlack);
                 live = kept;
             }
             if (!live) continue;
             m_alive[i] = 1;
-            bounds.grow(Vec3(lo[0], lo[1], lo[2]));
-            bounds.grow(Vec3(hi[0], hi[1], hi[2]));
+            bounds.grow(box);
             ownerMax = std::max(ownerMax, r.owner);
         }
     }

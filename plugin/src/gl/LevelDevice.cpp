@@ -116,12 +116,13 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
                                                                         "pack.glsl", "survive.comp"})},
                                      "the survivor program");
     }
-    buildProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "passes.glsl", "build.comp"})},
-                               "the record build program");
+    buildProgram = linkProgram(
+        {compileShader(GL_COMPUTE_SHADER, {"view.glsl", "passes.glsl", "geometry.glsl", "build.comp"})},
+        "the record build program");
     mapProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"map.comp"})}, "the mapped meshes' program");
     boxesProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"group_boxes.comp"})}, "the group boxes program");
     startProgram = linkProgram(
-        {compileShader(GL_COMPUTE_SHADER, {"view.glsl", "passes.glsl", "gather.glsl", "start.comp"})},
+        {compileShader(GL_COMPUTE_SHADER, {"view.glsl", "passes.glsl", "geometry.glsl", "gather.glsl", "start.comp"})},
         "the level start program");
     if (settings.backend == Backend::Compute)
         bands = context.isSoftware() && !options.shortBands ? CULLIDE_BANDS_LONG : CULLIDE_BANDS_SHORT;
