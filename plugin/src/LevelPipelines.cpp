@@ -202,7 +202,8 @@ std::vector<GroupRun> groupRuns(const std::vector<Group>& groups) {
 void addGroupRanges(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
     const auto k = static_cast<std::uint32_t>(run.settings.groupSize);
     for (const GroupRun& r : groupRuns(run.cluster.levelGroups)) {
-        const std::uint32_t firstBox = run.geometry.firstGroupBox(r.object) + r.first / k;  // its place among the mesh's
+        // The run's first group is the mesh's (r.first / k)-th: its box that many after the mesh's first group's.
+        const std::uint32_t firstBox = run.geometry.firstGroupBox(r.object) + r.first / k;
         addRange(run, r.object, r.groups, firstBox, 0, CULLIDE_RANGE_BOXES, kMaxGroupPartners);
     }
     for (std::uint32_t o : proxies)
