@@ -42,6 +42,13 @@
 #define CULLIDE_SSBO_BOX_RANGES 18 /* uint[2 * built boxes]: per box, its group's first triangle in CULLIDE_SSBO_ORDERED
                                       * and its triangle count (GpuGeometry::builtRanges), kept between uploads */
 
+/* The device exact stage (exact.comp), after a deferred triangle level: */
+#define CULLIDE_SSBO_EXACT 22      /* uint[1 + 2 * capacity]: word 0 counts the frame's pairs (past the capacity too;
+                                      * cleared at the frame's first exact stage), then per pair the two items, the
+                                      * second | CULLIDE_EXACT_WITHIN where the filter certified it */
+#define CULLIDE_SSBO_EXACT_ITEMS 23 /* uint[items]: where the exact stage follows a level, the items that start alive,
+                                       * appended by start.comp (exact.comp runs over those) */
+
 /* Counters, reset before every iteration (and before start.comp, which gathers the items that start alive in them). */
 #define CULLIDE_COUNTER_OVERFLOWS 0 /* compute invocations that would exceed CULLIDE_MAX_LOOP_ITERATIONS */
 #define CULLIDE_COUNTER_ALIVE 1     /* items alive after the iteration (iteration.glsl) */
@@ -85,6 +92,9 @@
                                      * device fault: the C++ side throws BackendError) */
 #define CULLIDE_CHAIN_PER_BAND 38   /* short bands: the pixels per band the level's last build found (float bits): the
                                      * estimate of the next build in the level's place (CULLIDE_LOC_PER_BAND) */
+#define CULLIDE_CHAIN_STARTED 40   /* items start.comp appended to CULLIDE_SSBO_EXACT_ITEMS */
+#define CULLIDE_DISPATCH_EXACT 41  /* 3 uints: exact.comp's indirect arguments (x, chunks, z: start.comp's last work
+                                    * group, for the items that start alive) */
 #define CULLIDE_CHAIN_ALIVE 48      /* CULLIDE_MAX_ITERATIONS words: items alive after iteration i */
 #define CULLIDE_MAX_ITERATIONS 64   /* Settings::maxIterations at most */
 /* Then words CULLIDE_DISPATCH_RECORDS .. CULLIDE_AHEAD of the level run before this one without being waited for
@@ -164,6 +174,16 @@
 #define CULLIDE_LOC_BOX_FIRST 35    /* uint: group_boxes.comp: where the built boxes start (after the uploaded ones) */
 #define CULLIDE_LOC_BOX_COUNT 36    /* uint: group_boxes.comp: the built boxes */
 #define CULLIDE_LOC_BOX_INFLATE 37  /* float: group_boxes.comp: GpuGeometry::builtInflate */
+#define CULLIDE_LOC_EXACT_PARTNERS 43 /* uint: exact.comp: where each range's exact partners begin in
+                                       * CULLIDE_SSBO_RANGES (ranges + 1 words), the partner ranges after them */
+#define CULLIDE_LOC_REACH 44        /* float: exact.comp: the filter's reach (0: margin 0; DeviceExactFilter.h) */
+#define CULLIDE_LOC_FILTER 45       /* int: exact.comp: 1 = the filter decides what it can; 0 = every candidate is
+                                     * written undecided (Settings::exactTriangles off) */
+#define CULLIDE_LOC_CHUNKS 46       /* uint: start.comp: chunks of CULLIDE_EXACT_CHUNK partner items per item where the
+                                     * exact stage follows (0: it does not) */
+#define CULLIDE_LOC_EXACT_CAPACITY 47 /* uint: exact.comp: the pairs CULLIDE_SSBO_EXACT holds */
+#define CULLIDE_EXACT_CHUNK 2048    /* partner items one exact.comp invocation visits at most */
+#define CULLIDE_EXACT_WITHIN 0x80000000u /* an exact pair the filter certified (its triangles intersect) */
 #define CULLIDE_RANGE_WORDS 8
 #define CULLIDE_RANGE_ITEM_BEGIN 0    /* its first item */
 #define CULLIDE_RANGE_COUNT 1         /* its items */

@@ -5,37 +5,25 @@
 // triangle's box of the positions) meets one of its partner objects' boxes grown by u_slack, or its range keeps every
 // item (a proxy; an object with too many partners to test). The items that start alive are counted (with their owner
 // range and boxes: gather.glsl), and the last work group fits the first view to them as an iteration's end fits the
-// next (none alive: to the origin). ReferenceVisibility.cpp's startByObjects is the CPU's copy, float for float.
+// next (none alive: to the origin). Where the device exact stage follows the level, the items that start alive are
+// listed for it, and the last work group writes its indirect arguments. ReferenceVisibility.cpp's startByObjects is the CPU's copy, float for float.
 layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
 layout(std430, binding = CULLIDE_SSBO_ORDERED) readonly buffer Ordered { uint ordered[]; };
-layout(std430, binding = CULLIDE_SSBO_RANGES) readonly buffer Ranges { uint ranges[]; };  // then the partner boxes
 layout(std430, binding = CULLIDE_SSBO_PARENT_ALIVE) readonly buffer ParentState { uint parentState[]; };
 layout(std430, binding = CULLIDE_SSBO_ITEM_OWNER) writeonly buffer Owners { uint owners[]; };
 layout(std430, binding = CULLIDE_SSBO_ITEM_PRIMS) writeonly buffer ItemPrims { uint itemPrims[]; };
 layout(std430, binding = CULLIDE_SSBO_ALIVE) writeonly buffer Alive { uint alive[]; };
+layout(std430, binding = CULLIDE_SSBO_EXACT_ITEMS) writeonly buffer ExactItems { uint exactItems[]; };
 layout(location = CULLIDE_LOC_RESOLUTION) uniform int u_resolution;
 layout(location = CULLIDE_LOC_ITEM_BASE) uniform uint u_itemBase;
 layout(location = CULLIDE_LOC_ITEM_COUNT) uniform uint u_itemCount;
 layout(location = CULLIDE_LOC_GROUPS) uniform uint u_groups;  // of all of the start's dispatches
-layout(location = CULLIDE_LOC_RANGES) uniform uint u_rangeCount;
 layout(location = CULLIDE_LOC_GROUP_SIZE) uniform uint u_groupSize;
 layout(location = CULLIDE_LOC_INHERITS) uniform int u_inherits;
 layout(location = CULLIDE_LOC_SLACK) uniform float u_slack;
+layout(location = CULLIDE_LOC_CHUNKS) uniform uint u_chunks;
 
 shared bool s_last;
-
-uint field(uint range, int word) { return ranges[uint(CULLIDE_RANGE_WORDS) * range + uint(word)]; }
-
-// The range of item i: the last r with ITEM_BEGIN <= i.
-uint rangeOf(uint i) {
-    uint lo = 0u;
-    uint hi = u_rangeCount;  // field(lo) <= i < field(hi)
-    while (hi - lo > 1u) {
-        uint mid = lo + (hi - lo) / 2u;
-        if (field(mid, CULLIDE_RANGE_ITEM_BEGIN) <= i) lo = mid; else hi = mid;
-    }
-    return lo;
-}
 
 // Whether (lo, hi) meets box `b` grown by u_slack on each side (closed intervals).
 bool meets(vec3 lo, vec3 hi, uint b) {
@@ -85,6 +73,7 @@ void main() {
         alive[i] = live ? 1u : 0u;
         if (live) {
             atomicOr(counters[CULLIDE_ALIVE_BITS + i / 32u], 1u << (i % 32u));
+            if (u_chunks != 0u) exactItems[atomicAdd(counters[CULLIDE_CHAIN_STARTED], 1u)] = i;  // the exact stage's
             gatherAlive(owner, uvec3(orderedBits(lo.x), orderedBits(lo.y), orderedBits(lo.z)),
                         uvec3(orderedBits(hi.x), orderedBits(hi.y), orderedBits(hi.z)));
         }
@@ -105,4 +94,11 @@ void main() {
         counters[CULLIDE_COUNTER_HI + 2] = origin;
     }
     fitView(0u, counters[CULLIDE_COUNTER_OWNER_MAX], u_resolution);
+    if (u_chunks != 0u) {  // the exact stage's work groups: 64 items each (rows of at most 65,535), per chunk
+        uint groups = (started + uint(CULLIDE_COMPUTE_GROUP_SIZE) - 1u) / uint(CULLIDE_COMPUTE_GROUP_SIZE);
+        uint x = min(groups, 65535u);
+        counters[CULLIDE_DISPATCH_EXACT] = x;
+        counters[CULLIDE_DISPATCH_EXACT + 1] = x == 0u ? 0u : u_chunks;
+        counters[CULLIDE_DISPATCH_EXACT + 2] = x == 0u ? 0u : (groups + x - 1u) / x;
+    }
 }

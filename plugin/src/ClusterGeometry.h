@@ -43,6 +43,8 @@ public:
     /// keeps in double: the float rounding of the positions and boxes as uploaded (2^-22 of the largest coordinate,
     /// as fitView allows) and the double rounding of world - origin. Rounded up to float.
     float prepassSlack(double grow) const;
+    /// The last upload's origin (world).
+    const Vec3& origin() const { return m_origin; }
     /// A world box relative to the upload's origin.
     Aabb relative(const Aabb& worldBox) const { return {worldBox.min - m_origin, worldBox.max - m_origin}; }
 

@@ -34,6 +34,9 @@ struct GlBackendOptions {
     /// (GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]), so that tests reach the split dispatches and rows of work groups that
     /// only scenes of millions of records or vertices need otherwise.
     std::size_t maxWorkGroups = 0;
+    /// Where above 0: the exact pairs the device's buffer holds at first (it grows after a frame that needed more),
+    /// so that tests reach an overflow.
+    std::size_t exactCapacity = 0;
 };
 
 /// The GL visibility test (gl/VisibilityPass). Throws GlUnavailableError without a usable GL device.

@@ -54,6 +54,9 @@ public:
     ExactStage(const ExactStage&) = delete;
     ExactStage& operator=(const ExactStage&) = delete;
 
+    /// The pool it runs on.
+    TaskPool& pool() const { return m_pool; }
+
     /// With `exact` false, every candidate is reported (no triangle test).
     /// Box jobs are answered in `touches` (1: some triangle box overlaps), from the same trees.
     /// Tasks that start once `deadline` (optional) has passed do nothing: the caller, seeing it passed, discards

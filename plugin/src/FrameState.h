@@ -23,6 +23,20 @@ struct Group {
     std::uint32_t index = 0;  ///< its place in FrameState::allGroups
 };
 
+/// A triangle pair the device exact stage found (Settings::deviceExact): objects a < b and their triangles, and
+/// whether the device's filter certified that they intersect (otherwise the CPU's exact predicate decides).
+struct DevicePair {
+    std::uint32_t a;
+    std::uint32_t b;
+    std::uint32_t triangleA;
+    std::uint32_t triangleB;
+    bool certified;
+    bool operator<(const DevicePair& o) const {
+        return a != o.a ? a < o.a : b != o.b ? b < o.b : triangleA != o.triangleA ? triangleA < o.triangleA
+                                                                                   : triangleB < o.triangleB;
+    }
+};
+
 /// One triangle of one object.
 struct FrameTriangle {
     std::uint32_t object;
@@ -72,11 +86,16 @@ struct FrameState {
     std::vector<Group> groups;
     /// Per object: its triangles that may touch another object's, sorted (what the exact stage tests).
     std::vector<std::vector<std::uint32_t>> surviving;
+    /// GPU levels: per object, 1 where the device exact stage found the candidates of its mesh pairs (its cluster's
+    /// stage ran and fit): they are devicePairs', and the exact stage tests only those the device left undecided.
+    std::vector<std::uint8_t> exactOnDevice;
+    std::vector<DevicePair> devicePairs;
 
     const TriangleMesh& meshOf(std::uint32_t o) const { return *(*objects)[o].mesh; }
     bool isMesh(std::uint32_t o) const { return valid[o].isMesh; }
     bool isActiveMesh(std::uint32_t o) const { return active[o] && valid[o].isMesh; }
     bool hasWholeTree(std::uint32_t o) const { return !whole.empty() && whole[o] != 0; }
+    bool pairsOnDevice(std::uint32_t o) const { return gpuLevels && !exactOnDevice.empty() && exactOnDevice[o] != 0; }
     bool overlapsPartner(std::uint32_t o, const Aabb& box) const {
         for (std::uint32_t p : partners[o])
             if (box.overlaps(valid[p].box)) return true;

@@ -1,5 +1,6 @@
 #include "LevelPipelines.h"
 
+#include "DeviceExact.h"
 #include "KeptCapacity.h"
 #include "VisibilityLevel.h"
 #include "bindings.h"
@@ -211,22 +212,79 @@ void addGroupRanges(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
     run.items.prepassSlack = run.geometry.prepassSlack(0.0);  // the boxes hold margin / 2 already
 }
 
+/// Partner ranges beyond which a mesh's triangles get no device exact stage: exact.comp's loop over them shares
+/// llvmpipe's 65,535 iterations per invocation with its CULLIDE_EXACT_CHUNK partner items.
+constexpr std::size_t kMaxExactPartners = 16384;
+
+/// The device exact stage after the triangle level (LevelItems::exact): each mesh range's partners are the ranges of
+/// its partner meshes with a larger object index (each object pair once). None where a range has too many partners,
+/// or more than 65,535 chunks of them.
+void addExactRequest(LevelRun& run, const std::vector<std::uint32_t>& rangeObjects) {
+    LevelItems& items = run.items;
+    ExactRequest& x = items.exact;
+    std::vector<std::uint32_t> rangeOfOwner(run.ownerCount, kNoOwner);
+    for (std::size_t r = 0; r < items.objectRanges.size(); ++r)
+        if ((items.objectRanges[r].kind & 1u) == CULLIDE_RANGE_TRIANGLES)
+            rangeOfOwner[items.objectRanges[r].owner] = static_cast<std::uint32_t>(r);
+    x.partnerBegin.assign(1, 0);
+    std::size_t longest = 0;
+    const auto k = static_cast<std::uint32_t>(run.settings.groupSize);
+    for (std::size_t r = 0; r < items.objectRanges.size(); ++r) {
+        const std::uint32_t o = rangeObjects[r];
+        std::size_t sum = 0;
+        const bool triangles = (items.objectRanges[r].kind & 1u) == CULLIDE_RANGE_TRIANGLES;
+        // Its items start at its first group's first triangle (in the mesh's order, from baseTriangle on).
+        x.groupBoxes.push_back(
+            triangles ? run.geometry.firstGroupBox(o) + (items.objectRanges[r].first - run.geometry.baseTriangle(o)) / k
+                      : 0u);
+        if (triangles) {
+            for (std::uint32_t p : run.frame.partners[o]) {
+                const std::uint32_t owner = run.ownerId[p];
+                if (p < o || owner == kNoOwner || rangeOfOwner[owner] == kNoOwner) continue;
+                x.partners.push_back(rangeOfOwner[owner]);
+                sum += items.objectRanges[rangeOfOwner[owner]].count;
+            }
+        }
+        if (x.partners.size() - x.partnerBegin.back() > kMaxExactPartners) {
+            x.clear();
+            return;
+        }
+        longest = std::max(longest, sum);
+        x.partnerBegin.push_back(static_cast<std::uint32_t>(x.partners.size()));
+    }
+    x.chunks = static_cast<std::uint32_t>(std::max<std::size_t>(1, (longest + CULLIDE_EXACT_CHUNK - 1) /
+                                                                       CULLIDE_EXACT_CHUNK));
+    if (x.chunks > 65535) {  // a row of work groups per chunk
+        x.clear();
+        return;
+    }
+    x.run = true;
+    x.filter = run.settings.exactTriangles;
+    x.slack = exactSlack(run.settings.margin, run.geometry.origin(), run.geometry.coordinateBound());
+    x.reach = exactReach(run.settings.margin, run.geometry.origin(), run.geometry.coordinateBound());
+}
+
 /// The triangle level described by its objects, inheriting the group level's survivors: every triangle of each
 /// mesh's run of groups in its spatial order (its groups' one after the other), then the proxies. A triangle starts
 /// alive where its group survived and its box meets a partner's object box (grown by margin / 2: triangle boxes are
-/// not); a proxy where it survived.
-void addTriangleRanges(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
+/// not); a proxy where it survived. `exact`: the device exact stage follows it (addExactRequest).
+void addTriangleRanges(LevelRun& run, const std::vector<std::uint32_t>& proxies, bool exact) {
+    std::vector<std::uint32_t> rangeObjects;
     std::uint32_t parent = 0;  // the group level's item of the run's first group
     for (const GroupRun& r : groupRuns(run.cluster.levelGroups)) {
         addRange(run, r.object, r.triangles, run.geometry.baseTriangle(r.object) + r.first, parent,
                  CULLIDE_RANGE_TRIANGLES, kMaxTrianglePartners);
+        rangeObjects.push_back(r.object);
         parent += r.groups;
     }
-    for (std::uint32_t o : proxies)
+    for (std::uint32_t o : proxies) {
         addRange(run, o, 1, run.geometry.objectBox(o), parent++, CULLIDE_RANGE_BOXES | CULLIDE_RANGE_KEEP, 0);
+        rangeObjects.push_back(o);
+    }
     run.items.inheritsParents = true;
     run.items.groupSize = static_cast<std::uint32_t>(run.settings.groupSize);
     run.items.prepassSlack = run.geometry.prepassSlack(0.5 * run.settings.margin);
+    if (exact) addExactRequest(run, rangeObjects);
 }
 
 /// The triangles of run.triangles and the proxies (occluders only) as one level; the surviving triangles go to
@@ -246,7 +304,9 @@ void runTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies) 
 /// backend (returns true), its read-back waits for the end of the frame (collectDeferred).
 bool runInheritingTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies, bool defer) {
     beginLevel(run, true);
-    addTriangleRanges(run, proxies);
+    const DeviceExact where = run.settings.deviceExact;
+    const bool exact = where == DeviceExact::Always || (where == DeviceExact::OnHardware && run.backend.hardwareDevice());
+    addTriangleRanges(run, proxies, defer && exact);
     if (!defer) {
         prune(run, "triangles");
     } else if (pruneDeferred(run, "triangles")) {
@@ -348,8 +408,53 @@ bool rasterisable(const FrameState& frame, const Cluster& cluster) {
 
 }  // namespace
 
+std::vector<LevelPipelines::ExactRange> LevelPipelines::exactRangesOf(const Cluster& cluster) const {
+    std::vector<std::uint32_t> objectOfOwner(cluster.objects.size(), kNoOwner);
+    for (std::uint32_t o : cluster.objects)
+        if (m_ownerId[o] != kNoOwner && m_ownerId[o] < objectOfOwner.size()) objectOfOwner[m_ownerId[o]] = o;
+    std::vector<ExactRange> ranges;
+    for (const ObjectRange& r : m_items.objectRanges) {
+        if ((r.kind & 1u) != CULLIDE_RANGE_TRIANGLES) continue;
+        const std::uint32_t o = objectOfOwner.at(r.owner);
+        ranges.push_back({r.itemBegin, r.count, o, r.first - m_geometry.baseTriangle(o)});
+    }
+    return ranges;
+}
+
+void LevelPipelines::addDevicePairs(FrameState& frame, const DeferredCluster& d,
+                                    const std::vector<std::uint32_t>& words, Stats& stats) {
+    const std::vector<ExactRange>& ranges = d.exactRanges;
+    // The object and triangle of a triangle item; BackendError where the device named an item of no range.
+    auto triangleOf = [&](std::uint32_t item) {
+        auto it = std::upper_bound(ranges.begin(), ranges.end(), item,
+                                   [](std::uint32_t i, const ExactRange& r) { return i < r.itemBegin; });
+        if (it == ranges.begin() || item - (--it)->itemBegin >= it->count)
+            throw BackendError("the device exact stage named an item of no triangle range");
+        return std::make_pair(it->object, (*frame.order[it->object])[it->localFirst + (item - it->itemBegin)]);
+    };
+    std::size_t certified = 0;
+    for (std::size_t w = 0; w + 1 < words.size(); w += 2) {
+        auto [a, ta] = triangleOf(words[w]);
+        auto [b, tb] = triangleOf(words[w + 1] & ~CULLIDE_EXACT_WITHIN);
+        const bool within = (words[w + 1] & CULLIDE_EXACT_WITHIN) != 0;
+        if (a == b) throw BackendError("the device exact stage paired an object with itself");
+        if (b < a) {
+            std::swap(a, b);
+            std::swap(ta, tb);
+        }
+        frame.devicePairs.push_back({a, b, ta, tb, within});
+        certified += within ? 1 : 0;
+    }
+    for (std::uint32_t o : d.cluster.objects) frame.exactOnDevice[o] = 1;
+    stats.deviceExactClusters += 1;
+    stats.deviceExactPairs += words.size() / 2;
+    stats.deviceExactCertified += certified;
+}
+
 void LevelPipelines::run(FrameState& frame, const Settings& settings, PruningBackend& backend, TaskPool& pool,
                          TriangleScratch& scratch, Stats& stats) {
+    frame.devicePairs.clear();
+    frame.exactOnDevice.assign(frame.valid.size(), 0);
     backend.beginFrame();
     m_deferred.clear();
     m_geometry.beginFrame();
@@ -374,8 +479,10 @@ void LevelPipelines::run(FrameState& frame, const Settings& settings, PruningBac
             continue;
         }
         const std::size_t firstPlace = place, firstLevel = stats.levels.size();
-        if (runCluster(frame, cluster, settings, backend, pool, scratch, stats, place, true))
-            m_deferred.push_back(DeferredCluster{cluster, firstPlace, firstLevel, stats.levels.size()});
+        if (runCluster(frame, cluster, settings, backend, pool, scratch, stats, place, true)) {
+            m_deferred.push_back(DeferredCluster{cluster, firstPlace, firstLevel, stats.levels.size(), {}});
+            if (m_items.exact.run) m_deferred.back().exactRanges = exactRangesOf(cluster);
+        }
     }
     collectDeferred(frame, settings, backend, pool, scratch, stats);
 }
@@ -417,6 +524,7 @@ void LevelPipelines::collectDeferred(FrameState& frame, const Settings& settings
         const DeferredCluster& d = m_deferred[k];
         if (m_results[k].complete) {
             addSurvivingGroupTriangles(frame, d.cluster.levelGroups, m_results[k].survivors);
+            if (m_results[k].exactRan) addDevicePairs(frame, d, m_results[k].exactPairs, stats);
             continue;
         }
         // A chain stopped early on the device (records to build again, more iterations than were issued): the

@@ -38,12 +38,28 @@ public:
 private:
     /// A cluster whose triangle level is read back with the frame's others: its levels are
     /// stats.levels[firstLevel .. endLevel), its places from firstPlace on.
+    /// A triangle range of a level that the device exact stage ran after: its items are the triangles of `object`
+    /// from localFirst on in its spatial order (FrameState::order).
+    struct ExactRange {
+        std::uint32_t itemBegin;
+        std::uint32_t count;
+        std::uint32_t object;
+        std::uint32_t localFirst;
+    };
     struct DeferredCluster {
         Cluster cluster;
         std::size_t firstPlace = 0;
         std::size_t firstLevel = 0;
         std::size_t endLevel = 0;
+        std::vector<ExactRange> exactRanges;  ///< where the device exact stage ran after its triangle level
     };
+
+    /// The triangle ranges of the level just issued for `cluster` (m_items).
+    std::vector<ExactRange> exactRangesOf(const Cluster& cluster) const;
+    /// The device exact stage's pairs of a deferred cluster (item pairs, DeferredLevel::exactPairs) into
+    /// frame.devicePairs, and its objects marked (FrameState::exactOnDevice).
+    static void addDevicePairs(FrameState& frame, const DeferredCluster& d, const std::vector<std::uint32_t>& words,
+                               Stats& stats);
 
     /// The levels of one cluster (the Auto or the paper pipeline; a level run ahead that stopped early runs again
     /// with its cluster, waited for). `defer`: the Auto triangle level's read-back may wait for collectDeferred;

@@ -19,7 +19,14 @@ public:
     void run(const FrameState& frame, const Settings& settings, ExactStage& exact, Result& result);
 
 private:
+    /// The device exact stage's pairs (frame.devicePairs), sorted into m_device: m_deviceKeep[i] where the filter
+    /// certified pair i, or its double boxes overlap and the exact predicate keeps it (every candidate without
+    /// Settings::exactTriangles).
+    void decideDevicePairs(const FrameState& frame, const Settings& settings, TaskPool& pool, Stats& stats);
+
     // Allocations kept between frames.
+    std::vector<DevicePair> m_device;
+    std::vector<std::uint8_t> m_deviceKeep;
     std::vector<ExactJobResult> m_jobResults;
     std::vector<std::uint8_t> m_touches;
 };

@@ -105,6 +105,33 @@ struct ObjectRange {
 };
 static_assert(sizeof(ObjectRange) == 4 * CULLIDE_RANGE_WORDS, "start.comp's range records");
 
+/// The device exact stage after a level described by its objects (a deferred triangle level): per range r, the ranges
+/// of the meshes its triangles may meet are partners[partnerBegin[r] .. partnerBegin[r + 1]) (each object pair listed
+/// under one of its two ranges). The backend writes every pair of surviving triangles, one from r and one from a
+/// partner, whose boxes (of the positions) meet within `slack`, unless DeviceExactFilter.h's filter (with `reach`; off
+/// without `filter`) certifies it apart; each pair with that filter's verdict (DeferredLevel::exactPairs).
+struct ExactRequest {
+    bool run = false;
+    bool filter = true;  ///< false: every candidate is written undecided (Settings::exactTriangles off)
+    float slack = 0.0f;  ///< exactSlack (DeviceExact.h)
+    float reach = 0.0f;  ///< exactReach (DeviceExact.h)
+    std::uint32_t chunks = 0;  ///< CULLIDE_EXACT_CHUNK partner items per chunk: the longest partner list's chunks
+    std::vector<std::uint32_t> partnerBegin;  ///< ranges + 1
+    std::vector<std::uint32_t> partners;      ///< range indices
+    /// Per range: the box of its first item's group (a triangle range's item j is in group j / groupSize, whose box is
+    /// this one + j / groupSize; 0 for a range of boxes). A group whose box misses a triangle's holds no pair with it.
+    std::vector<std::uint32_t> groupBoxes;
+    void clear() {
+        run = false;
+        filter = true;
+        slack = reach = 0.0f;
+        chunks = 0;
+        partnerBegin.clear();
+        partners.clear();
+        groupBoxes.clear();
+    }
+};
+
 /// The items of one level. Item i belongs to owner[i] (a compact object id) and is drawn as the primitives
 /// prims[primBegin[i] .. primBegin[i + 1]) (a triangle index, or a box index | CULLIDE_PRIM_BOX_BIT) — or, in a level
 /// described by its objects (describedByObjects()), as the one primitive its range gives it on the device.
@@ -127,6 +154,7 @@ struct LevelItems {
     /// How far the pre-pass grows a partner's box (float, rounded up): the float error of the boxes and positions
     /// as the device holds them, and for triangles the margin / 2 their boxes are not grown by.
     float prepassSlack = 0.0f;
+    ExactRequest exact;  ///< a deferred level described by its objects: the device exact stage after it
     bool describedByObjects() const { return !objectRanges.empty(); }
     std::size_t primitiveCount() const { return describedByObjects() ? size() : prims.size(); }
     std::size_t size() const { return describedByObjects() ? objectItems : owner.size(); }
@@ -147,6 +175,7 @@ struct LevelItems {
         inheritsParents = false;
         groupSize = 1;
         prepassSlack = 0.0f;
+        exact.clear();
     }
 };
 
@@ -201,6 +230,10 @@ struct DeferredLevel {
     /// iterations needed than were issued): nothing of the level is known, and it runs again, waited for.
     bool complete = false;
     std::vector<std::uint8_t> survivors;
+    /// The device exact stage ran (LevelItems::exact) and every pair it found fit its buffer: exactPairs holds them,
+    /// two words each (the items, the second | CULLIDE_EXACT_WITHIN where the filter certified the pair).
+    bool exactRan = false;
+    std::vector<std::uint32_t> exactPairs;
 };
 
 /// A backend failure in the middle of a frame (a GL error). The culler finishes that frame without pruning: every
@@ -229,6 +262,8 @@ public:
     /// GL_RENDERER and the device chosen (Stats::renderer, Stats::device).
     virtual std::string renderer() const = 0;
     virtual std::string device() const = 0;
+    /// Whether it runs on a hardware GPU (not a software renderer, not the CPU reference).
+    virtual bool hardwareDevice() const { return false; }
 
     /// Runs one level over `items` (at least two owners, owner ids below 2^16): every item alive, then at most
     /// Settings::maxIterations iterations, the first with start.view, each next one with the view fitted to the

@@ -1,6 +1,7 @@
 #include "ReferenceVisibility.h"
 
 #include "CullerBackends.h"
+#include "DeviceExact.h"
 #include "VisibilityLevel.h"
 #include "bindings.h"
 
@@ -288,6 +289,11 @@ void ReferenceVisibility::pruneLevelDeferred(const LevelItems& items, const Leve
     DeferredLevel level;
     level.complete = true;
     pruneLevel(items, start, level.survivors, stats.levels.at(levelIndex), stats, trace);
+    if (items.exact.run && items.describedByObjects()) {
+        findExactPairs(m_geometry->positions, m_geometry->indices, items, m_expanded.prims, level.survivors,
+                       level.exactPairs);
+        level.exactRan = true;
+    }
     m_deferred.push_back(std::move(level));
 }
 

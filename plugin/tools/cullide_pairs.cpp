@@ -197,6 +197,9 @@ nlohmann::ordered_json statsToJson(const cullide::Stats& s) {
     j["candidate_object_pairs"] = s.candidateObjectPairs;
     j["candidate_triangle_pairs"] = s.candidateTrianglePairs;
     j["exact_tests"] = s.exactTests;
+    j["device_exact_pairs"] = s.deviceExactPairs;
+    j["device_exact_certified"] = s.deviceExactCertified;
+    j["device_exact_overflows"] = s.deviceExactOverflows;
     j["exact_trees_refit"] = s.exactTreesRefit;
     j["exact_trees_sorted"] = s.exactTreesSorted;
     j["exact_trees_whole"] = s.exactTreesWhole;

@@ -7,7 +7,8 @@ Settings reliable(int resolution, Pipeline pipeline) {
     s.resolution = resolution;
     s.pipeline = pipeline;
     s.exactThreshold = 0;              // run every GPU level in tests,
-    s.gpuLevels = GpuLevels::Always;   // also on llvmpipe
+    s.gpuLevels = GpuLevels::Always;   // also on llvmpipe,
+    s.deviceExact = DeviceExact::Always;  // and the device exact stage
     return s;
 }
 

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <iterator>
 #include <cstring>
 #include <sstream>
 #include <utility>
@@ -117,7 +118,11 @@ public:
         d->levelIndex = levelIndex;
         m_scratch.levels.assign(1, LevelStats{});
         m_scratch.levels[0].itemsPerIteration.push_back(items.size());
-        m_reference->pruneLevel(items, start, d->expectedAlive, m_scratch.levels[0], m_scratch, &d->expected);
+        m_reference->pruneLevelDeferred(items, start, 0, m_scratch, &d->expected);
+        std::vector<DeferredLevel> expected;
+        m_reference->collect(Deadline(), expected, m_scratch);
+        d->expectedAlive = std::move(expected.at(0).survivors);
+        d->expectedExact = std::move(expected.at(0).exactPairs);
         d->expectedStart = startOf(m_scratch.levels[0], items.size());
         try {
             m_tested->pruneLevelDeferred(items, start, levelIndex, stats, &d->got);
@@ -146,6 +151,7 @@ public:
             const std::size_t gotStart =
                 d.levelIndex < stats.levels.size() ? startOf(stats.levels[d.levelIndex], d.items) : d.items;
             compare(d.got, d.expected, {gotStart, d.expectedStart}, &results[k].survivors, d.expectedAlive);
+            if (results[k].exactRan) compareExact(results[k].exactPairs, d.expectedExact);
         }
         return true;
     }
@@ -167,8 +173,30 @@ private:
         std::vector<IterationTrace> got;
         std::vector<IterationTrace> expected;
         std::vector<std::uint8_t> expectedAlive;
+        std::vector<std::uint32_t> expectedExact;  ///< the reference's exact pairs (DeferredLevel::exactPairs)
         std::unique_ptr<Ahead> ahead;
     };
+
+    /// The device exact stage's pairs and verdicts against the reference's (in any order: the device appends them
+    /// as its invocations finish).
+    void compareExact(const std::vector<std::uint32_t>& got, const std::vector<std::uint32_t>& expected) {
+        auto sorted = [](const std::vector<std::uint32_t>& words) {
+            std::vector<std::pair<std::uint32_t, std::uint32_t>> pairs;
+            for (std::size_t w = 0; w + 1 < words.size(); w += 2) pairs.emplace_back(words[w], words[w + 1]);
+            std::sort(pairs.begin(), pairs.end());
+            return pairs;
+        };
+        const auto a = sorted(got), b = sorted(expected);
+        m_log->exactPairs += a.size();
+        for (const auto& p : a) m_log->exactCertified += (p.second & CULLIDE_EXACT_WITHIN) != 0 ? 1 : 0;
+        if (a == b) return;
+        std::size_t differing = 0;
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> diff;
+        std::set_symmetric_difference(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(diff));
+        differing = diff.size();
+        note(0, "the device exact stage wrote " + std::to_string(a.size()) + " pairs, the reference " +
+                    std::to_string(b.size()) + "; " + std::to_string(differing) + " differ (pair or verdict)");
+    }
 
     void compareAhead(const Stats& stats) {
         if (!m_ahead) return;

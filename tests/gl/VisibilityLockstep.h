@@ -26,6 +26,8 @@ struct LockstepLog {
     std::size_t uploads = 0;         ///< geometry uploads, each checked: the device's positions bit for bit
     std::size_t mappedVertices = 0;  ///< of their vertices, mapped on the device (MappedMesh), summed
     std::size_t builtBoxes = 0;      ///< of their boxes, built on the device (GpuGeometry::builtRanges), summed
+    std::size_t exactPairs = 0;      ///< pairs the device exact stage wrote (compared with the reference's), summed
+    std::size_t exactCertified = 0;  ///< of those, certified intersecting by its filter
     std::size_t mismatches = 0;   ///< differences found (an iteration's view or result, a level's survivors, an
                                   ///< upload's positions or boxes)
     std::size_t itemsDiffering = 0;

@@ -4,7 +4,8 @@
 // back-end has no bands) and where short bands take them from the last build in the level's place (only a place's
 // first build sums every primitive's footprint first: FOOTPRINTS, then APPEND); each iteration issued is its three
 // passes on the compute back-end (the flag pass ends it), and on the raster back-end a set-up dispatch, the three
-// draws and the survivor pass. Nothing else is dispatched but, per cluster, the dispatch that builds its group boxes
+// draws and the survivor pass; a deferred triangle level is followed by the device exact stage, one dispatch
+// (exact.comp). Nothing else is dispatched but, per cluster, the dispatch that builds its group boxes
 // (group_boxes.comp: these meshes are not static; they come without transforms, so map.comp has none).
 #include "Compare.h"
 #include "CullerBackends.h"
@@ -37,6 +38,7 @@ TEST(DispatchCount, ABuildIsOneDispatchInASteadyFrameAndAComputeIterationThree) 
                           Case{"raster", Backend::Raster, false}}) {
         Settings settings;
         settings.gpuLevels = GpuLevels::Always;
+        settings.deviceExact = DeviceExact::Always;
         settings.exactThreshold = 0;
         settings.resolution = 64;
         settings.backend = c.backend;
@@ -56,12 +58,17 @@ TEST(DispatchCount, ABuildIsOneDispatchInASteadyFrameAndAComputeIterationThree) 
             ++levelsRun;
             EXPECT_EQ(level.shortBuilds, 0u) << c.name << ", " << level.name;
             const std::size_t issued = level.iterations + level.idleIterations;
-            EXPECT_EQ(level.draws, 1 + level.recordBuilds * perBuild + issued * perIteration)
+            const std::size_t exactStage = level.deferred ? 1 : 0;
+            EXPECT_EQ(level.draws, 1 + level.recordBuilds * perBuild + issued * perIteration + exactStage)
                 << c.name << ", " << level.name << ": " << level.recordBuilds << " builds, " << level.iterations
                 << " iterations + " << level.idleIterations << " idle";
         }
         EXPECT_GE(levelsRun, 2u) << c.name;
         EXPECT_GE(r.stats.clusters, 2u) << c.name;
+        std::size_t deferred = 0;
+        for (const LevelStats& level : r.stats.levels) deferred += level.deferred ? 1 : 0;
+        EXPECT_GE(deferred, 1u) << c.name;
+        EXPECT_EQ(r.stats.deviceExactClusters, deferred) << c.name << ": a deferred level without the exact stage";
         EXPECT_EQ(r.stats.draws, levelDraws + r.stats.clusters) << c.name << ": a dispatch outside the levels";
     }
 }

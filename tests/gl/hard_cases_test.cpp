@@ -22,6 +22,7 @@ Settings gpu(int resolution, Mode mode = Mode::Reliable, double margin = 0.0) {
     s.mode = mode;
     s.margin = margin;
     s.gpuLevels = GpuLevels::Always;
+    s.deviceExact = DeviceExact::Always;  // the device's filter on every hard case
     s.exactThreshold = 0;
     return s;
 }

@@ -38,7 +38,10 @@ public:
     void settle(Stats&) override {}
     void pruneLevelDeferred(const LevelItems& items, const LevelStart&, std::size_t, Stats&,
                             std::vector<IterationTrace>*) override {
-        deferred.push_back(DeferredLevel{true, std::vector<std::uint8_t>(items.size(), 1)});
+        DeferredLevel level;
+        level.complete = true;
+        level.survivors.assign(items.size(), 1);
+        deferred.push_back(std::move(level));
     }
     bool collect(const Deadline&, std::vector<DeferredLevel>& results, Stats&) override {
         results.swap(deferred);

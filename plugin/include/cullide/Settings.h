@@ -49,6 +49,18 @@ enum class GpuLevels {
     Never,
 };
 
+/// Where the exact stage's candidate pairs are found when GPU levels run (Settings::deviceExact). On the device: after
+/// each deferred triangle level, every pair of surviving triangles of two partner meshes whose boxes meet, and a
+/// floating-point filter with certified error bounds decides those it can (apart, or intersecting); the CPU's exact
+/// predicate decides the rest. On the CPU: box trees over the surviving triangles (ExactStage).
+enum class DeviceExact {
+    /// On the device where it is a hardware one; on a software renderer the CPU's box trees are faster (its
+    /// all-pairs search per partner group runs on the CPU there).
+    OnHardware,
+    Always,  ///< on the device, a software renderer too (tests)
+    Never,   ///< on the CPU
+};
+
 struct Settings {
     Mode mode = Mode::Reliable;
     Pipeline pipeline = Pipeline::Auto;
@@ -74,6 +86,9 @@ struct Settings {
     /// boxes grown by margin / 2 overlap) — a superset, cheaper to produce; the Bullet adapter uses this, since
     /// Bullet's triangle routines decide the contacts anyway. The reference culler is always exact.
     bool exactTriangles = true;
+    /// With GPU levels: where the exact stage's candidate pairs are found (DeviceExact). The pairs are the same
+    /// either way.
+    DeviceExact deviceExact = DeviceExact::OnHardware;
     /// Worker threads for the CPU stages; 0 = the CPUs this process may run on (its affinity mask on Linux).
     unsigned threads = 0;
     /// Auto pipeline: a level whose input has at most this many triangles goes straight to the exact stage.

@@ -133,6 +133,14 @@ struct Stats {
     /// What the culler holds on its GL device after the frame: buffer capacities plus the view images.
     std::size_t gpuDeviceBytes = 0;
     std::size_t bytesReadBack = 0;
+    /// The device exact stage (Settings::deviceExact): clusters whose candidate pairs the device found, the pairs it
+    /// wrote (those its filter did not certify apart), those it certified intersecting (the others went to the CPU's
+    /// exact predicate), and clusters whose pairs overflowed the device's buffer (their exact stage ran on the CPU;
+    /// the buffer grows for the next frame).
+    std::size_t deviceExactClusters = 0;
+    std::size_t deviceExactPairs = 0;
+    std::size_t deviceExactCertified = 0;
+    std::size_t deviceExactOverflows = 0;
     /// Read-backs this frame that waited for the device to finish the work submitted before (the sum over levels,
     /// unless a level ran again): each is a round trip that leaves the device idle until the CPU submits again. One
     /// in a steady frame of the Auto pipeline, however many clusters it has (a cluster whose group level ends on the

@@ -85,6 +85,7 @@ std::size_t counterWords(std::size_t items) { return CULLIDE_ALIVE_BITS + (items
 LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const GlBackendOptions& options)
     : ownContext(std::move(c)), context(*ownContext), settings(s), readBackDelayMs(options.readBackDelayMs),
       positionsAfterUpload(options.positionsAfterUpload), boxesAfterUpload(options.boxesAfterUpload) {
+    if (options.exactCapacity > 0) exactCapacity = options.exactCapacity;
     context.makeCurrent();
     if (settings.backend == Backend::Compute) {
         program = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl", "passes.glsl",
@@ -121,9 +122,11 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
         "the record build program");
     mapProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"map.comp"})}, "the mapped meshes' program");
     boxesProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"group_boxes.comp"})}, "the group boxes program");
-    startProgram = linkProgram(
-        {compileShader(GL_COMPUTE_SHADER, {"view.glsl", "passes.glsl", "geometry.glsl", "gather.glsl", "start.comp"})},
-        "the level start program");
+    startProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "passes.glsl", "geometry.glsl",
+                                                                  "ranges.glsl", "gather.glsl", "start.comp"})},
+                               "the level start program");
+    exactProgram = linkProgram(
+        {compileShader(GL_COMPUTE_SHADER, {"geometry.glsl", "ranges.glsl", "exact.comp"})}, "the exact stage program");
     if (settings.backend == Backend::Compute)
         bands = context.isSoftware() && !options.shortBands ? CULLIDE_BANDS_LONG : CULLIDE_BANDS_SHORT;
     glCreateVertexArrays(1, &vao);
@@ -166,6 +169,7 @@ LevelDevice::~LevelDevice() {
     glDeleteProgram(mapProgram);
     glDeleteProgram(boxesProgram);
     glDeleteProgram(startProgram);
+    glDeleteProgram(exactProgram);
 }
 
 std::size_t LevelDevice::dispatchAll(std::size_t count, GLint baseLocation) const {
@@ -358,11 +362,70 @@ void LevelDevice::sendRanges(const LevelItems& items, Stats& stats) {
         glCopyNamedBufferSubData(buffers[kAlive], buffers[kParentAlive], 0, 0,
                                  static_cast<GLsizeiptr>(lastItemCount * 4));
     }
+    checkExactRequest(items);
     rangeWords.resize(ranges.size() * CULLIDE_RANGE_WORDS);
     std::memcpy(rangeWords.data(), ranges.data(), ranges.size() * sizeof(ObjectRange));
     rangeWords.insert(rangeWords.end(), items.partnerBoxes.begin(), items.partnerBoxes.end());
+    exactPartnersWord = rangeWords.size();
+    if (items.exact.run) {
+        rangeWords.insert(rangeWords.end(), items.exact.partnerBegin.begin(), items.exact.partnerBegin.end());
+        rangeWords.insert(rangeWords.end(), items.exact.partners.begin(), items.exact.partners.end());
+        rangeWords.insert(rangeWords.end(), items.exact.groupBoxes.begin(), items.exact.groupBoxes.end());
+    }
     uploadBuffer(buffers[kRanges], capacity[kRanges], rangeWords.data(), rangeWords.size() * 4);
     stats.bytesUploaded += rangeWords.size() * 4;
+}
+
+void LevelDevice::checkExactRequest(const LevelItems& items) const {
+    const ExactRequest& x = items.exact;
+    if (!x.run) return;
+    const std::size_t ranges = items.objectRanges.size();
+    const std::size_t boxCount = geometry->boxes.size() / 6 + geometry->builtRanges.size() / 2;
+    bool fits = x.partnerBegin.size() == ranges + 1 && x.partnerBegin.front() == 0 && x.groupBoxes.size() == ranges &&
+                x.partnerBegin.back() == x.partners.size() && x.chunks > 0 && x.chunks <= 65535;
+    for (std::size_t r = 0; fits && r < ranges; ++r) fits = x.partnerBegin[r] <= x.partnerBegin[r + 1];
+    std::size_t longest = 0;  // partner items of one range, summed: within the chunks
+    for (std::size_t r = 0; fits && r < ranges; ++r) {
+        std::size_t sum = 0;
+        for (std::uint32_t p = x.partnerBegin[r]; fits && p < x.partnerBegin[r + 1]; ++p) {
+            fits = x.partners[p] < ranges;
+            if (!fits) break;
+            const ObjectRange& other = items.objectRanges[x.partners[p]];
+            const std::size_t groups = (other.count + items.groupSize - 1) / items.groupSize;
+            fits = (other.kind & 1u) == CULLIDE_RANGE_TRIANGLES && x.groupBoxes[x.partners[p]] + groups <= boxCount;
+            sum += other.count;
+        }
+        longest = std::max(longest, sum);
+    }
+    if (!fits || longest > std::size_t{x.chunks} * CULLIDE_EXACT_CHUNK)
+        throw BackendError("a level's exact partners do not fit its ranges");
+}
+
+void LevelDevice::findExactPairs(const LevelItems& items, bool firstOfFrame, LevelStats& level, Stats& stats) {
+    const ExactRequest& x = items.exact;
+    if (firstOfFrame) {
+        reserveBuffer(buffers[kExact], capacity[kExact], 4 * (1 + 2 * exactCapacity));
+        const GLuint zero = 0;
+        glClearNamedBufferSubData(buffers[kExact], GL_R32UI, 0, 4, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+    }
+    bindBuffers();
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_EXACT, buffers[kExact]);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_EXACT_ITEMS, buffers[kExactItems]);
+    glBindBuffer(GL_DISPATCH_INDIRECT_BUFFER, buffers[kCounters]);
+    glUseProgram(exactProgram);
+    glUniform1ui(CULLIDE_LOC_RANGES, static_cast<GLuint>(items.objectRanges.size()));
+    glUniform1ui(CULLIDE_LOC_EXACT_PARTNERS, static_cast<GLuint>(exactPartnersWord));
+    glUniform1f(CULLIDE_LOC_SLACK, x.slack);
+    glUniform1f(CULLIDE_LOC_REACH, x.reach);
+    glUniform1i(CULLIDE_LOC_FILTER, x.filter ? 1 : 0);
+    glUniform1ui(CULLIDE_LOC_EXACT_CAPACITY, static_cast<GLuint>(exactCapacity));
+    glUniform1ui(CULLIDE_LOC_GROUP_SIZE, items.groupSize);
+    // The level's alive set, and the arguments start.comp wrote for the items that started alive.
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+    glDispatchComputeIndirect(4 * CULLIDE_DISPATCH_EXACT);
+    level.draws += 1;
+    stats.draws += 1;
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
 }
 
 void LevelDevice::clearIterationCounters() const {
@@ -392,6 +455,10 @@ void LevelDevice::startItems(const LevelItems& items, double coordinateBound, Le
     glUniform1ui(CULLIDE_LOC_GROUP_SIZE, items.groupSize);
     glUniform1i(CULLIDE_LOC_INHERITS, items.inheritsParents ? 1 : 0);
     glUniform1f(CULLIDE_LOC_SLACK, items.prepassSlack);
+    glUniform1ui(CULLIDE_LOC_CHUNKS, items.exact.run ? items.exact.chunks : 0u);
+    // Where the exact stage follows: the items that start alive, listed.
+    reserveBuffer(buffers[kExactItems], capacity[kExactItems], (items.exact.run ? n : 1) * 4);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, CULLIDE_SSBO_EXACT_ITEMS, buffers[kExactItems]);
     startTiming();
     const std::size_t dispatches = dispatchAll(n, CULLIDE_LOC_ITEM_BASE);
     level.draws += dispatches;

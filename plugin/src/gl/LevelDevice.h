@@ -53,6 +53,8 @@ enum Buffer {
     kBoxRanges,   ///< GpuGeometry::builtRanges
     kFrameResults,  ///< the deferred levels' counter words (chain, the level run ahead's chain, alive bits), in turn
     kFrameViews,    ///< ... and their views and those of the levels run ahead (where a trace is asked for)
+    kExact,         ///< the frame's exact pairs (exact.comp, CULLIDE_SSBO_EXACT)
+    kExactItems,    ///< the items of a level that start alive, where the exact stage follows it
     kBufferCount
 };
 
@@ -103,6 +105,7 @@ struct LevelDevice {
     GLuint mapProgram = 0;
     GLuint boxesProgram = 0;  ///< group_boxes.comp
     GLuint startProgram = 0;  ///< start.comp: the start of a level described by its objects
+    GLuint exactProgram = 0;  ///< exact.comp: the device exact stage
     int bands = CULLIDE_BANDS_NONE;  ///< build.comp's CULLIDE_BANDS_* for this back-end and device
     GLuint vao = 0;
     GLuint framebuffer = 0;
@@ -121,6 +124,9 @@ struct LevelDevice {
     std::size_t lastItemCount = 0;  ///< of the last level (what the next level's items may inherit)
     bool onePrimEach = false;       ///< the level's item i is primitive i: its primBegin is not sent
     std::vector<std::uint32_t> rangeWords;  ///< kRanges' words, gathered before they are sent
+    std::size_t exactPartnersWord = 0;  ///< where the level's exact partners begin in kRanges
+    /// The pairs kExact holds: kept between frames, grown after a frame whose pairs did not fit.
+    std::size_t exactCapacity = 65536;
     /// Short bands: the pixels per band the level's builds take, from the last build in its place (0: none).
     float perBandEstimate = 0.0f;
     /// Records the record buffers (kPrims, kPrimsNext; kRecords on the raster back-end) hold: kept between levels and
@@ -176,6 +182,12 @@ struct LevelDevice {
     /// start.comp over a level described by its objects: its items' primitives, owners and start, and the first
     /// view (nothing read back).
     void startItems(const LevelItems& items, double coordinateBound, LevelStats& level, Stats& stats);
+    /// Throws BackendError where a level's exact request (LevelItems::exact) names ranges it does not have, or
+    /// partners beyond its chunks.
+    void checkExactRequest(const LevelItems& items) const;
+    /// exact.comp after the level's iterations (their alive set): its pairs appended to kExact, whose word 0 counts
+    /// the frame's (cleared first where `firstOfFrame`). Nothing is read back.
+    void findExactPairs(const LevelItems& items, bool firstOfFrame, LevelStats& level, Stats& stats);
     /// The counters an iteration (and start.comp) gathers into, emptied.
     void clearIterationCounters() const;
 

@@ -41,6 +41,8 @@ struct DeferredEntry {
     std::optional<IssuedLevel> ahead;  ///< the level run ahead before it: its chain in words CULLIDE_AHEAD ..
     bool waited = false;  ///< it ran waited for (its place stopped early last time): `survivors` holds its result
     std::vector<std::uint8_t> survivors;
+    bool exact = false;         ///< the device exact stage ran after it
+    std::size_t exactWord = 0;  ///< where kFrameResults holds the frame's exact pairs counted after it
 };
 
 }  // namespace
@@ -66,6 +68,8 @@ struct VisibilityPass::Impl : LevelDevice {
     std::size_t frameWords = 0;           ///< words of kFrameResults they fill
     std::size_t frameViews = 0;           ///< ViewRecords of kFrameViews they fill
     std::vector<std::uint32_t> frameScratch;  ///< collect()'s read-back
+    bool exactIssued = false;                 ///< an exact stage ran since the last collect(): kExact is counting
+    std::vector<std::uint32_t> exactScratch;  ///< collect()'s exact pairs
 
     bool waitsAt(std::size_t place) const { return place < places.size() && places[place].wait; }
 
@@ -238,6 +242,11 @@ struct VisibilityPass::Impl : LevelDevice {
         }
         entry.level.issued = issueLevel(items, start, guessFor(start.place), perBandFor(start.place), level, stats);
         level.deferred = true;
+        if (items.exact.run) {
+            findExactPairs(items, !exactIssued, level, stats);
+            exactIssued = true;
+            entry.exact = true;
+        }
         endTiming();  // the level's span: its device time is read after collect()'s read-back
         entry.level.span = lastSpan();
         entry.level.spanOpened = timedSpan;
@@ -248,10 +257,17 @@ struct VisibilityPass::Impl : LevelDevice {
             ahead.reset();
         }
         entry.firstWord = frameWords;
-        growKeeping(buffers[kFrameResults], capacity[kFrameResults], 4 * frameWords, 4 * (frameWords + words));
+        const std::size_t exactWords = entry.exact ? 1 : 0;  // the frame's exact pairs so far
+        growKeeping(buffers[kFrameResults], capacity[kFrameResults], 4 * frameWords,
+                    4 * (frameWords + words + exactWords));
         glCopyNamedBufferSubData(buffers[kCounters], buffers[kFrameResults], 0,
                                  static_cast<GLintptr>(4 * frameWords), static_cast<GLsizeiptr>(4 * words));
-        frameWords += words;
+        if (entry.exact) {
+            entry.exactWord = frameWords + words;
+            glCopyNamedBufferSubData(buffers[kExact], buffers[kFrameResults], 0,
+                                     static_cast<GLintptr>(4 * entry.exactWord), 4);
+        }
+        frameWords += words + exactWords;
         if (trace || (entry.ahead && entry.ahead->trace)) {
             const std::size_t firstView = frameViews;
             entry.firstView = firstView;
@@ -290,9 +306,14 @@ struct VisibilityPass::Impl : LevelDevice {
                 return false;
             }
             checkGlError("the deferred levels");
+            readExactPairs(stats);
         }
         results.resize(deferred.size());
-        for (std::size_t k = 0; k < deferred.size(); ++k) results[k] = noteDeferred(deferred[k], stats);
+        std::size_t exactFrom = 0;  // the frame's exact pairs before the level's
+        for (std::size_t k = 0; k < deferred.size(); ++k) {
+            results[k] = noteDeferred(deferred[k], stats);
+            if (deferred[k].exact) takeExactPairs(deferred[k], exactFrom, results[k], stats);
+        }
         dropDeferred();
         forgetSpans();
         return true;
@@ -320,6 +341,36 @@ struct VisibilityPass::Impl : LevelDevice {
         return result;
     }
 
+    /// The frame's exact pairs, after collect()'s read-back: the device has finished writing them, so this read
+    /// waits for nothing. Where they did not all fit, the buffer grows for the next frame.
+    void readExactPairs(Stats& stats) {
+        std::size_t total = 0;
+        for (const DeferredEntry& e : deferred)
+            if (e.exact && !e.waited) total = frameScratch[e.exactWord];
+        const std::size_t held = std::min(total, exactCapacity);
+        exactScratch.resize(2 * held);
+        if (held > 0) {
+            glGetNamedBufferSubData(buffers[kExact], 4, static_cast<GLsizeiptr>(8 * held), exactScratch.data());
+            stats.bytesReadBack += 8 * held;
+            checkGlError("the exact pairs");
+        }
+        constexpr std::size_t kMostPairs = std::size_t{1} << 25;  // 256 MiB of pairs
+        if (total > exactCapacity) exactCapacity = std::min(kMostPairs, std::max(exactCapacity, total + total / 4));
+    }
+
+    /// A deferred level's exact pairs (those counted after the level before's, from `from`), where they all fit.
+    void takeExactPairs(const DeferredEntry& e, std::size_t& from, DeferredLevel& result, Stats& stats) const {
+        const std::size_t to = frameScratch[e.exactWord];
+        if (2 * to > exactScratch.size()) {  // some of its pairs were not written: its exact stage runs on the CPU
+            ++stats.deviceExactOverflows;
+        } else if (result.complete) {
+            result.exactRan = true;
+            result.exactPairs.assign(exactScratch.begin() + static_cast<std::ptrdiff_t>(2 * from),
+                                     exactScratch.begin() + static_cast<std::ptrdiff_t>(2 * to));
+        }
+        from = to;
+    }
+
     /// Grows the record buffers for the count a short build needed (as the chain says).
     void growRecordsFor(const Chain& chain) {
         float approx = 0.0f;
@@ -330,6 +381,7 @@ struct VisibilityPass::Impl : LevelDevice {
 
     /// Forgets the deferred levels (no GL call).
     void dropDeferred() {
+        exactIssued = false;
         deferred.clear();
         frameWords = 0;
         frameViews = 0;
@@ -394,6 +446,8 @@ std::size_t VisibilityPass::deviceBytes() const {
     return bytes;
 }
 
+bool VisibilityPass::hardwareDevice() const { return !m_impl->context.isSoftware(); }
+
 void VisibilityPass::forgetUploads() {
     // After a GL error (out of memory among them) no buffer is trusted to hold what was sent or the size it was
     // asked for: the next frame allocates and sends everything again.
@@ -408,6 +462,7 @@ void VisibilityPass::forgetUploads() {
     s.dropDeferred();
     s.capacity[kFrameResults] = 0;
     s.capacity[kFrameViews] = 0;
+    s.capacity[kExact] = 0;
     s.lastItemCount = 0;
 }
 

@@ -30,6 +30,7 @@ public:
     std::size_t deviceBytes() const override;
     std::string renderer() const override;
     std::string device() const override;
+    bool hardwareDevice() const override;
 
     void pruneLevel(const LevelItems& items, const LevelStart& start, std::vector<std::uint8_t>& survivors,
                     LevelStats& level, Stats& stats, std::vector<IterationTrace>* trace) override;
