@@ -12,7 +12,8 @@ namespace cullide::bench {
 
 std::vector<std::string> engineNames() {
     std::vector<std::string> names = {"exact",          "cullide",         "cullide-1t",  "cullide-cpu",
-                                      "cullide-gpu",    "cullide-raster",  "cullide-sampled", "cullide-sampled-reference",
+                                      "cullide-gpu",    "cullide-gpu-exact", "cullide-raster", "cullide-sampled",
+                                      "cullide-sampled-reference",
                                       "bullet-dbvt",    "bullet-sap"};
 #ifdef CULLIDE_BENCH_FCL
     names.push_back("fcl");
@@ -36,6 +37,11 @@ std::unique_ptr<Engine> makeEngine(const std::string& name, const EngineOptions&
     }
     if (name == "cullide-cpu") {  // the CPU path alone: what Auto weighs the GPU levels against
         s.gpuLevels = GpuLevels::Never;
+        return std::make_unique<CullideEngine>(s, CullideEngine::Kind::Gpu);
+    }
+    if (name == "cullide-gpu-exact") {  // the GPU levels and the exact stage's search on the device, everywhere
+        s.gpuLevels = GpuLevels::Always;
+        s.deviceExact = DeviceExact::Always;
         return std::make_unique<CullideEngine>(s, CullideEngine::Kind::Gpu);
     }
     if (name == "cullide-gpu" || name == "cullide-raster" || name == "cullide-sampled") {

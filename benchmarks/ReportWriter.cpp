@@ -22,7 +22,8 @@ using nlohmann::json;
 const std::vector<std::string> kSceneOrder = {"env1", "env2", "env3", "env3-deform", "stack", "landscape",
                                               "breakable"};
 const std::vector<std::string> kEngineOrder = {"exact",          "cullide",        "cullide-fast",    "cullide-1t",
-                                               "cullide-cpu",    "cullide-gpu",    "cullide-raster",  "cullide-sampled",
+                                               "cullide-cpu",    "cullide-gpu",    "cullide-gpu-exact", "cullide-raster",
+                                               "cullide-sampled",
                                                "bullet-dbvt",    "bullet-sap",     "fcl",             "fcl-aabb"};
 
 double medianMs(const json& r) { return r.at("ms").at("median").get<double>(); }
@@ -40,6 +41,8 @@ std::string engineLabel(const std::string& e, const json& r) {
     if (e == "cullide-fast") return "CULLIDE reliable, deep-penetration fallback off (Bullet adapter)";
     if (e == "cullide-cpu") return "CULLIDE reliable, GPU levels off (CPU path)";
     if (e == "cullide-gpu") return "CULLIDE reliable, GPU levels forced, " + std::to_string(res) + "²";
+    if (e == "cullide-gpu-exact")
+        return "CULLIDE reliable, GPU levels and exact-stage search on the device, " + std::to_string(res) + "²";
     if (e == "cullide-raster") return "CULLIDE reliable, GPU levels forced, raster back-end, " + std::to_string(res) + "²";
     if (e == "cullide-sampled") return "CULLIDE sampled, GPU levels forced, " + std::to_string(res) + "²";
     const bool stepping = r.value("mode", "") == "bullet";

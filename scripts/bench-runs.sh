@@ -46,7 +46,7 @@ bench() {
 }
 
 has_engine() { "$run" --list-engines | grep -x "$1" >/dev/null; }
-engines="exact cullide cullide-1t cullide-cpu cullide-gpu cullide-raster cullide-sampled bullet-dbvt bullet-sap"
+engines="exact cullide cullide-1t cullide-cpu cullide-gpu cullide-gpu-exact cullide-raster cullide-sampled bullet-dbvt bullet-sap"
 for e in fcl fcl-aabb; do has_engine $e && engines="$engines $e"; done
 peers="bullet-dbvt bullet-sap"
 for e in fcl fcl-aabb; do has_engine $e && peers="$peers $e"; done

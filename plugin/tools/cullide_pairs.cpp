@@ -1,7 +1,8 @@
 // cullide-pairs: runs the GPU culler once on a scene file and prints the colliding pairs as JSON.
 //
 //   cullide-pairs SCENE.json [--mode reliable|sampled] [--resolution N] [--margin D] [--out FILE]
-//                 [--gpu-levels auto|always|never] [--pipeline auto|paper] [--backend compute|raster] [--help]
+//                 [--gpu-levels auto|always|never] [--device-exact on-hardware|always|never]
+//                 [--pipeline auto|paper] [--backend compute|raster] [--help]
 //
 // Exit status: 0 success, 1 unexpected failure, 2 bad input or flags, 3 no usable EGL/OpenGL where GPU levels are
 // demanded (--gpu-levels always, --pipeline paper); otherwise the CPU path runs without GL.
@@ -45,6 +46,8 @@ const char* const kUsage =
     "  --gpu-levels L      auto (default: on a hardware GL device, GPU levels where a bounded trial of both\n"
     "                      paths shows they pay; on a software renderer the CPU path, no GL context), always,\n"
     "                      never\n"
+    "  --device-exact E    with GPU levels, the exact stage's candidate search and float filter on the GPU:\n"
+    "                      on-hardware (default: on a hardware GL device), always, never\n"
     "  --pipeline P        auto (default: CPU box pre-pass, group boxes, triangles) or paper\n"
     "  --backend B         compute (default) or raster\n"
     "  --help              show this help\n"
@@ -103,7 +106,7 @@ std::optional<Options> parseArgs(int argc, char** argv) {
                 inlineValue = true;
             }
             if (flag != "--mode" && flag != "--resolution" && flag != "--margin" && flag != "--out" &&
-                flag != "--gpu-levels" && flag != "--pipeline" && flag != "--backend") {
+                flag != "--gpu-levels" && flag != "--device-exact" && flag != "--pipeline" && flag != "--backend") {
                 throw UsageError("unknown option '" + flag + "'");
             }
             if (!inlineValue) {
@@ -127,6 +130,11 @@ std::optional<Options> parseArgs(int argc, char** argv) {
                 else if (value == "always") o.settings.gpuLevels = cullide::GpuLevels::Always;
                 else if (value == "never") o.settings.gpuLevels = cullide::GpuLevels::Never;
                 else throw UsageError("--gpu-levels expects 'auto', 'always' or 'never', got '" + value + "'");
+            } else if (flag == "--device-exact") {
+                if (value == "on-hardware") o.settings.deviceExact = cullide::DeviceExact::OnHardware;
+                else if (value == "always") o.settings.deviceExact = cullide::DeviceExact::Always;
+                else if (value == "never") o.settings.deviceExact = cullide::DeviceExact::Never;
+                else throw UsageError("--device-exact expects 'on-hardware', 'always' or 'never', got '" + value + "'");
             } else if (flag == "--pipeline") {
                 if (value == "auto") o.settings.pipeline = cullide::Pipeline::Auto;
                 else if (value == "paper") o.settings.pipeline = cullide::Pipeline::Paper;
