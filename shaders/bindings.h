@@ -179,10 +179,10 @@
 #define CULLIDE_LOC_REACH 44        /* float: exact.comp: the filter's reach (0: margin 0; DeviceExactFilter.h) */
 #define CULLIDE_LOC_FILTER 45       /* int: exact.comp: 1 = the filter decides what it can; 0 = every candidate is
                                      * written undecided (Settings::exactTriangles off) */
-#define CULLIDE_LOC_CHUNKS 46       /* uint: start.comp: chunks of CULLIDE_EXACT_CHUNK partner items per item where the
-                                     * exact stage follows (0: it does not) */
+#define CULLIDE_LOC_CHUNKS 46       /* uint: start.comp: chunks of partner items per item where the exact stage follows
+                                     * (0: it does not) */
+#define CULLIDE_LOC_CHUNK_ITEMS 48  /* uint: exact.comp: partner items per chunk (ExactRequest::chunkItems) */
 #define CULLIDE_LOC_EXACT_CAPACITY 47 /* uint: exact.comp: the pairs CULLIDE_SSBO_EXACT holds */
-#define CULLIDE_EXACT_CHUNK 2048    /* partner items one exact.comp invocation visits at most */
 #define CULLIDE_EXACT_WITHIN 0x80000000u /* an exact pair the filter certified (its triangles intersect) */
 #define CULLIDE_RANGE_WORDS 8
 #define CULLIDE_RANGE_ITEM_BEGIN 0    /* its first item */

@@ -1,15 +1,16 @@
 // The device exact stage, after a deferred triangle level described by its objects: the candidate triangle pairs among
-// the level's survivors and the filter's verdict on each. Invocation (item i, chunk c), over the items that started
-// alive (start.comp lists them), runs where item i is a surviving triangle: over the surviving triangles of its range's exact partners (the ranges of the meshes it may meet, each
-// object pair listed once), from partner item c * CULLIDE_EXACT_CHUNK on (group by group, skipping the groups whose
-// boxes miss, then through the alive set's bits, so that an item pruned costs a bit), it writes every pair whose boxes meet within
-// u_slack (the margin and the float error of the positions: a superset of the pairs whose double boxes, grown by
-// margin / 2, overlap) and that the filter does not certify apart — certified intersecting (CULLIDE_EXACT_WITHIN) or
-// left to the CPU's exact predicate. The filter is DeviceExactFilter.h's, operation for operation: the reference backend
-// runs that one and the lockstep tests hold the two to the same pairs and verdicts. No loop over the filter's axes
-// (llvmpipe ends an invocation's loops after 65,535 iterations in all): each is written out.
+// the level's survivors and the filter's verdict on each. Work is by group pair: invocation (item i, chunk c), over
+// the items that started alive (start.comp lists them), runs where item i is its group's first surviving triangle.
+// It compares its group's box with the group boxes of its range's exact partners (the ranges of the meshes it may
+// meet, each object pair listed once) from partner item c * u_chunkItems on, and for each pair of groups whose boxes
+// meet within u_slack, their surviving triangles through the alive set's bits (an item pruned costs a bit). It writes
+// every triangle pair whose boxes meet within u_slack (the margin and the float error of the positions: a superset of
+// the pairs whose double boxes, grown by margin / 2, overlap; a group's box holds its triangles') and that the filter
+// does not certify apart — certified intersecting (CULLIDE_EXACT_WITHIN) or left to the CPU's exact predicate. The
+// filter is DeviceExactFilter.h's, operation for operation: the reference backend runs that one and the lockstep tests
+// hold the two to the same pairs and verdicts. No loop over the filter's axes (llvmpipe ends an invocation's loops
+// after 65,535 iterations in all): each is written out; a chunk's group pairs stay within that (ExactRequest).
 layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
-layout(std430, binding = CULLIDE_SSBO_ALIVE) readonly buffer Alive { uint alive[]; };
 layout(std430, binding = CULLIDE_SSBO_COUNTERS) readonly buffer Counters { uint counters[]; };
 layout(std430, binding = CULLIDE_SSBO_ITEM_PRIMS) readonly buffer ItemPrims { uint itemPrims[]; };
 layout(std430, binding = CULLIDE_SSBO_EXACT_ITEMS) readonly buffer ExactItems { uint exactItems[]; };
@@ -20,6 +21,7 @@ layout(location = CULLIDE_LOC_REACH) uniform float u_reach;
 layout(location = CULLIDE_LOC_FILTER) uniform int u_filter;
 layout(location = CULLIDE_LOC_EXACT_CAPACITY) uniform uint u_capacity;
 layout(location = CULLIDE_LOC_GROUP_SIZE) uniform uint u_groupSize;
+layout(location = CULLIDE_LOC_CHUNK_ITEMS) uniform uint u_chunkItems;
 
 // Powers of two, written out (GLSL has no hex float literals): each decimal converts to the power exactly.
 const float k2m10 = 0.0009765625;
@@ -28,6 +30,7 @@ const float k2m20 = 9.5367431640625e-7;
 const float k2m22 = 2.384185791015625e-7;
 const float k2m23 = 1.1920928955078125e-7;
 const float k2m24 = 5.9604644775390625e-8;
+const float k2m100 = 7.888609052210118e-31;
 const float k2m120 = 7.52316384526264e-37;
 const float k2m125 = 2.350988701644575e-38;
 const float k2p36 = 68719476736.0;
@@ -78,9 +81,11 @@ bool apartAlong(vec3 w, vec3 r1, vec3 r2, vec3 r3, vec3 r4, vec3 r5) {
     float maxB = max(max(q0, q1), q2);
     precise float gap = max(minB - maxA, minA - maxB);
     precise float g = (gap * (1.0 - k2m22) - errP) * (1.0 - k2m22);
-    if (!(g > 0.0)) return false;
-    precise float lhs = g * g;
+    if (!(g >= k2m100)) return false;
+    if (u_reach == 0.0) return true;
     precise float rhs = u_reach * u_reach * dot3(w, w) * (1.0 + k2m18);
+    if (!(rhs >= k2m100)) return false;
+    precise float lhs = g * g;
     return lhs > rhs;
 }
 
@@ -148,67 +153,103 @@ void triangleAt(uint t, out vec3 a, out vec3 b, out vec3 c) {
     c = vertexAt(indices[3u * t + 2u]);
 }
 
+// The alive set's bits of items first .. last - 1 within word w.
+uint aliveBits(uint w, uint first, uint last) {
+    uint bits = counters[CULLIDE_ALIVE_BITS + w];
+    if (w * 32u < first) bits &= ~0u << (first - w * 32u);
+    if (last - w * 32u < 32u) bits &= (1u << (last - w * 32u)) - 1u;
+    return bits;
+}
+
+// Whether some item of first .. last - 1 is alive.
+bool anyAlive(uint first, uint last) {
+    for (uint w = first / 32u; w * 32u < last; ++w)
+        if (aliveBits(w, first, last) != 0u) return true;
+    return false;
+}
+
+// Box b of the upload, grown by u_slack on each side, meets (lo, hi).
+bool boxMeets(uint b, vec3 lo, vec3 hi) {
+    uint at = 6u * b;
+    precise vec3 bLo = vec3(boxes[at], boxes[at + 1u], boxes[at + 2u]) - vec3(u_slack);
+    precise vec3 bHi = vec3(boxes[at + 3u], boxes[at + 4u], boxes[at + 5u]) + vec3(u_slack);
+    return all(lessThanEqual(bLo, hi)) && all(lessThanEqual(lo, bHi));
+}
+
+// Every pair of a surviving triangle of items aFirst .. aLast - 1 and one of bFirst .. bLast - 1 whose boxes meet
+// within u_slack and that the filter does not certify apart, appended.
+void pairsOf(uint aFirst, uint aLast, uint bFirst, uint bLast) {
+    for (uint wa = aFirst / 32u; wa * 32u < aLast; ++wa) {
+        uint bitsA = aliveBits(wa, aFirst, aLast);
+        while (bitsA != 0u) {
+            uint i = wa * 32u + uint(findLSB(bitsA));
+            bitsA &= bitsA - 1u;
+            vec3 a0, a1, a2;
+            triangleAt(itemPrims[i], a0, a1, a2);
+            precise vec3 reachLo = min(min(a0, a1), a2) - vec3(u_slack);
+            precise vec3 reachHi = max(max(a0, a1), a2) + vec3(u_slack);
+            for (uint wb = bFirst / 32u; wb * 32u < bLast; ++wb) {
+                uint bitsB = aliveBits(wb, bFirst, bLast);
+                while (bitsB != 0u) {
+                    uint item = wb * 32u + uint(findLSB(bitsB));
+                    bitsB &= bitsB - 1u;
+                    vec3 b0, b1, b2;
+                    triangleAt(itemPrims[item], b0, b1, b2);
+                    vec3 loB = min(min(b0, b1), b2);
+                    vec3 hiB = max(max(b0, b1), b2);
+                    if (!all(lessThanEqual(reachLo, hiB)) || !all(lessThanEqual(loB, reachHi))) continue;
+                    uint v = u_filter != 0 ? verdict(a0, a1, a2, b0, b1, b2) : 1u;
+                    if (v == 0u) continue;
+                    if (exactPairs[0] >= 0x80000000u) continue;  // the count stays far from wrapping around
+                    uint slot = atomicAdd(exactPairs[0], 1u);
+                    if (slot >= u_capacity) continue;
+                    exactPairs[1u + 2u * slot] = i;
+                    exactPairs[2u + 2u * slot] = item | (v == 2u ? CULLIDE_EXACT_WITHIN : 0u);
+                }
+            }
+        }
+    }
+}
+
 void main() {
     // Dispatched indirectly (start.comp): rows of work groups over the items that started alive, one per chunk.
     uint slot = (gl_WorkGroupID.z * gl_NumWorkGroups.x + gl_WorkGroupID.x) * gl_WorkGroupSize.x +
                 gl_LocalInvocationID.x;
     if (slot >= counters[CULLIDE_CHAIN_STARTED]) return;
-    uint chunk = gl_WorkGroupID.y;
     uint i = exactItems[slot];
-    if (alive[i] == 0u) return;
+    if ((counters[CULLIDE_ALIVE_BITS + i / 32u] & (1u << (i % 32u))) == 0u) return;  // pruned since
     uint r = rangeOf(i);
     if ((field(r, CULLIDE_RANGE_KIND) & 1u) != CULLIDE_RANGE_TRIANGLES) return;
-    vec3 a0, a1, a2;
-    triangleAt(itemPrims[i], a0, a1, a2);
-    vec3 loA = min(min(a0, a1), a2);
-    vec3 hiA = max(max(a0, a1), a2);
-    precise vec3 reachLo = loA - vec3(u_slack);
-    precise vec3 reachHi = hiA + vec3(u_slack);
-    uint windowLo = chunk * uint(CULLIDE_EXACT_CHUNK);
-    uint windowHi = windowLo + uint(CULLIDE_EXACT_CHUNK);
+    // The group of item i, led by its first surviving triangle: the others leave it to that one.
+    uint begin = field(r, CULLIDE_RANGE_ITEM_BEGIN);
+    uint group = (i - begin) / u_groupSize;
+    uint groupFirst = begin + group * u_groupSize;
+    uint groupLast = min(groupFirst + u_groupSize, begin + field(r, CULLIDE_RANGE_COUNT));
+    if (anyAlive(groupFirst, i)) return;
     uint list = u_partners + u_rangeCount + 1u;
-    uint end = ranges[u_partners + r + 1u];
     uint groupBoxes = list + ranges[u_partners + u_rangeCount];  // after every range's partners
+    uint box = 6u * (ranges[groupBoxes + r] + group);
+    vec3 lo = vec3(boxes[box], boxes[box + 1u], boxes[box + 2u]);
+    vec3 hi = vec3(boxes[box + 3u], boxes[box + 4u], boxes[box + 5u]);
+    // Partner items windowLo .. windowHi - 1 of the concatenation of its partner ranges, group by group: a partner
+    // group whose box misses this group's (grown by u_slack) holds no pair (the boxes hold their triangles').
+    uint windowLo = gl_WorkGroupID.y * u_chunkItems;
+    uint windowHi = windowLo + u_chunkItems;
+    uint end = ranges[u_partners + r + 1u];
     uint at = 0u;  // partner items before range p, summed
     for (uint p = ranges[u_partners + r]; p < end && at < windowHi; ++p) {
         uint other = ranges[list + p];
         uint count = field(other, CULLIDE_RANGE_COUNT);
         uint from = max(at, windowLo);
         uint to = min(at + count, windowHi);
-        if (from < to) {
-            // The partner's items from - at .. to - at: group by group (a group's box holds its triangles' boxes of
-            // the positions, so a group whose box misses this triangle's holds no pair), and within a group through
-            // the alive set's bits (an item pruned costs a bit).
-            uint begin = field(other, CULLIDE_RANGE_ITEM_BEGIN);
-            uint boxBase = ranges[groupBoxes + other];
-            for (uint g = (from - at) / u_groupSize; g * u_groupSize < to - at; ++g) {
-                uint b = 6u * (boxBase + g);
-                vec3 gLo = vec3(boxes[b], boxes[b + 1u], boxes[b + 2u]);
-                vec3 gHi = vec3(boxes[b + 3u], boxes[b + 4u], boxes[b + 5u]);
-                if (!all(lessThanEqual(reachLo, gHi)) || !all(lessThanEqual(gLo, reachHi))) continue;
-                uint first = begin + max(from - at, g * u_groupSize);
-                uint last = begin + min(to - at, (g + 1u) * u_groupSize);  // exclusive
-                for (uint w = first / 32u; w * 32u < last; ++w) {
-                    uint bits = counters[CULLIDE_ALIVE_BITS + w];
-                    if (w * 32u < first) bits &= ~0u << (first - w * 32u);
-                    if (last - w * 32u < 32u) bits &= (1u << (last - w * 32u)) - 1u;
-                    while (bits != 0u) {
-                        uint item = w * 32u + uint(findLSB(bits));
-                        bits &= bits - 1u;
-                        vec3 b0, b1, b2;
-                        triangleAt(itemPrims[item], b0, b1, b2);
-                        vec3 loB = min(min(b0, b1), b2);
-                        vec3 hiB = max(max(b0, b1), b2);
-                        if (!all(lessThanEqual(reachLo, hiB)) || !all(lessThanEqual(loB, reachHi))) continue;
-                        uint v = u_filter != 0 ? verdict(a0, a1, a2, b0, b1, b2) : 1u;
-                        if (v == 0u) continue;
-                        uint slot = atomicAdd(exactPairs[0], 1u);
-                        if (slot >= u_capacity) continue;
-                        exactPairs[1u + 2u * slot] = i;
-                        exactPairs[2u + 2u * slot] = item | (v == 2u ? CULLIDE_EXACT_WITHIN : 0u);
-                    }
-                }
-            }
+        uint otherBegin = field(other, CULLIDE_RANGE_ITEM_BEGIN);
+        uint otherBox = ranges[groupBoxes + other];
+        uint g = from < to ? (from - at) / u_groupSize : 0u;
+        for (; from < to && g * u_groupSize < to - at; ++g) {
+            if (!boxMeets(otherBox + g, lo, hi)) continue;
+            uint first = otherBegin + max(from - at, g * u_groupSize);
+            uint last = otherBegin + min(to - at, (g + 1u) * u_groupSize);
+            pairsOf(i, groupLast, first, last);
         }
         at += count;
     }

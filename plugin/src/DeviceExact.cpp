@@ -9,6 +9,12 @@
 
 namespace cullide {
 
+std::uint32_t exactChunkItems(std::uint32_t groupSize) {
+    if (groupSize == 0) return 0;
+    const std::size_t groups = kMostExactGroupPairWork / (std::size_t{groupSize} * groupSize);
+    return static_cast<std::uint32_t>(groups * groupSize);
+}
+
 float exactSlack(double margin, const Vec3& origin, double coordinateBound) {
     const double world = origin.cwiseAbs().maxCoeff() + coordinateBound;
     return floatUp(margin + 2.0 * (std::ldexp(coordinateBound, -20) + std::ldexp(world, -48)));
@@ -17,7 +23,7 @@ float exactSlack(double margin, const Vec3& origin, double coordinateBound) {
 float exactReach(double margin, const Vec3& origin, double coordinateBound) {
     if (!(margin > 0.0)) return 0.0f;
     const double world = origin.cwiseAbs().maxCoeff() + coordinateBound;
-    return floatUp(margin + std::ldexp(world + margin, -30));
+    return floatUp(margin + std::ldexp(world + margin, -20));
 }
 
 namespace {

@@ -11,6 +11,14 @@
 
 namespace cullide {
 
+/// The most triangle pairs one exact.comp invocation may visit (a chunk's partner items times its group's
+/// triangles), within llvmpipe's 65,535 loop iterations per invocation.
+constexpr std::size_t kMostExactGroupPairWork = 32768;
+
+/// Partner items per chunk of exact.comp for groups of `groupSize`: whole groups, as many as kMostExactGroupPairWork
+/// allows (0: groups too large for the device exact stage).
+std::uint32_t exactChunkItems(std::uint32_t groupSize);
+
 /// How far exact.comp grows a triangle's box (of the positions, float) before it compares it with another's: the
 /// margin (both halves) and, for each of the two boxes, the float error of the positions (2^-20 of the largest
 /// coordinate) and the double error of world - origin (2^-48 of the largest world coordinate), rounded up — so that
@@ -18,8 +26,8 @@ namespace cullide {
 float exactSlack(double margin, const Vec3& origin, double coordinateBound);
 
 /// The filter's reach (DeviceExactFilter.h): 0 for margin 0 (the CPU's test is then exact intersection), otherwise
-/// the margin plus a bound of the CPU's double distance error (2^-30 of the largest world coordinate and of the
-/// margin), rounded up: a pair certified farther apart than this is farther than the margin by the CPU's test too.
+/// the margin plus a bound of the CPU's double distance error (2^-20 of the largest world coordinate and of the
+/// margin: generous, since a sliver's face normal may tilt), rounded up: a pair certified farther apart than this is farther than the margin by the CPU's test too.
 float exactReach(double margin, const Vec3& origin, double coordinateBound);
 
 /// exact.comp on the CPU: the pairs of surviving triangle items (alive[i] != 0) of `items`' ranges and their exact

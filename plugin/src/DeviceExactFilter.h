@@ -14,7 +14,10 @@
 //   inside it — five orientation signs, each certified by a static error bound of the 3x3 determinant with its
 //   inputs' error.
 // Only +, -, * (correctly rounded in GLSL 4.5) and comparisons; no sqrt, no division, no fused operation (the shader
-// marks every value `precise`, and the C++ build contracts none). NaN or overflow lands in Uncertain.
+// marks every value `precise`, and the C++ build contracts none). NaN or overflow lands in Uncertain. A device may
+// flush subnormal values to zero: the error bounds carry floors above what that loses (2^-120), and the separation test
+// decides only on normal values; a determinant within a few subnormals of its bound may still be decided differently
+// here and on such a device (the lockstep tests would say so), never wrongly.
 #pragma once
 
 #include <algorithm>
@@ -76,8 +79,13 @@ inline bool apartAlong(V3 w, const V3 r[6], const Bounds& b, float reach) {
     const float minB = std::min(std::min(q0, q1), q2), maxB = std::max(std::max(q0, q1), q2);
     const float gap = std::max(minB - maxA, minA - maxB);
     const float g = (gap * (1.0f - 0x1p-22f) - errP) * (1.0f - 0x1p-22f);
-    if (!(g > 0.0f)) return false;
-    return g * g > reach * reach * dot(w, w) * (1.0f + 0x1p-18f);
+    // Only normal values decide (a device may flush subnormals to zero): a gap, and the squares compared, of at least
+    // 2^-100 (whose squares stay normal).
+    if (!(g >= 0x1p-100f)) return false;
+    if (reach == 0.0f) return true;
+    const float rhs = reach * reach * dot(w, w) * (1.0f + 0x1p-18f);
+    if (!(rhs >= 0x1p-100f)) return false;
+    return g * g > rhs;
 }
 
 /// The certified sign of an orientation determinant d (0: not certain).

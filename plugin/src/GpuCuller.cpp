@@ -240,7 +240,9 @@ private:
         } catch (const BackendError& e) {
             ++stats.gpuFallbacks;
             stats.gpuError = e.what();
-            m_backend->forgetUploads();  // what the device holds is no longer trusted
+            m_backend->forgetUploads();  // what the device holds is no longer trusted, its exact pairs included
+            frame.devicePairs.clear();
+            frame.exactOnDevice.assign(frame.valid.size(), 0);
             clearLists(frame.surviving, frame.valid.size());
             collectTriangles(frame, frame.groups, m_settings.pipeline != Pipeline::Paper, m_pool, m_scratch,
                              m_fallbackTriangles);

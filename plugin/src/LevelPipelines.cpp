@@ -213,12 +213,12 @@ void addGroupRanges(LevelRun& run, const std::vector<std::uint32_t>& proxies) {
 }
 
 /// Partner ranges beyond which a mesh's triangles get no device exact stage: exact.comp's loop over them shares
-/// llvmpipe's 65,535 iterations per invocation with its CULLIDE_EXACT_CHUNK partner items.
+/// llvmpipe's 65,535 iterations per invocation with its chunk's group pairs.
 constexpr std::size_t kMaxExactPartners = 16384;
 
 /// The device exact stage after the triangle level (LevelItems::exact): each mesh range's partners are the ranges of
 /// its partner meshes with a larger object index (each object pair once). None where a range has too many partners,
-/// or more than 65,535 chunks of them.
+/// more than 65,535 chunks of them, or groups too large (exactChunkItems).
 void addExactRequest(LevelRun& run, const std::vector<std::uint32_t>& rangeObjects) {
     LevelItems& items = run.items;
     ExactRequest& x = items.exact;
@@ -252,8 +252,12 @@ void addExactRequest(LevelRun& run, const std::vector<std::uint32_t>& rangeObjec
         longest = std::max(longest, sum);
         x.partnerBegin.push_back(static_cast<std::uint32_t>(x.partners.size()));
     }
-    x.chunks = static_cast<std::uint32_t>(std::max<std::size_t>(1, (longest + CULLIDE_EXACT_CHUNK - 1) /
-                                                                       CULLIDE_EXACT_CHUNK));
+    x.chunkItems = exactChunkItems(static_cast<std::uint32_t>(run.settings.groupSize));
+    if (x.chunkItems == 0) {  // groups too large for one invocation's loops
+        x.clear();
+        return;
+    }
+    x.chunks = static_cast<std::uint32_t>(std::max<std::size_t>(1, (longest + x.chunkItems - 1) / x.chunkItems));
     if (x.chunks > 65535) {  // a row of work groups per chunk
         x.clear();
         return;

@@ -115,7 +115,10 @@ struct ExactRequest {
     bool filter = true;  ///< false: every candidate is written undecided (Settings::exactTriangles off)
     float slack = 0.0f;  ///< exactSlack (DeviceExact.h)
     float reach = 0.0f;  ///< exactReach (DeviceExact.h)
-    std::uint32_t chunks = 0;  ///< CULLIDE_EXACT_CHUNK partner items per chunk: the longest partner list's chunks
+    /// Partner items per chunk (whole groups: llvmpipe's 65,535 loop iterations per invocation hold a chunk's group
+    /// pairs, groupSize^2 triangle pairs each), and the chunks of the longest partner list.
+    std::uint32_t chunkItems = 0;
+    std::uint32_t chunks = 0;
     std::vector<std::uint32_t> partnerBegin;  ///< ranges + 1
     std::vector<std::uint32_t> partners;      ///< range indices
     /// Per range: the box of its first item's group (a triangle range's item j is in group j / groupSize, whose box is
@@ -125,7 +128,7 @@ struct ExactRequest {
         run = false;
         filter = true;
         slack = reach = 0.0f;
-        chunks = 0;
+        chunkItems = chunks = 0;
         partnerBegin.clear();
         partners.clear();
         groupBoxes.clear();

@@ -69,6 +69,7 @@ public:
     std::size_t deviceBytes() const override { return m_tested->deviceBytes(); }
     std::string renderer() const override { return m_tested->renderer(); }
     std::string device() const override { return m_tested->device(); }
+    bool hardwareDevice() const override { return m_tested->hardwareDevice(); }
 
     void pruneLevel(const LevelItems& items, const LevelStart& start, std::vector<std::uint8_t>& survivors,
                     LevelStats& level, Stats& stats, std::vector<IterationTrace>* trace) override {

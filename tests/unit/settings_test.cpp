@@ -32,6 +32,7 @@ TEST(Settings, RejectsOutOfRangeFields) {
     EXPECT_NE(bad([](Settings& s) { s.margin = -1; }), "");
     EXPECT_NE(bad([](Settings& s) { s.margin = std::numeric_limits<double>::quiet_NaN(); }), "");
     EXPECT_NE(bad([](Settings& s) { s.margin = std::numeric_limits<double>::infinity(); }), "");
+    EXPECT_NE(bad([](Settings& s) { s.deviceExact = static_cast<DeviceExact>(7); }), "");
     for (const char* device : {"bogus", "gpu", "-1", "1.5", " 0", "12345", "00", "07"})
         EXPECT_NE(bad([device](Settings& s) { s.device = device; }), "") << device;
     for (const char* device : {"", "hardware", "software", "surfaceless", "0", "99", "1234"})

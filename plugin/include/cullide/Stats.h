@@ -87,7 +87,9 @@ struct Stats {
     std::vector<LevelStats> levels;
     std::size_t pcsObjects = 0;
     std::size_t candidateObjectPairs = 0;
-    std::size_t candidateTrianglePairs = 0;  ///< pairs whose inflated boxes overlap (handed to the exact test)
+    /// Pairs whose inflated boxes overlap (handed to the exact test); with the device exact stage, those it did not
+    /// certify apart.
+    std::size_t candidateTrianglePairs = 0;
     std::size_t exactTests = 0;
     /// The exact stage's box trees (one per mesh with surviving triangles): built in a spatial order of the mesh kept
     /// between frames (a refit, no sort: when the survivors are at least an eighth of the mesh), or sorted.

@@ -4,6 +4,7 @@
 #include "gl/GlProgram.h"
 #include "gl/GpuTimes.h"
 #include "gl/ViewRecords.h"
+#include "DeviceExact.h"
 #include "VisibilityLevel.h"
 
 #include <algorithm>
@@ -397,7 +398,9 @@ void LevelDevice::checkExactRequest(const LevelItems& items) const {
         }
         longest = std::max(longest, sum);
     }
-    if (!fits || longest > std::size_t{x.chunks} * CULLIDE_EXACT_CHUNK)
+    fits = fits && x.chunkItems > 0 && x.chunkItems % items.groupSize == 0 &&
+           std::size_t{x.chunkItems} * items.groupSize <= kMostExactGroupPairWork;
+    if (!fits || longest > std::size_t{x.chunks} * x.chunkItems)
         throw BackendError("a level's exact partners do not fit its ranges");
 }
 
@@ -420,6 +423,7 @@ void LevelDevice::findExactPairs(const LevelItems& items, bool firstOfFrame, Lev
     glUniform1i(CULLIDE_LOC_FILTER, x.filter ? 1 : 0);
     glUniform1ui(CULLIDE_LOC_EXACT_CAPACITY, static_cast<GLuint>(exactCapacity));
     glUniform1ui(CULLIDE_LOC_GROUP_SIZE, items.groupSize);
+    glUniform1ui(CULLIDE_LOC_CHUNK_ITEMS, x.chunkItems);
     // The level's alive set, and the arguments start.comp wrote for the items that started alive.
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
     glDispatchComputeIndirect(4 * CULLIDE_DISPATCH_EXACT);

@@ -119,5 +119,17 @@ TEST(DeviceExactFilter, NearContactsTouchingCoplanarAndDegenerateAreNeverDecided
     }
 }
 
+TEST(DeviceExactFilter, AnAxisWhoseLengthUnderflowsCertifiesNothingWithAMargin) {
+    // Nearly parallel edges whose tiny components lie in different axes: cross(r1, eb0) is about (0, -1e-23, -1e-23),
+    // whose squared length underflows while the gap along it does not. The triangles are 10 apart: not apart by 20.
+    const float v[6][3] = {{0.0f, 0.0f, 0.0f},   {1.0f, 1e-23f, 0.0f},   {0.5f, 1.0f, 0.0f},
+                           {0.0f, -10.0f, 0.0f}, {1.0f, -10.0f, 1e-23f}, {0.5f, -15.0f, 0.0f}};
+    EXPECT_NE(filterTrianglePair(v, 20.0f), FilterVerdict::Apart);
+    // The same with components a device flushes (1e-40 squared is 0 there, and subnormal here).
+    const float w[6][3] = {{0.0f, 0.0f, 0.0f},   {1.0f, 1e-20f, 0.0f},   {0.5f, 1.0f, 0.0f},
+                           {0.0f, -20.0f, 0.0f}, {1.0f, -20.0f, 1e-20f}, {0.5f, -25.0f, 0.0f}};
+    EXPECT_NE(filterTrianglePair(w, 40.0f), FilterVerdict::Apart);
+}
+
 }  // namespace
 }  // namespace cullide::test
