@@ -621,7 +621,7 @@ void ReportWriter::gpuLevels(const Class& c) {
         const std::string decision = decided ? a->value("auto_decision", std::string()) : "not trialled";
         const std::string cpuTrial = decided ? ms(a->value("auto_cpu_ms", 0.0)) : "–";
         const std::string gpuTrial = decided ? ms(a->value("auto_gpu_ms", 0.0)) : "–";
-        for (const std::string e : {"cullide-gpu", "cullide-raster"}) {
+        for (const std::string e : {"cullide-gpu", "cullide-gpu-exact", "cullide-raster"}) {
             const json* r = find(c, "side", scene, e);
             if (r == nullptr) continue;
             double wall = 0.0;
