@@ -46,8 +46,9 @@
 #define CULLIDE_SSBO_EXACT 22      /* uint[1 + 2 * capacity]: word 0 counts the frame's pairs (past the capacity too;
                                       * cleared at the frame's first exact stage), then per pair the two items, the
                                       * second | CULLIDE_EXACT_WITHIN where the filter certified it */
-#define CULLIDE_SSBO_EXACT_ITEMS 23 /* uint[items]: where the exact stage follows a level, the items that start alive,
-                                       * appended by start.comp (exact.comp runs over those) */
+#define CULLIDE_SSBO_EXACT_ITEMS 23 /* uint[items]: where the exact stage follows a level, the groups of triangles
+                                       * whose parent survived, by their first item, appended by start.comp
+                                       * (exact.comp runs over those) */
 
 /* Counters, reset before every iteration (and before start.comp, which gathers the items that start alive in them). */
 #define CULLIDE_COUNTER_OVERFLOWS 0 /* compute invocations that would exceed CULLIDE_MAX_LOOP_ITERATIONS */
@@ -92,9 +93,9 @@
                                      * device fault: the C++ side throws BackendError) */
 #define CULLIDE_CHAIN_PER_BAND 38   /* short bands: the pixels per band the level's last build found (float bits): the
                                      * estimate of the next build in the level's place (CULLIDE_LOC_PER_BAND) */
-#define CULLIDE_CHAIN_STARTED 40   /* items start.comp appended to CULLIDE_SSBO_EXACT_ITEMS */
+#define CULLIDE_CHAIN_STARTED 40   /* groups start.comp appended to CULLIDE_SSBO_EXACT_ITEMS */
 #define CULLIDE_DISPATCH_EXACT 41  /* 3 uints: exact.comp's indirect arguments (x, chunks, z: start.comp's last work
-                                    * group, for the items that start alive) */
+                                    * group, for the groups it listed) */
 #define CULLIDE_CHAIN_ALIVE 48      /* CULLIDE_MAX_ITERATIONS words: items alive after iteration i */
 #define CULLIDE_MAX_ITERATIONS 64   /* Settings::maxIterations at most */
 /* Then words CULLIDE_DISPATCH_RECORDS .. CULLIDE_AHEAD of the level run before this one without being waited for

@@ -1,6 +1,6 @@
 // The device exact stage, after a deferred triangle level described by its objects: the candidate triangle pairs among
-// the level's survivors and the filter's verdict on each. Work is by group pair: invocation (item i, chunk c), over
-// the items that started alive (start.comp lists them), runs where item i is its group's first surviving triangle.
+// the level's survivors and the filter's verdict on each. Work is by group pair: invocation (group, chunk c), over the
+// groups of triangles whose parent survived (start.comp lists them), runs where some triangle of the group survives.
 // It compares its group's box with the group boxes of its range's exact partners (the ranges of the meshes it may
 // meet, each object pair listed once) from partner item c * u_chunkItems on, and for each pair of groups whose boxes
 // meet within u_slack, their surviving triangles through the alive set's bits (an item pruned costs a bit). It writes
@@ -212,20 +212,16 @@ void pairsOf(uint aFirst, uint aLast, uint bFirst, uint bLast) {
 }
 
 void main() {
-    // Dispatched indirectly (start.comp): rows of work groups over the items that started alive, one per chunk.
+    // Dispatched indirectly (start.comp): rows of work groups over the groups it listed, one per chunk.
     uint slot = (gl_WorkGroupID.z * gl_NumWorkGroups.x + gl_WorkGroupID.x) * gl_WorkGroupSize.x +
                 gl_LocalInvocationID.x;
     if (slot >= counters[CULLIDE_CHAIN_STARTED]) return;
-    uint i = exactItems[slot];
-    if ((counters[CULLIDE_ALIVE_BITS + i / 32u] & (1u << (i % 32u))) == 0u) return;  // pruned since
-    uint r = rangeOf(i);
-    if ((field(r, CULLIDE_RANGE_KIND) & 1u) != CULLIDE_RANGE_TRIANGLES) return;
-    // The group of item i, led by its first surviving triangle: the others leave it to that one.
+    uint groupFirst = exactItems[slot];  // a group of triangles whose parent survived, by its first item
+    uint r = rangeOf(groupFirst);
     uint begin = field(r, CULLIDE_RANGE_ITEM_BEGIN);
-    uint group = (i - begin) / u_groupSize;
-    uint groupFirst = begin + group * u_groupSize;
+    uint group = (groupFirst - begin) / u_groupSize;
     uint groupLast = min(groupFirst + u_groupSize, begin + field(r, CULLIDE_RANGE_COUNT));
-    if (anyAlive(groupFirst, i)) return;
+    if (!anyAlive(groupFirst, groupLast)) return;
     uint list = u_partners + u_rangeCount + 1u;
     uint groupBoxes = list + ranges[u_partners + u_rangeCount];  // after every range's partners
     uint box = 6u * (ranges[groupBoxes + r] + group);
@@ -249,7 +245,7 @@ void main() {
             if (!boxMeets(otherBox + g, lo, hi)) continue;
             uint first = otherBegin + max(from - at, g * u_groupSize);
             uint last = otherBegin + min(to - at, (g + 1u) * u_groupSize);
-            pairsOf(i, groupLast, first, last);
+            pairsOf(groupFirst, groupLast, first, last);
         }
         at += count;
     }

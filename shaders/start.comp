@@ -5,8 +5,8 @@
 // triangle's box of the positions) meets one of its partner objects' boxes grown by u_slack, or its range keeps every
 // item (a proxy; an object with too many partners to test). The items that start alive are counted (with their owner
 // range and boxes: gather.glsl), and the last work group fits the first view to them as an iteration's end fits the
-// next (none alive: to the origin). Where the device exact stage follows the level, the items that start alive are
-// listed for it, and the last work group writes its indirect arguments. ReferenceVisibility.cpp's startByObjects is the CPU's copy, float for float.
+// next (none alive: to the origin). Where the device exact stage follows the level, the groups of triangles whose
+// parent survived are listed for it (by their first item), and the last work group writes its indirect arguments. ReferenceVisibility.cpp's startByObjects is the CPU's copy, float for float.
 layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
 layout(std430, binding = CULLIDE_SSBO_ORDERED) readonly buffer Ordered { uint ordered[]; };
 layout(std430, binding = CULLIDE_SSBO_PARENT_ALIVE) readonly buffer ParentState { uint parentState[]; };
@@ -57,6 +57,9 @@ void main() {
         uint owner = field(r, CULLIDE_RANGE_OWNER);
         uint parent = field(r, CULLIDE_RANGE_PARENT) + (isBox ? j : j / u_groupSize);
         bool live = u_inherits == 0 || parentState[parent] != 0u;
+        // The exact stage's work: a group of triangles whose parent survived, listed by its first item.
+        if (u_chunks != 0u && live && !isBox && j % u_groupSize == 0u)
+            exactItems[atomicAdd(counters[CULLIDE_CHAIN_STARTED], 1u)] = i;
         vec3 lo;
         vec3 hi;
         primBox(prim, lo, hi);
@@ -73,7 +76,6 @@ void main() {
         alive[i] = live ? 1u : 0u;
         if (live) {
             atomicOr(counters[CULLIDE_ALIVE_BITS + i / 32u], 1u << (i % 32u));
-            if (u_chunks != 0u) exactItems[atomicAdd(counters[CULLIDE_CHAIN_STARTED], 1u)] = i;  // the exact stage's
             gatherAlive(owner, uvec3(orderedBits(lo.x), orderedBits(lo.y), orderedBits(lo.z)),
                         uvec3(orderedBits(hi.x), orderedBits(hi.y), orderedBits(hi.z)));
         }
@@ -94,8 +96,9 @@ void main() {
         counters[CULLIDE_COUNTER_HI + 2] = origin;
     }
     fitView(0u, counters[CULLIDE_COUNTER_OWNER_MAX], u_resolution);
-    if (u_chunks != 0u) {  // the exact stage's work groups: 64 items each (rows of at most 65,535), per chunk
-        uint groups = (started + uint(CULLIDE_COMPUTE_GROUP_SIZE) - 1u) / uint(CULLIDE_COMPUTE_GROUP_SIZE);
+    if (u_chunks != 0u) {  // the exact stage's work groups: 64 listed groups each (rows of at most 65,535), per chunk
+        uint listed = counters[CULLIDE_CHAIN_STARTED];
+        uint groups = (listed + uint(CULLIDE_COMPUTE_GROUP_SIZE) - 1u) / uint(CULLIDE_COMPUTE_GROUP_SIZE);
         uint x = min(groups, 65535u);
         counters[CULLIDE_DISPATCH_EXACT] = x;
         counters[CULLIDE_DISPATCH_EXACT + 1] = x == 0u ? 0u : u_chunks;

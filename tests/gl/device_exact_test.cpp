@@ -106,5 +106,38 @@ TEST(DeviceExact, AFrameWhosePairsOverflowTheBufferFinishesOnTheCpuAndTheBufferG
     EXPECT_EQ(trianglePairs(second), trianglePairs(expected));
 }
 
+TEST(DeviceExact, WhereOnlyALaterClusterOverflowsTheEarlierKeepsItsDevicePairs) {
+    // Two copies of the scene far apart: two clusters, whose pairs share the frame's buffer one after the other.
+    Settings settings = deviceExact(0.0);
+    CULLIDE_GPU_CULLER_OR_SKIP(single, settings);
+    const auto one = nearContacts(Vec3::Zero());
+    Result alone;
+    single->run(asObjects(one), alone);
+    const std::size_t perCluster = alone.stats.deviceExactPairs;
+    ASSERT_GT(perCluster, 0u);
+    auto meshes = one;
+    for (const TriangleMesh& m : nearContacts(Vec3(1000.0, 0.0, 0.0))) meshes.push_back(m);
+    const auto objects = asObjects(meshes);
+    Settings off = settings;
+    off.deviceExact = DeviceExact::Never;
+    Result expected;
+    createGpuCuller(off)->run(objects, expected);
+    GlBackendOptions options;
+    options.exactCapacity = perCluster;  // the first cluster's pairs fit exactly, the second's do not
+    auto culler =
+        createGpuCuller(settings, [options](const Settings& s) { return createGlPruningBackend(s, options); });
+    Result got;
+    culler->run(objects, got);
+    EXPECT_EQ(got.stats.clusters, 2u);
+    EXPECT_EQ(got.stats.deviceExactOverflows, 1u);
+    EXPECT_EQ(got.stats.deviceExactClusters, 1u);
+    EXPECT_EQ(got.stats.deviceExactPairs, perCluster);
+    EXPECT_EQ(trianglePairs(got), trianglePairs(expected));
+    culler->run(objects, got);
+    EXPECT_EQ(got.stats.deviceExactOverflows, 0u);
+    EXPECT_EQ(got.stats.deviceExactClusters, 2u);
+    EXPECT_EQ(trianglePairs(got), trianglePairs(expected));
+}
+
 }  // namespace
 }  // namespace cullide::test
