@@ -11,6 +11,25 @@
 namespace cullide::test {
 namespace {
 
+/// The culler on the reference backend with the device exact stage (got) and without it (expected).
+struct Both {
+    Result got;
+    Result expected;
+};
+
+Both runBoth(const std::vector<Object>& objects, double margin, bool exactTriangles) {
+    Settings on = referenceLevels(Pipeline::Auto, Mode::Reliable, 64);
+    on.margin = margin;
+    on.exactTriangles = exactTriangles;
+    on.deviceExact = DeviceExact::Always;
+    Settings off = on;
+    off.deviceExact = DeviceExact::Never;
+    Both both;
+    referenceLevelsCuller(on)->run(objects, both.got);
+    referenceLevelsCuller(off)->run(objects, both.expected);
+    return both;
+}
+
 TEST(DeviceExactReference, TheSamePairsAsTheCpuExactStage) {
     for (double offset : {0.0, 1e7}) {
         for (double margin : {0.0, 0.01}) {
@@ -19,15 +38,7 @@ TEST(DeviceExactReference, TheSamePairsAsTheCpuExactStage) {
                 for (TriangleMesh& m : meshes)
                     for (Vec3& v : m.vertices) v += Vec3(offset, -offset, 0.5 * offset);
                 const auto objects = asObjects(meshes);
-                Settings on = referenceLevels(Pipeline::Auto, Mode::Reliable, 64);
-                on.margin = margin;
-                on.exactTriangles = exactTriangles;
-                on.deviceExact = DeviceExact::Always;
-                Settings off = on;
-                off.deviceExact = DeviceExact::Never;
-                Result got, expected;
-                referenceLevelsCuller(on)->run(objects, got);
-                referenceLevelsCuller(off)->run(objects, expected);
+                const auto [got, expected] = runBoth(objects, margin, exactTriangles);
                 const std::string name = "offset " + std::to_string(offset) + ", margin " + std::to_string(margin) +
                                          (exactTriangles ? ", exact" : ", candidates");
                 EXPECT_GT(got.stats.deviceExactClusters, 0u) << name;
@@ -55,14 +66,7 @@ TEST(DeviceExactReference, ACandidateIsAPairWhoseDoubleBoxesOverlapNotOnlyItsFlo
     const std::vector<TriangleMesh> meshes = {a, b};
     const auto objects = asObjects(meshes);
     for (bool exactTriangles : {false, true}) {
-        Settings on = referenceLevels(Pipeline::Auto, Mode::Reliable, 64);
-        on.exactTriangles = exactTriangles;
-        on.deviceExact = DeviceExact::Always;
-        Settings off = on;
-        off.deviceExact = DeviceExact::Never;
-        Result got, expected;
-        referenceLevelsCuller(on)->run(objects, got);
-        referenceLevelsCuller(off)->run(objects, expected);
+        const auto [got, expected] = runBoth(objects, 0.0, exactTriangles);
         EXPECT_GT(got.stats.deviceExactPairs, 0u) << "the device did not compare the pair";
         EXPECT_EQ(trianglePairs(got), trianglePairs(expected)) << (exactTriangles ? "exact" : "candidates");
         EXPECT_TRUE(trianglePairs(got).empty());
