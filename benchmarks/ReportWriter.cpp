@@ -22,8 +22,8 @@ using nlohmann::json;
 const std::vector<std::string> kSceneOrder = {"env1", "env2", "env3", "env3-deform", "stack", "landscape",
                                               "breakable"};
 const std::vector<std::string> kEngineOrder = {"exact",          "cullide",        "cullide-fast",    "cullide-1t",
-                                               "cullide-cpu",    "cullide-gpu",    "cullide-gpu-exact", "cullide-raster",
-                                               "cullide-sampled",
+                                               "cullide-cpu",    "cullide-gpu",    "cullide-gpu-exact",
+                                               "cullide-raster", "cullide-sampled",
                                                "bullet-dbvt",    "bullet-sap",     "fcl",             "fcl-aabb"};
 
 double medianMs(const json& r) { return r.at("ms").at("median").get<double>(); }

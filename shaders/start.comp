@@ -6,7 +6,8 @@
 // item (a proxy; an object with too many partners to test). The items that start alive are counted (with their owner
 // range and boxes: gather.glsl), and the last work group fits the first view to them as an iteration's end fits the
 // next (none alive: to the origin). Where the device exact stage follows the level, the groups of triangles whose
-// parent survived are listed for it (by their first item), and the last work group writes its indirect arguments. ReferenceVisibility.cpp's startByObjects is the CPU's copy, float for float.
+// parent survived are listed for it (by their first item), and the last work group writes its indirect arguments.
+// ReferenceVisibility.cpp's startByObjects is the CPU's copy, float for float.
 layout(local_size_x = CULLIDE_COMPUTE_GROUP_SIZE) in;
 layout(std430, binding = CULLIDE_SSBO_ORDERED) readonly buffer Ordered { uint ordered[]; };
 layout(std430, binding = CULLIDE_SSBO_PARENT_ALIVE) readonly buffer ParentState { uint parentState[]; };

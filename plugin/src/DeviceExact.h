@@ -27,7 +27,8 @@ float exactSlack(double margin, const Vec3& origin, double coordinateBound);
 
 /// The filter's reach (DeviceExactFilter.h): 0 for margin 0 (the CPU's test is then exact intersection), otherwise
 /// the margin plus a bound of the CPU's double distance error (2^-20 of the largest world coordinate and of the
-/// margin: generous, since a sliver's face normal may tilt), rounded up: a pair certified farther apart than this is farther than the margin by the CPU's test too.
+/// margin: generous, since a sliver's face normal may tilt), rounded up: a pair certified farther apart than this is
+/// farther than the margin by the CPU's test too.
 float exactReach(double margin, const Vec3& origin, double coordinateBound);
 
 /// exact.comp on the CPU: the pairs of surviving triangle items (alive[i] != 0) of `items`' ranges and their exact

@@ -309,7 +309,8 @@ void runTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies) 
 bool runInheritingTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>& proxies, bool defer) {
     beginLevel(run, true);
     const DeviceExact where = run.settings.deviceExact;
-    const bool exact = where == DeviceExact::Always || (where == DeviceExact::OnHardware && run.backend.hardwareDevice());
+    const bool exact =
+        where == DeviceExact::Always || (where == DeviceExact::OnHardware && run.backend.hardwareDevice());
     addTriangleRanges(run, proxies, defer && exact);
     if (!defer) {
         prune(run, "triangles");

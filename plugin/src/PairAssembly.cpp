@@ -100,8 +100,8 @@ void PairAssembly::run(const FrameState& frame, const Settings& settings, ExactS
         std::size_t at = 0;  // m_device and the pairs are both sorted by object pair
         for (std::size_t i : devicePairIndex) {
             ObjectPair& pair = result.pairs[i];
-            while (at < m_device.size() && std::make_pair(m_device[at].a, m_device[at].b) < std::make_pair(pair.a, pair.b))
-                ++at;
+            const auto before = [&](const DevicePair& p) { return p.a != pair.a ? p.a < pair.a : p.b < pair.b; };
+            while (at < m_device.size() && before(m_device[at])) ++at;
             for (; at < m_device.size() && m_device[at].a == pair.a && m_device[at].b == pair.b; ++at)
                 if (m_deviceKeep[at]) pair.triangles.push_back({m_device[at].triangleA, m_device[at].triangleB});
             keep[i] = !pair.triangles.empty();

@@ -33,7 +33,8 @@ std::string Settings::validate() const {
     if (backend != Backend::Compute && backend != Backend::Raster) return "backend is not a Backend value";
     if (gpuLevels != GpuLevels::Auto && gpuLevels != GpuLevels::Always && gpuLevels != GpuLevels::Never)
         return "gpuLevels is not a GpuLevels value";
-    if (deviceExact != DeviceExact::OnHardware && deviceExact != DeviceExact::Always && deviceExact != DeviceExact::Never)
+    if (deviceExact != DeviceExact::OnHardware && deviceExact != DeviceExact::Always &&
+        deviceExact != DeviceExact::Never)
         return "deviceExact is not a DeviceExact value";
     if (pipeline == Pipeline::Paper && gpuLevels == GpuLevels::Never)
         return "pipeline Paper runs GPU levels by definition: it contradicts gpuLevels Never (use Pipeline::Auto "
