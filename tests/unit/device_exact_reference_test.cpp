@@ -2,6 +2,7 @@
 // the culler's pairs are those of the CPU's exact stage — exact or candidates, with and without a margin, near the
 // origin and far from it — while most pairs are decided by the filter, not the CPU's predicate.
 #include "Compare.h"
+#include "CullerBackends.h"
 #include "ReferenceLevelsSupport.h"
 
 #include <gtest/gtest.h>
@@ -70,6 +71,54 @@ TEST(DeviceExactReference, ACandidateIsAPairWhoseDoubleBoxesOverlapNotOnlyItsFlo
         EXPECT_GT(got.stats.deviceExactPairs, 0u) << "the device did not compare the pair";
         EXPECT_EQ(trianglePairs(got), trianglePairs(expected)) << (exactTriangles ? "exact" : "candidates");
         EXPECT_TRUE(trianglePairs(got).empty());
+    }
+}
+
+/// The reference backend, saying it runs on a hardware GPU or not (DeviceExact::OnHardware asks).
+class ReportingBackend final : public PruningBackend {
+public:
+    ReportingBackend(const Settings& s, bool hardware)
+        : m_inner(createReferencePruningBackend(s)), m_hardware(hardware) {}
+    bool hardwareDevice() const override { return m_hardware; }
+    void beginFrame() override { m_inner->beginFrame(); }
+    void upload(const GpuGeometry& g, Stats& stats) override { m_inner->upload(g, stats); }
+    void forgetUploads() override { m_inner->forgetUploads(); }
+    std::size_t deviceBytes() const override { return m_inner->deviceBytes(); }
+    std::string renderer() const override { return m_inner->renderer(); }
+    std::string device() const override { return m_inner->device(); }
+    void pruneLevel(const LevelItems& items, const LevelStart& start, std::vector<std::uint8_t>& survivors,
+                    LevelStats& level, Stats& stats, std::vector<IterationTrace>* trace) override {
+        m_inner->pruneLevel(items, start, survivors, level, stats, trace);
+    }
+    void pruneLevelAhead(const LevelItems& items, const LevelStart& start, std::size_t levelIndex, Stats& stats,
+                         std::vector<IterationTrace>* trace) override {
+        m_inner->pruneLevelAhead(items, start, levelIndex, stats, trace);
+    }
+    void settle(Stats& stats) override { m_inner->settle(stats); }
+    void pruneLevelDeferred(const LevelItems& items, const LevelStart& start, std::size_t levelIndex, Stats& stats,
+                            std::vector<IterationTrace>* trace) override {
+        m_inner->pruneLevelDeferred(items, start, levelIndex, stats, trace);
+    }
+    bool collect(const Deadline& until, std::vector<DeferredLevel>& results, Stats& stats) override {
+        return m_inner->collect(until, results, stats);
+    }
+
+private:
+    std::unique_ptr<PruningBackend> m_inner;
+    bool m_hardware;
+};
+
+TEST(DeviceExactReference, OnHardwareRunsTheStageOnlyWhereTheBackendIsAHardwareGpu) {
+    const auto meshes = randomSoups(5, 12, 80, 0.6);
+    const auto objects = asObjects(meshes);
+    Settings s = referenceLevels(Pipeline::Auto, Mode::Reliable, 64);
+    EXPECT_EQ(s.deviceExact, DeviceExact::OnHardware) << "the default";
+    for (bool hardware : {false, true}) {
+        auto culler = createGpuCuller(
+            s, [hardware](const Settings& settings) { return std::make_unique<ReportingBackend>(settings, hardware); });
+        Result r;
+        culler->run(objects, r);
+        EXPECT_EQ(r.stats.deviceExactClusters > 0, hardware) << (hardware ? "hardware" : "software");
     }
 }
 
