@@ -147,12 +147,6 @@ uint verdict(vec3 p0, vec3 p1, vec3 p2, vec3 p3, vec3 p4, vec3 p5) {
     return 1u;
 }
 
-void triangleAt(uint t, out vec3 a, out vec3 b, out vec3 c) {
-    a = vertexAt(indices[3u * t]);
-    b = vertexAt(indices[3u * t + 1u]);
-    c = vertexAt(indices[3u * t + 2u]);
-}
-
 // The alive set's bits of items first .. last - 1 within word w.
 uint aliveBits(uint w, uint first, uint last) {
     uint bits = counters[CULLIDE_ALIVE_BITS + w];
@@ -166,14 +160,6 @@ bool anyAlive(uint first, uint last) {
     for (uint w = first / 32u; w * 32u < last; ++w)
         if (aliveBits(w, first, last) != 0u) return true;
     return false;
-}
-
-// Box b of the upload, grown by u_slack on each side, meets (lo, hi).
-bool boxMeets(uint b, vec3 lo, vec3 hi) {
-    uint at = 6u * b;
-    precise vec3 bLo = vec3(boxes[at], boxes[at + 1u], boxes[at + 2u]) - vec3(u_slack);
-    precise vec3 bHi = vec3(boxes[at + 3u], boxes[at + 4u], boxes[at + 5u]) + vec3(u_slack);
-    return all(lessThanEqual(bLo, hi)) && all(lessThanEqual(lo, bHi));
 }
 
 // Every pair of a surviving triangle of items aFirst .. aLast - 1 and one of bFirst .. bLast - 1 whose boxes meet
@@ -242,7 +228,7 @@ void main() {
         uint otherBox = ranges[groupBoxes + other];
         uint g = from < to ? (from - at) / u_groupSize : 0u;
         for (; from < to && g * u_groupSize < to - at; ++g) {
-            if (!boxMeets(otherBox + g, lo, hi)) continue;
+            if (!meetsGrownBox(lo, hi, otherBox + g, u_slack)) continue;
             uint first = otherBegin + max(from - at, g * u_groupSize);
             uint last = otherBegin + min(to - at, (g + 1u) * u_groupSize);
             pairsOf(groupFirst, groupLast, first, last);

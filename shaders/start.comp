@@ -26,14 +26,6 @@ layout(location = CULLIDE_LOC_CHUNKS) uniform uint u_chunks;
 
 shared bool s_last;
 
-// Whether (lo, hi) meets box `b` grown by u_slack on each side (closed intervals).
-bool meets(vec3 lo, vec3 hi, uint b) {
-    uint at = 6u * b;
-    precise vec3 bLo = vec3(boxes[at], boxes[at + 1u], boxes[at + 2u]) - vec3(u_slack);
-    precise vec3 bHi = vec3(boxes[at + 3u], boxes[at + 4u], boxes[at + 5u]) + vec3(u_slack);
-    return all(lessThanEqual(lo, bHi)) && all(lessThanEqual(bLo, hi));
-}
-
 // Whether this work group is the last of all of the start's to finish (every lane calls it).
 bool lastToFinish() {
     memoryBarrierBuffer();
@@ -69,7 +61,7 @@ void main() {
             uint end = field(r, CULLIDE_RANGE_PARTNER_END);
             uint partners = uint(CULLIDE_RANGE_WORDS) * u_rangeCount;
             for (uint p = field(r, CULLIDE_RANGE_PARTNER_BEGIN); p < end && !kept; ++p)
-                kept = meets(lo, hi, ranges[partners + p]);
+                kept = meetsGrownBox(lo, hi, ranges[partners + p], u_slack);
             live = kept;
         }
         itemPrims[i] = prim;
