@@ -29,6 +29,7 @@ struct LevelRun {
     std::vector<std::uint32_t>& ownerId;   ///< per object: its compact owner id in the level being built
     std::vector<FrameTriangle>& triangles;
     std::size_t& place;  ///< the next level's place in the frame (LevelStart::place)
+    std::vector<TriangleRange>& triangleRanges;  ///< the mesh ranges of the last triangle level described by objects
     std::uint32_t ownerCount = 0;
     bool uploaded = false;  ///< the cluster's geometry is on the device (sent when its first level runs)
 };
@@ -219,31 +220,29 @@ constexpr std::size_t kMaxExactPartners = 16384;
 /// The device exact stage after the triangle level (LevelItems::exact): each mesh range's partners are the ranges of
 /// its partner meshes with a larger object index (each object pair once). None where a range has too many partners,
 /// more than 65,535 chunks of them, or groups too large (exactChunkItems).
-void addExactRequest(LevelRun& run, const std::vector<std::uint32_t>& rangeObjects) {
+void addExactRequest(LevelRun& run) {
     LevelItems& items = run.items;
     ExactRequest& x = items.exact;
+    const std::vector<TriangleRange>& meshes = run.triangleRanges;  // the first ranges; the proxies' follow
     std::vector<std::uint32_t> rangeOfOwner(run.ownerCount, kNoOwner);
-    for (std::size_t r = 0; r < items.objectRanges.size(); ++r)
-        if ((items.objectRanges[r].kind & 1u) == CULLIDE_RANGE_TRIANGLES)
-            rangeOfOwner[items.objectRanges[r].owner] = static_cast<std::uint32_t>(r);
+    for (std::size_t r = 0; r < meshes.size(); ++r)
+        rangeOfOwner[run.ownerId[meshes[r].object]] = static_cast<std::uint32_t>(r);
     x.partnerBegin.assign(1, 0);
     std::size_t longest = 0;
     const auto k = static_cast<std::uint32_t>(run.settings.groupSize);
     for (std::size_t r = 0; r < items.objectRanges.size(); ++r) {
-        const std::uint32_t o = rangeObjects[r];
         std::size_t sum = 0;
-        const bool triangles = (items.objectRanges[r].kind & 1u) == CULLIDE_RANGE_TRIANGLES;
-        // Its items start at its first group's first triangle (in the mesh's order, from baseTriangle on).
-        x.groupBoxes.push_back(
-            triangles ? run.geometry.firstGroupBox(o) + (items.objectRanges[r].first - run.geometry.baseTriangle(o)) / k
-                      : 0u);
-        if (triangles) {
+        if (r < meshes.size()) {
+            const std::uint32_t o = meshes[r].object;
+            x.groupBoxes.push_back(run.geometry.firstGroupBox(o) + meshes[r].localFirst / k);  // its first group's
             for (std::uint32_t p : run.frame.partners[o]) {
                 const std::uint32_t owner = run.ownerId[p];
                 if (p < o || owner == kNoOwner || rangeOfOwner[owner] == kNoOwner) continue;
                 x.partners.push_back(rangeOfOwner[owner]);
-                sum += items.objectRanges[rangeOfOwner[owner]].count;
+                sum += meshes[rangeOfOwner[owner]].count;
             }
+        } else {
+            x.groupBoxes.push_back(0);  // a proxy: no partners
         }
         if (x.partners.size() - x.partnerBegin.back() > kMaxExactPartners) {
             x.clear();
@@ -273,22 +272,21 @@ void addExactRequest(LevelRun& run, const std::vector<std::uint32_t>& rangeObjec
 /// alive where its group survived and its box meets a partner's object box (grown by margin / 2: triangle boxes are
 /// not); a proxy where it survived. `exact`: the device exact stage follows it (addExactRequest).
 void addTriangleRanges(LevelRun& run, const std::vector<std::uint32_t>& proxies, bool exact) {
-    std::vector<std::uint32_t> rangeObjects;
+    run.triangleRanges.clear();
     std::uint32_t parent = 0;  // the group level's item of the run's first group
     for (const GroupRun& r : groupRuns(run.cluster.levelGroups)) {
+        const auto itemBegin = static_cast<std::uint32_t>(run.items.objectItems);
+        run.triangleRanges.push_back({itemBegin, r.triangles, r.object, r.first});
         addRange(run, r.object, r.triangles, run.geometry.baseTriangle(r.object) + r.first, parent,
                  CULLIDE_RANGE_TRIANGLES, kMaxTrianglePartners);
-        rangeObjects.push_back(r.object);
         parent += r.groups;
     }
-    for (std::uint32_t o : proxies) {
+    for (std::uint32_t o : proxies)
         addRange(run, o, 1, run.geometry.objectBox(o), parent++, CULLIDE_RANGE_BOXES | CULLIDE_RANGE_KEEP, 0);
-        rangeObjects.push_back(o);
-    }
     run.items.inheritsParents = true;
     run.items.groupSize = static_cast<std::uint32_t>(run.settings.groupSize);
     run.items.prepassSlack = run.geometry.prepassSlack(0.5 * run.settings.margin);
-    if (exact) addExactRequest(run, rangeObjects);
+    if (exact) addExactRequest(run);
 }
 
 /// The triangles of run.triangles and the proxies (occluders only) as one level; the surviving triangles go to
@@ -413,26 +411,13 @@ bool rasterisable(const FrameState& frame, const Cluster& cluster) {
 
 }  // namespace
 
-std::vector<LevelPipelines::ExactRange> LevelPipelines::exactRangesOf(const Cluster& cluster) const {
-    std::vector<std::uint32_t> objectOfOwner(cluster.objects.size(), kNoOwner);
-    for (std::uint32_t o : cluster.objects)
-        if (m_ownerId[o] != kNoOwner && m_ownerId[o] < objectOfOwner.size()) objectOfOwner[m_ownerId[o]] = o;
-    std::vector<ExactRange> ranges;
-    for (const ObjectRange& r : m_items.objectRanges) {
-        if ((r.kind & 1u) != CULLIDE_RANGE_TRIANGLES) continue;
-        const std::uint32_t o = objectOfOwner.at(r.owner);
-        ranges.push_back({r.itemBegin, r.count, o, r.first - m_geometry.baseTriangle(o)});
-    }
-    return ranges;
-}
-
 void LevelPipelines::addDevicePairs(FrameState& frame, const DeferredCluster& d,
                                     const std::vector<std::uint32_t>& words, Stats& stats) {
-    const std::vector<ExactRange>& ranges = d.exactRanges;
+    const std::vector<TriangleRange>& ranges = d.exactRanges;
     // The object and triangle of a triangle item; BackendError where the device named an item of no range.
     auto triangleOf = [&](std::uint32_t item) {
         auto it = std::upper_bound(ranges.begin(), ranges.end(), item,
-                                   [](std::uint32_t i, const ExactRange& r) { return i < r.itemBegin; });
+                                   [](std::uint32_t i, const TriangleRange& r) { return i < r.itemBegin; });
         if (it == ranges.begin() || item - (--it)->itemBegin >= it->count)
             throw BackendError("the device exact stage named an item of no triangle range");
         return std::make_pair(it->object, (*frame.order[it->object])[it->localFirst + (item - it->itemBegin)]);
@@ -486,7 +471,7 @@ void LevelPipelines::run(FrameState& frame, const Settings& settings, PruningBac
         const std::size_t firstPlace = place, firstLevel = stats.levels.size();
         if (runCluster(frame, cluster, settings, backend, pool, scratch, stats, place, true)) {
             m_deferred.push_back(DeferredCluster{cluster, firstPlace, firstLevel, stats.levels.size(), {}});
-            if (m_items.exact.run) m_deferred.back().exactRanges = exactRangesOf(cluster);
+            if (m_items.exact.run) m_deferred.back().exactRanges = m_triangleRanges;
         }
     }
     collectDeferred(frame, settings, backend, pool, scratch, stats);
@@ -496,7 +481,7 @@ bool LevelPipelines::runCluster(FrameState& frame, const Cluster& cluster, const
                                 PruningBackend& backend, TaskPool& pool, TriangleScratch& scratch, Stats& stats,
                                 std::size_t& place, bool defer) {
     LevelRun run{frame, cluster, settings, backend, pool, scratch, stats, m_geometry, m_items,
-                 m_survivors, m_ownerId, m_triangles, place};
+                 m_survivors, m_ownerId, m_triangles, place, m_triangleRanges};
     const std::size_t firstPlace = place;
     const std::size_t firstLevel = stats.levels.size();
     for (int attempt = 0;; ++attempt) {

@@ -20,6 +20,15 @@ namespace cullide {
 /// pre-pass keeps goes to the exact stage.
 constexpr double kRasterisableExtent = 1e30;
 
+/// A triangle range of a level described by its objects: its items are the triangles of `object` from localFirst on
+/// in its spatial order (FrameState::order).
+struct TriangleRange {
+    std::uint32_t itemBegin;
+    std::uint32_t count;
+    std::uint32_t object;
+    std::uint32_t localFirst;
+};
+
 /// Thrown at the start of a level once the frame's levelsDeadline has passed: the device holds nothing half done, and
 /// the caller finishes the frame on the CPU path.
 struct LevelsAbandoned {};
@@ -38,24 +47,14 @@ public:
 private:
     /// A cluster whose triangle level is read back with the frame's others: its levels are
     /// stats.levels[firstLevel .. endLevel), its places from firstPlace on.
-    /// A triangle range of a level that the device exact stage ran after: its items are the triangles of `object`
-    /// from localFirst on in its spatial order (FrameState::order).
-    struct ExactRange {
-        std::uint32_t itemBegin;
-        std::uint32_t count;
-        std::uint32_t object;
-        std::uint32_t localFirst;
-    };
     struct DeferredCluster {
         Cluster cluster;
         std::size_t firstPlace = 0;
         std::size_t firstLevel = 0;
         std::size_t endLevel = 0;
-        std::vector<ExactRange> exactRanges;  ///< where the device exact stage ran after its triangle level
+        std::vector<TriangleRange> exactRanges;  ///< where the device exact stage ran after its triangle level
     };
 
-    /// The triangle ranges of the level just issued for `cluster` (m_items).
-    std::vector<ExactRange> exactRangesOf(const Cluster& cluster) const;
     /// The device exact stage's pairs of a deferred cluster (item pairs, DeferredLevel::exactPairs) into
     /// frame.devicePairs, and its objects marked (FrameState::exactOnDevice).
     static void addDevicePairs(FrameState& frame, const DeferredCluster& d, const std::vector<std::uint32_t>& words,
@@ -78,6 +77,7 @@ private:
     std::vector<std::uint8_t> m_survivors;
     std::vector<std::uint32_t> m_ownerId;
     std::vector<FrameTriangle> m_triangles;
+    std::vector<TriangleRange> m_triangleRanges;  ///< of the last triangle level described by its objects
     std::vector<DeferredCluster> m_deferred;
     std::vector<DeferredLevel> m_results;
 };

@@ -42,8 +42,8 @@ void PairAssembly::decideDevicePairs(const FrameState& frame, const Settings& se
         return static_cast<std::size_t>(std::count(v.begin(), v.end(), 1));
     };
     const std::size_t candidates = count(tested);
-    const std::size_t certified = m_device.size() - static_cast<std::size_t>(std::count_if(
-        m_device.begin(), m_device.end(), [](const DevicePair& p) { return !p.certified; }));
+    const auto certified = static_cast<std::size_t>(
+        std::count_if(m_device.begin(), m_device.end(), [](const DevicePair& p) { return p.certified; }));
     stats.candidateTrianglePairs += candidates + certified;
     if (settings.exactTriangles) {
         stats.exactTests += candidates;
