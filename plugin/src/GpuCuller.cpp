@@ -244,8 +244,8 @@ private:
             frame.devicePairs.clear();
             frame.exactOnDevice.assign(frame.valid.size(), 0);
             clearLists(frame.surviving, frame.valid.size());
-            collectTriangles(frame, frame.groups, m_settings.pipeline != Pipeline::Paper, m_pool, m_scratch,
-                             m_fallbackTriangles);
+            collectTriangles(frame, frame.groups, m_settings.pipeline != Pipeline::Paper, m_settings.margin, m_pool,
+                             m_scratch, m_fallbackTriangles);
             addSurvivingTriangles(frame, m_fallbackTriangles, {});
         }
         return true;

@@ -316,7 +316,7 @@ bool runInheritingTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>&
         return true;
     }
     run.backend.settle(run.stats);  // a level run ahead that the triangle level did not wait for (no two owners)
-    addSurvivingGroupTriangles(run.frame, run.cluster.levelGroups, run.survivors);
+    addSurvivingGroupTriangles(run.frame, run.cluster.levelGroups, run.survivors, run.settings.margin);
     return false;
 }
 
@@ -344,7 +344,7 @@ bool runAutoPipeline(LevelRun& run, bool defer) {
         keepSurvivors(run.survivors, 0, groups);
         keepSurvivors(run.survivors, groups.size(), proxies);
     }
-    collectTriangles(run.frame, groups, true, run.pool, run.scratch, run.triangles);
+    collectTriangles(run.frame, groups, true, run.settings.margin, run.pool, run.scratch, run.triangles);
     if (run.triangles.size() > run.settings.exactThreshold)
         runTriangleLevel(run, proxies);
     else
@@ -387,7 +387,7 @@ void runPaperPipeline(LevelRun& run) {
     const std::size_t groupItems = groups.size();
     keepSurvivors(run.survivors, 0, groups);
     keepSurvivors(run.survivors, groupItems, proxies);
-    collectTriangles(run.frame, groups, false, run.pool, run.scratch, run.triangles);
+    collectTriangles(run.frame, groups, false, run.settings.margin, run.pool, run.scratch, run.triangles);
     runTriangleLevel(run, proxies);
 }
 
@@ -464,7 +464,7 @@ void LevelPipelines::run(FrameState& frame, const Settings& settings, PruningBac
         if (!rasterisable(frame, cluster)) {
             // Relative coordinates beyond what float positions and depths carry: no pruning (sound, and rare).
             ++stats.unrasterisedClusters;
-            collectTriangles(frame, cluster.groups, true, pool, scratch, m_triangles);
+            collectTriangles(frame, cluster.groups, true, settings.margin, pool, scratch, m_triangles);
             addSurvivingTriangles(frame, m_triangles, {});
             continue;
         }
@@ -513,7 +513,7 @@ void LevelPipelines::collectDeferred(FrameState& frame, const Settings& settings
     for (std::size_t k = 0; k < m_deferred.size(); ++k) {
         const DeferredCluster& d = m_deferred[k];
         if (m_results[k].complete) {
-            addSurvivingGroupTriangles(frame, d.cluster.levelGroups, m_results[k].survivors);
+            addSurvivingGroupTriangles(frame, d.cluster.levelGroups, m_results[k].survivors, settings.margin);
             if (m_results[k].exactRan) addDevicePairs(frame, d, m_results[k].exactPairs, stats);
             continue;
         }

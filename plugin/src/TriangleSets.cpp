@@ -20,8 +20,12 @@ void splitIntoRanges(const FrameState& frame, const Take& take, std::uint32_t ra
     }
 }
 
-/// Which meshes get their triangle boxes computed now (scratch.needBoxes), and where each active mesh's boxes live
-/// (frame.boxesOf).
+/// Whether object o's triangle boxes are computed as the frame's stages reach its triangles: those of every mesh but a
+/// static one (whose boxes are kept between frames, StaticEntry).
+bool boxesOnDemand(const FrameState& frame, std::uint32_t o) { return frame.statics.entry[o] == nullptr; }
+
+/// Which meshes get their triangle boxes computed now (scratch.needBoxes: new static meshes), and where each active
+/// mesh's boxes live (frame.boxesOf).
 void assignBoxStorage(FrameState& frame, TriangleScratch& scratch) {
     const std::size_t n = frame.valid.size();
     frame.ownBoxes.resize(n);
@@ -31,24 +35,45 @@ void assignBoxStorage(FrameState& frame, TriangleScratch& scratch) {
         if (!frame.isActiveMesh(o) || frame.hasWholeTree(o)) continue;  // a whole tree holds its own boxes
         const std::size_t triangles = frame.meshOf(o).triangles.size();
         StaticEntry* e = frame.statics.entry[o];
-        if (e != nullptr) {
-            frame.boxesOf[o] = &e->boxes;
-            if (e->boxesReady) continue;
-            e->boxes.resize(triangles);
-            e->boxesReady = true;  // filled by the caller
-        } else {
+        if (e == nullptr) {  // filled on demand
             resizeKeeping(frame.ownBoxes[o], triangles);
             frame.boxesOf[o] = &frame.ownBoxes[o];
-            if (!frame.gpuLevels) continue;  // collectDirect computes them
+            continue;
         }
+        frame.boxesOf[o] = &e->boxes;
+        if (e->boxesReady) continue;
+        e->boxes.resize(triangles);
+        e->boxesReady = true;  // filled by the caller
         scratch.needBoxes[o] = 1;
     }
 }
 
-/// Every group of k triangles of the active meshes, with its box; kept (frame.groups) when `prepass` is off or its
-/// box overlaps a partner's.
-void buildGroups(FrameState& frame, std::uint32_t k, bool prepass, TaskPool& pool, TriangleScratch& scratch,
-                 Stats& stats) {
+/// The box of the triangles order[first, first + count) of `mesh`, inflated: the union of their triangleBounds, bit
+/// for bit (subtracting, or adding, `inflate` is monotone in the rounded result), without storing theirs.
+Aabb groupBounds(const TriangleMesh& mesh, const std::vector<std::uint32_t>& order, std::uint32_t first,
+                 std::uint32_t count, double inflate) {
+    Vec3 lo = mesh.vertices[mesh.triangles[order[first]][0]], hi = lo;
+    for (std::uint32_t k = first; k < first + count; ++k) {
+        for (std::uint32_t v : mesh.triangles[order[k]]) {
+            const Vec3& p = mesh.vertices[v];
+            for (int a = 0; a < 3; ++a) {
+                lo[a] = std::min(lo[a], p[a]);
+                hi[a] = std::max(hi[a], p[a]);
+            }
+        }
+    }
+    Aabb box;
+    for (int a = 0; a < 3; ++a) {
+        box.min[a] = lo[a] - inflate;
+        box.max[a] = hi[a] + inflate;
+    }
+    return box;
+}
+
+/// Every group of k triangles of the active meshes, with its box (from the triangle boxes of a static mesh, from the
+/// vertices of any other); kept (frame.groups) when `prepass` is off or its box overlaps a partner's.
+void buildGroups(FrameState& frame, std::uint32_t k, double margin, bool prepass, TaskPool& pool,
+                 TriangleScratch& scratch, Stats& stats) {
     std::vector<Group>& candidates = frame.allGroups;
     candidates.clear();
     for (std::uint32_t o = 0; o < frame.valid.size(); ++o) {
@@ -63,9 +88,13 @@ void buildGroups(FrameState& frame, std::uint32_t k, bool prepass, TaskPool& poo
     pool.parallelFor(candidates.size(), 256, [&](std::size_t begin, std::size_t end) {
         for (std::size_t i = begin; i < end; ++i) {
             Group& g = candidates[i];
-            const std::vector<Aabb>& boxes = *frame.boxesOf[g.object];
             const std::vector<std::uint32_t>& order = *frame.order[g.object];
-            for (std::uint32_t t = g.first; t < g.first + g.count; ++t) g.box.grow(boxes[order[t]]);
+            if (boxesOnDemand(frame, g.object)) {
+                g.box = groupBounds(frame.meshOf(g.object), order, g.first, g.count, 0.5 * margin);
+            } else {
+                const std::vector<Aabb>& boxes = *frame.boxesOf[g.object];
+                for (std::uint32_t t = g.first; t < g.first + g.count; ++t) g.box.grow(boxes[order[t]]);
+            }
             scratch.groupKept[i] = !prepass || frame.overlapsPartner(g.object, g.box);
         }
     });
@@ -93,7 +122,7 @@ void buildTriangleBoxesAndGroups(FrameState& frame, std::uint32_t groupSize, dou
             for (std::uint32_t t = range.begin; t < range.end; ++t) boxes[t] = triangleBounds(mesh, t, inflate);
         }
     });
-    if (frame.gpuLevels) buildGroups(frame, groupSize, prepass, pool, scratch, stats);
+    if (frame.gpuLevels) buildGroups(frame, groupSize, margin, prepass, pool, scratch, stats);
 }
 
 namespace {
@@ -106,8 +135,9 @@ bool keptByPrepass(const FrameState& frame, std::uint32_t object, std::uint32_t 
 
 }  // namespace
 
-void collectTriangles(const FrameState& frame, const std::vector<Group>& groups, bool prepass, TaskPool& pool,
-                      TriangleScratch& scratch, std::vector<FrameTriangle>& triangles) {
+void collectTriangles(const FrameState& frame, const std::vector<Group>& groups, bool prepass, double margin,
+                      TaskPool& pool, TriangleScratch& scratch, std::vector<FrameTriangle>& triangles) {
+    const double inflate = 0.5 * margin;
     constexpr std::size_t kGroupsPerTask = 256;
     const std::size_t tasks = (groups.size() + kGroupsPerTask - 1) / kGroupsPerTask;
     if (scratch.taskTriangles.size() < tasks) scratch.taskTriangles.resize(tasks);
@@ -118,8 +148,11 @@ void collectTriangles(const FrameState& frame, const std::vector<Group>& groups,
             const std::size_t last = std::min(groups.size(), (task + 1) * kGroupsPerTask);
             for (std::size_t i = task * kGroupsPerTask; i < last; ++i) {
                 const Group& g = groups[i];
+                const bool compute = boxesOnDemand(frame, g.object);
+                std::vector<Aabb>& boxes = *frame.boxesOf[g.object];
                 for (std::uint32_t k = g.first; k < g.first + g.count; ++k) {
                     const std::uint32_t t = (*frame.order[g.object])[k];
+                    if (compute) boxes[t] = triangleBounds(frame.meshOf(g.object), t, inflate);
                     if (prepass && !keptByPrepass(frame, g.object, t)) continue;
                     kept.push_back({g.object, t, static_cast<std::uint32_t>(i)});
                 }
@@ -156,7 +189,7 @@ void collectDirect(FrameState& frame, std::uint32_t groupSize, double margin, Ta
             const TriangleScratch::Range& rg = scratch.ranges[r];
             const TriangleMesh& mesh = frame.meshOf(rg.object);
             std::vector<Aabb>& boxes = *frame.boxesOf[rg.object];
-            const bool compute = frame.statics.entry[rg.object] == nullptr;
+            const bool compute = boxesOnDemand(frame, rg.object);
             const Aabb& near = scratch.partnerUnion[rg.object];
             kept.clear();
             if (frame.partners[rg.object].size() <= 16) {
@@ -205,12 +238,18 @@ void addSurvivingTriangles(FrameState& frame, const std::vector<FrameTriangle>& 
 }
 
 void addSurvivingGroupTriangles(FrameState& frame, const std::vector<Group>& groups,
-                                const std::vector<std::uint8_t>& alive) {
+                                const std::vector<std::uint8_t>& alive, double margin) {
+    const double inflate = 0.5 * margin;
     std::size_t i = 0;
     for (const Group& g : groups) {
         const std::vector<std::uint32_t>& order = *frame.order[g.object];
-        for (std::uint32_t k = g.first; k < g.first + g.count; ++k, ++i)
-            if (alive[i]) frame.surviving[g.object].push_back(order[k]);
+        const bool compute = boxesOnDemand(frame, g.object);
+        std::vector<Aabb>& boxes = *frame.boxesOf[g.object];
+        for (std::uint32_t k = g.first; k < g.first + g.count; ++k, ++i) {
+            if (!alive[i]) continue;
+            if (compute) boxes[order[k]] = triangleBounds(frame.meshOf(g.object), order[k], inflate);
+            frame.surviving[g.object].push_back(order[k]);
+        }
     }
     sortSurviving(frame);
 }
