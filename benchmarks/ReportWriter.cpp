@@ -608,7 +608,8 @@ void ReportWriter::gpuLevels(const Class& c) {
             "largest of any frame: the first timed frame, where the buffers grow and a cluster may run again; a frame "
             "waits once however many clusters it has); per level, the last frame's items per iteration and its CPU / "
             "GPU ms (\"ahead\": a level run ahead, its device time read with the next level's; a deferred level's "
-            "CPU ms include the frame's wait when it is the last), and of the CPU ms the set-up (item data and records built and sent; of it, the GL calls "
+            "CPU ms include the frame's wait when it is the last; a deferred triangle level's GPU ms include the device "
+            "exact stage's, also shown apart), and of the CPU ms the set-up (item data and records built and sent; of it, the GL calls "
             "that send them, and the records sent) and the time blocked in read-backs (waiting for the device); the "
             "rest is issuing commands.\n\n| scene | Auto decision | "
             "trial: CPU path ms | trial: GPU levels ms | engine | levels "
@@ -640,6 +641,8 @@ void ReportWriter::gpuLevels(const Class& c) {
                 levels += (levels.empty() ? "" : "; ") + l.value("name", std::string()) + " " + items + ", " +
                           ms(l.value("cpu_ms", 0.0)) + " / " +
                           (l.contains("gpu_ms") ? ms(l.value("gpu_ms", 0.0)) : "–") + (ahead ? " ahead" : "");
+                if (l.value("exact_gpu_ms", 0.0) > 0.0)
+                    levels += " (exact stage " + ms(l.value("exact_gpu_ms", 0.0)) + " of the GPU ms)";
                 // Set-up split into sending (GL calls) and building on the CPU, where the record has it.
                 if (l.contains("setup_ms"))
                     levels += " (set-up " + ms(l.value("setup_ms", 0.0)) +

@@ -198,6 +198,7 @@ nlohmann::ordered_json statsToJson(const cullide::Stats& s) {
         lj["wait_ms"] = l.waitMs;
         lj["deferred"] = l.deferred;
         lj["gpu_ms"] = gpuTime(l.gpuMs, l.gpuTimingValid);
+        lj["exact_gpu_ms"] = gpuTime(l.exactGpuMs, l.gpuTimingValid);
         levels.push_back(std::move(lj));
     }
     j["levels"] = std::move(levels);

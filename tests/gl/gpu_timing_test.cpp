@@ -40,6 +40,8 @@ void expectValidOrAbsent(const Stats& stats, const std::string& what) {
         EXPECT_LE(level.setupMs + level.waitMs, level.cpuMs) << what << ", level " << level.name;
         if (level.gpuTimingValid) {
             EXPECT_GE(level.gpuMs, 0.0) << what << ", level " << level.name;
+            EXPECT_GE(level.exactGpuMs, 0.0) << what << ", level " << level.name;
+            EXPECT_LE(level.exactGpuMs, level.gpuMs) << what << ", level " << level.name << ": a part of it";
             // A deferred level's or a level run ahead's device work may run while later levels are issued and in
             // the wait that another level counts: the frame's time bounds it.
             if (level.blockingReadBacks > 0 && !level.deferred) {
@@ -48,10 +50,17 @@ void expectValidOrAbsent(const Stats& stats, const std::string& what) {
             EXPECT_LE(level.gpuMs, bound(stats.totalMs)) << what << ", level " << level.name;
         } else {
             EXPECT_EQ(level.gpuMs, 0.0) << what << ", level " << level.name << ": an absent time must not read as one";
+            EXPECT_EQ(level.exactGpuMs, 0.0) << what << ", level " << level.name;
             allLevelsValid = false;
         }
     }
     EXPECT_EQ(stats.gpuTimingValid, allLevelsValid) << what;
+    // Each device exact stage is timed by a span of its own, counted in the level it followed.
+    std::size_t exactTimed = 0;
+    for (const LevelStats& level : stats.levels) exactTimed += level.exactGpuMs > 0.0 ? 1 : 0;
+    if (stats.gpuTimingValid) {
+        EXPECT_EQ(exactTimed, stats.deviceExactClusters + stats.deviceExactOverflows) << what;
+    }
     if (stats.gpuTimingValid) {
         EXPECT_GE(stats.gpuMs, 0.0) << what;
         EXPECT_LE(stats.gpuMs, bound(stats.totalMs)) << what;
@@ -71,6 +80,7 @@ TEST(GpuTiming, ReportedTimesAreValidOrAbsent) {
             settings.resolution = 64;
             settings.backend = backend;
             settings.pipeline = pipeline;
+            settings.deviceExact = DeviceExact::Always;  // after each deferred triangle level (the Auto pipeline's)
             CULLIDE_GPU_CULLER_OR_SKIP(culler, settings);
             for (int frame = 0; frame < 2; ++frame) {
                 Result result;
@@ -79,6 +89,9 @@ TEST(GpuTiming, ReportedTimesAreValidOrAbsent) {
                                          (pipeline == Pipeline::Auto ? " auto" : " paper") + " frame " +
                                          std::to_string(frame) + " (" + result.stats.renderer + ")";
                 ASSERT_FALSE(result.stats.levels.empty()) << what << ": the GPU levels must run in this test";
+                if (pipeline == Pipeline::Auto) {
+                    EXPECT_GT(result.stats.deviceExactClusters, 0u) << what << ": the exact stage must run here";
+                }
                 EXPECT_EQ(result.stats.gpuFallbacks, 0u) << what << ": " << result.stats.gpuError;
                 expectValidOrAbsent(result.stats, what);
             }

@@ -48,10 +48,13 @@ struct LevelStats {
     /// GL back-end: the level was issued and read back with the frame's other deferred levels (the Auto pipeline's
     /// triangle level of each cluster): one read-back per frame however many clusters it has.
     bool deferred = false;
-    /// GPU time of the level's iterations and record builds from timer queries (one span from the level's first
-    /// pass to its read-back, or to the end of its issue where it runs ahead or is deferred: read after the read-back
-    /// that brings its chain). Only meaningful with gpuTimingValid; 0 otherwise.
+    /// GPU time of the level's iterations and record builds from timer queries (one span from the level's first pass
+    /// to its read-back, or to the end of its issue where it runs ahead or is deferred: read after the read-back that
+    /// brings its chain), and of its exact stage (exactGpuMs). Only meaningful with gpuTimingValid; 0 otherwise.
     double gpuMs = 0.0;
+    /// Of gpuMs, the device exact stage that followed the level (Settings::deviceExact; a deferred triangle level),
+    /// timed by a span of its own. 0 where it did not run or gpuTimingValid is false.
+    double exactGpuMs = 0.0;
     /// true when every iteration of the level was timed by an available, plausible timer-query result (at most
     /// the CPU wall time of the same span): false without timer queries and where a driver reports nonsense
     /// (llvmpipe's first timer result in a context is an absolute time: the machine's uptime).

@@ -27,12 +27,18 @@ void recordGpuTime(double ms, LevelStats& level, Stats& stats) {
     if (ms < 0.0) {
         level.gpuTimingValid = false;
         level.gpuMs = 0.0;
+        level.exactGpuMs = 0.0;
         stats.gpuTimingValid = false;
         stats.gpuMs = 0.0;
         return;
     }
     if (level.gpuTimingValid) level.gpuMs += ms;
     if (stats.gpuTimingValid) stats.gpuMs += ms;
+}
+
+void recordExactGpuTime(double ms, LevelStats& level, Stats& stats) {
+    recordGpuTime(ms, level, stats);
+    if (level.gpuTimingValid) level.exactGpuMs += ms;
 }
 
 }  // namespace cullide::gl

@@ -19,4 +19,7 @@ double timerResultMs(GLuint query, double wallMs);
 /// frame's timings absent: a partial sum would read as a time.
 void recordGpuTime(double ms, LevelStats& level, Stats& stats);
 
+/// recordGpuTime for the span of the device exact stage that followed the level, also counted in its exactGpuMs.
+void recordExactGpuTime(double ms, LevelStats& level, Stats& stats);
+
 }  // namespace cullide::gl

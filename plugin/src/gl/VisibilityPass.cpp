@@ -43,6 +43,8 @@ struct DeferredEntry {
     std::vector<std::uint8_t> survivors;
     bool exact = false;         ///< the device exact stage ran after it
     std::size_t exactWord = 0;  ///< where kFrameResults holds the frame's exact pairs counted after it
+    std::size_t exactSpan = kNoSpan;  ///< the exact stage's timer query span, opened at `exactSpanOpened`
+    Clock::time_point exactSpanOpened;
 };
 
 }  // namespace
@@ -242,14 +244,18 @@ struct VisibilityPass::Impl : LevelDevice {
         }
         entry.level.issued = issueLevel(items, start, guessFor(start.place), perBandFor(start.place), level, stats);
         level.deferred = true;
-        if (items.exact.run) {
-            findExactPairs(items, !exactIssued, level, stats);
-            exactIssued = true;
-            entry.exact = true;
-        }
         endTiming();  // the level's span: its device time is read after collect()'s read-back
         entry.level.span = lastSpan();
         entry.level.spanOpened = timedSpan;
+        if (items.exact.run) {
+            startTiming();  // a span of its own (LevelStats::exactGpuMs)
+            findExactPairs(items, !exactIssued, level, stats);
+            endTiming();
+            entry.exactSpan = lastSpan();
+            entry.exactSpanOpened = timedSpan;
+            exactIssued = true;
+            entry.exact = true;
+        }
         const std::size_t words = counterWords(items.size());
         if (ahead) {
             glCopyNamedBufferSubData(buffers[kStash], buffers[kCounters], 0, 4 * CULLIDE_AHEAD, 4 * kChainWords);
@@ -333,6 +339,8 @@ struct VisibilityPass::Impl : LevelDevice {
                                                        e.firstView + kViewsEach, stats);
         const Chain chain{words + CULLIDE_DISPATCH_RECORDS};
         const bool ended = noteIssued(e.level, chain, buffers[kFrameViews], e.firstView, stats);
+        if (e.exact)
+            recordExactGpuTime(spanMs(e.exactSpan, e.exactSpanOpened), stats.levels[e.level.levelIndex], stats);
         // It needed more iterations than were issued: the rerun issues all that are allowed.
         if (!ended && !chain.shortBuild() && chain.stop() == CULLIDE_STOP_NONE)
             remember(e.level.place, settings.maxIterations, false);
