@@ -24,7 +24,4 @@ public:
 /// of `what`, the check reports GL_INVALID_OPERATION, as a driver error in the middle of a frame would.
 void checkGlError(const char* what);
 
-/// Embedded shader sources (generated from shaders/ at build time); nullptr for an unknown name.
-const char* shaderSource(const char* name);
-
 }  // namespace cullide::gl

@@ -5,30 +5,47 @@
 #include <vector>
 
 namespace cullide::gl {
+namespace {
 
-GLuint compileShader(GLenum type, std::initializer_list<const char*> names) {
-    std::vector<const char*> sources = {"#version 450 core\n", shaderSource("bindings.h")};
-    for (const char* name : names) {
-        const char* text = shaderSource(name);
-        if (text == nullptr) throw std::logic_error(std::string("missing embedded shader ") + name);
-        sources.push_back("\n");
-        sources.push_back(text);
+GLenum glStage(ShaderStage stage) {
+    switch (stage) {
+        case ShaderStage::Compute: return GL_COMPUTE_SHADER;
+        case ShaderStage::Vertex: return GL_VERTEX_SHADER;
+        case ShaderStage::Fragment: return GL_FRAGMENT_SHADER;
     }
-    GLuint shader = glCreateShader(type);
-    glShaderSource(shader, static_cast<GLsizei>(sources.size()), sources.data(), nullptr);
-    glCompileShader(shader);
-    GLint ok = 0;
-    glGetShaderiv(shader, GL_COMPILE_STATUS, &ok);
-    if (!ok) {
-        char log[4096] = {};
-        glGetShaderInfoLog(shader, sizeof log, nullptr, log);
-        glDeleteShader(shader);
-        throw std::runtime_error(std::string("cullide: compiling ") + *(names.end() - 1) + " failed: " + log);
-    }
-    return shader;
+    throw std::logic_error("cullide: unknown shader stage");
 }
 
-GLuint linkProgram(std::initializer_list<GLuint> shaders, const char* what) {
+/// Compiles one shader of `program`; throws std::runtime_error with the compiler's log.
+GLuint compileShader(const ShaderProgram& program, const ShaderPieces& shader) {
+    const std::string text = assembledSource(shader);
+    const char* source = text.c_str();
+    GLuint id = glCreateShader(glStage(shader.stage));
+    glShaderSource(id, 1, &source, nullptr);
+    glCompileShader(id);
+    GLint ok = 0;
+    glGetShaderiv(id, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+        char log[4096] = {};
+        glGetShaderInfoLog(id, sizeof log, nullptr, log);
+        glDeleteShader(id);
+        throw std::runtime_error(std::string("cullide: compiling ") + shader.pieces.back() + " (" + program.what +
+                                 ") failed: " + log);
+    }
+    return id;
+}
+
+}  // namespace
+
+GLuint linkProgram(Program which) {
+    const ShaderProgram& p = shaderProgram(which);
+    std::vector<GLuint> shaders;
+    try {
+        for (const ShaderPieces& shader : p.shaders) shaders.push_back(compileShader(p, shader));
+    } catch (...) {
+        for (GLuint shader : shaders) glDeleteShader(shader);
+        throw;
+    }
     GLuint program = glCreateProgram();
     for (GLuint shader : shaders) glAttachShader(program, shader);
     glLinkProgram(program);
@@ -39,7 +56,7 @@ GLuint linkProgram(std::initializer_list<GLuint> shaders, const char* what) {
         char log[4096] = {};
         glGetProgramInfoLog(program, sizeof log, nullptr, log);
         glDeleteProgram(program);
-        throw std::runtime_error(std::string("cullide: linking ") + what + " failed: " + log);
+        throw std::runtime_error(std::string("cullide: linking ") + p.what + " failed: " + log);
     }
     return program;
 }

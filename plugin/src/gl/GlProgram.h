@@ -3,8 +3,7 @@
 #pragma once
 
 #include "gl/GlApi.h"
-
-#include <initializer_list>
+#include "gl/ShaderPrograms.h"
 
 #if defined(__SANITIZE_ADDRESS__)
 #include <sanitizer/lsan_interface.h>
@@ -12,12 +11,9 @@
 
 namespace cullide::gl {
 
-/// Compiles "#version 450 core" + bindings.h + the named embedded sources, in order. Throws std::runtime_error with
-/// the compiler log (and std::logic_error for a name that was not embedded).
-GLuint compileShader(GLenum type, std::initializer_list<const char*> names);
-
-/// Links the shaders into a program and deletes them (also on failure). `what` names the program in errors.
-GLuint linkProgram(std::initializer_list<GLuint> shaders, const char* what);
+/// Compiles the program's shaders (ShaderPrograms.h) and links them. Throws std::runtime_error with the compiler's or
+/// the linker's log (and std::logic_error for a source that was not embedded).
+GLuint linkProgram(Program program);
 
 #if defined(__SANITIZE_ADDRESS__)
 /// Mesa 22.3's llvmpipe draw path loses 112 bytes (two 56-byte callocs inside swrast_dri, from JIT-compiled code)

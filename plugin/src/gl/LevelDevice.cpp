@@ -89,45 +89,19 @@ LevelDevice::LevelDevice(std::unique_ptr<EglContext> c, const Settings& s, const
     if (options.exactCapacity > 0) exactCapacity = options.exactCapacity;
     context.makeCurrent();
     if (settings.backend == Backend::Compute) {
-        program = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl", "passes.glsl",
-                                                                 "pack.glsl", "scan.glsl", "cull.comp"})},
-                              "the visibility program");
-        secondProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl",
-                                                                       "passes.glsl", "scan.glsl", "second.comp"})},
-                                    "the second pass program");
-        flagProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl",
-                                                                     "passes.glsl", "gather.glsl", "iteration.glsl",
-                                                                     "scan.glsl", "flag.comp"})},
-                                  "the flag pass program");
+        program = linkProgram(Program::Cull);
+        secondProgram = linkProgram(Program::Second);
+        flagProgram = linkProgram(Program::Flag);
     } else {
-        setupProgram = linkProgram(
-            {compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "records.glsl", "cull_setup.comp"})},
-            "the visibility setup program");
-        GLuint vs = compileShader(GL_VERTEX_SHADER, {"view.glsl", "common.glsl", "records.glsl", "cull.vert"});
-        GLuint fs = 0;
-        try {
-            fs = compileShader(GL_FRAGMENT_SHADER,
-                               {"view.glsl", "common.glsl", "visit.glsl", "records.glsl", "cull.frag"});
-        } catch (...) {
-            glDeleteShader(vs);
-            throw;
-        }
-        program = linkProgram({vs, fs}, "the visibility raster program");
-        surviveProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "common.glsl", "visit.glsl",
-                                                                        "passes.glsl", "gather.glsl", "iteration.glsl",
-                                                                        "pack.glsl", "survive.comp"})},
-                                     "the survivor program");
+        setupProgram = linkProgram(Program::CullSetup);
+        program = linkProgram(Program::CullRaster);
+        surviveProgram = linkProgram(Program::Survive);
     }
-    buildProgram = linkProgram(
-        {compileShader(GL_COMPUTE_SHADER, {"view.glsl", "passes.glsl", "geometry.glsl", "build.comp"})},
-        "the record build program");
-    mapProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"map.comp"})}, "the mapped meshes' program");
-    boxesProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"group_boxes.comp"})}, "the group boxes program");
-    startProgram = linkProgram({compileShader(GL_COMPUTE_SHADER, {"view.glsl", "passes.glsl", "geometry.glsl",
-                                                                  "ranges.glsl", "gather.glsl", "start.comp"})},
-                               "the level start program");
-    exactProgram = linkProgram(
-        {compileShader(GL_COMPUTE_SHADER, {"geometry.glsl", "ranges.glsl", "exact.comp"})}, "the exact stage program");
+    buildProgram = linkProgram(Program::Build);
+    mapProgram = linkProgram(Program::Map);
+    boxesProgram = linkProgram(Program::GroupBoxes);
+    startProgram = linkProgram(Program::Start);
+    exactProgram = linkProgram(Program::Exact);
     if (settings.backend == Backend::Compute)
         bands = context.isSoftware() && !options.shortBands ? CULLIDE_BANDS_LONG : CULLIDE_BANDS_SHORT;
     glCreateVertexArrays(1, &vao);

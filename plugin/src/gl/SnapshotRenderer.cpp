@@ -141,23 +141,11 @@ Camera fitCamera(const SnapshotView& view, const Aabb& frame) {
     return cam;
 }
 
-GLuint linkSnapshotProgram() {
-    const GLuint vs = compileShader(GL_VERTEX_SHADER, {"snapshot.vert"});
-    GLuint fs = 0;
-    try {
-        fs = compileShader(GL_FRAGMENT_SHADER, {"snapshot.frag"});
-    } catch (...) {
-        glDeleteShader(vs);
-        throw;
-    }
-    return linkProgram({vs, fs}, "the snapshot program");
-}
-
 class GlSnapshotRenderer final : public SnapshotRenderer {
 public:
     explicit GlSnapshotRenderer(const std::string& device) : m_context(device) {
         // If anything below throws, m_context's destructor destroys the context and with it every GL object.
-        m_program = linkSnapshotProgram();
+        m_program = linkProgram(Program::Snapshot);
         glCreateVertexArrays(1, &m_vao);
         glCreateBuffers(1, &m_buffer);
         glVertexArrayVertexBuffer(m_vao, 0, m_buffer, 0, sizeof(Vertex));
