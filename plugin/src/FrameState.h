@@ -72,8 +72,8 @@ struct FrameState {
     std::vector<std::vector<Aabb>> ownBoxes;
     /// Per active mesh: triangle boxes (inflated by margin / 2), of every triangle (static meshes) or only of those
     /// the stages have reached (TriangleSets.h): on the CPU path its surviving ones (none for the meshes with a whole
-    /// tree); with GPU levels its collected ones and those that survive the levels. Every surviving triangle's is
-    /// there.
+    /// tree); with GPU levels those collected for a level and every surviving one (computeSurvivorBoxes). Every
+    /// surviving triangle's is there.
     std::vector<std::vector<Aabb>*> boxesOf;
     /// Per object, on the CPU path: 1 when its mesh has a box tree of all its triangles (MeshTrees: a static mesh, or
     /// one lying mostly near its partners) in place of per-triangle boxes (boxesOf) and a tree of its survivors.

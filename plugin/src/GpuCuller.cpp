@@ -219,9 +219,10 @@ private:
             objects, frame, [&](std::uint32_t o) { return MeshTrees::needsBuild(frame, o); }, m_pool);
     }
 
-    /// frame.surviving: by the visibility levels, or by the CPU path. A backend error mid-frame costs this frame its
-    /// pruning, never a contact: every triangle that the CPU pre-pass keeps goes to the exact stage. False when the
-    /// levels ran past the frame's levelsDeadline: the caller finishes the frame on the CPU path.
+    /// frame.surviving (with the survivors' boxes): by the visibility levels, or by the CPU path. A backend error
+    /// mid-frame costs this frame its pruning, never a contact: every triangle that the CPU pre-pass keeps goes to the
+    /// exact stage. False when the levels ran past the frame's levelsDeadline: the caller finishes the frame on the
+    /// CPU path.
     bool findSurvivingTriangles(FrameState& frame, Stats& stats) {
         if (!frame.gpuLevels) {
             if (frame.runDeadline.expired()) throw RunAbandoned{};
@@ -248,6 +249,7 @@ private:
                              m_scratch, m_fallbackTriangles);
             addSurvivingTriangles(frame, m_fallbackTriangles, {});
         }
+        computeSurvivorBoxes(frame, m_settings.margin, m_pool, m_scratch);
         return true;
     }
 

@@ -316,7 +316,7 @@ bool runInheritingTriangleLevel(LevelRun& run, const std::vector<std::uint32_t>&
         return true;
     }
     run.backend.settle(run.stats);  // a level run ahead that the triangle level did not wait for (no two owners)
-    addSurvivingGroupTriangles(run.frame, run.cluster.levelGroups, run.survivors, run.settings.margin);
+    addSurvivingGroupTriangles(run.frame, run.cluster.levelGroups, run.survivors);
     return false;
 }
 
@@ -513,7 +513,7 @@ void LevelPipelines::collectDeferred(FrameState& frame, const Settings& settings
     for (std::size_t k = 0; k < m_deferred.size(); ++k) {
         const DeferredCluster& d = m_deferred[k];
         if (m_results[k].complete) {
-            addSurvivingGroupTriangles(frame, d.cluster.levelGroups, m_results[k].survivors, settings.margin);
+            addSurvivingGroupTriangles(frame, d.cluster.levelGroups, m_results[k].survivors);
             if (m_results[k].exactRan) addDevicePairs(frame, d, m_results[k].exactPairs, stats);
             continue;
         }

@@ -135,7 +135,7 @@ bool keptByPrepass(const FrameState& frame, std::uint32_t object, std::uint32_t 
 
 }  // namespace
 
-void collectTriangles(const FrameState& frame, const std::vector<Group>& groups, bool prepass, double margin,
+void collectTriangles(FrameState& frame, const std::vector<Group>& groups, bool prepass, double margin,
                       TaskPool& pool, TriangleScratch& scratch, std::vector<FrameTriangle>& triangles) {
     const double inflate = 0.5 * margin;
     constexpr std::size_t kGroupsPerTask = 256;
@@ -238,20 +238,36 @@ void addSurvivingTriangles(FrameState& frame, const std::vector<FrameTriangle>& 
 }
 
 void addSurvivingGroupTriangles(FrameState& frame, const std::vector<Group>& groups,
-                                const std::vector<std::uint8_t>& alive, double margin) {
-    const double inflate = 0.5 * margin;
+                                const std::vector<std::uint8_t>& alive) {
     std::size_t i = 0;
     for (const Group& g : groups) {
         const std::vector<std::uint32_t>& order = *frame.order[g.object];
-        const bool compute = boxesOnDemand(frame, g.object);
-        std::vector<Aabb>& boxes = *frame.boxesOf[g.object];
-        for (std::uint32_t k = g.first; k < g.first + g.count; ++k, ++i) {
-            if (!alive[i]) continue;
-            if (compute) boxes[order[k]] = triangleBounds(frame.meshOf(g.object), order[k], inflate);
-            frame.surviving[g.object].push_back(order[k]);
-        }
+        for (std::uint32_t k = g.first; k < g.first + g.count; ++k, ++i)
+            if (alive[i]) frame.surviving[g.object].push_back(order[k]);
     }
     sortSurviving(frame);
+}
+
+void computeSurvivorBoxes(FrameState& frame, double margin, TaskPool& pool, TriangleScratch& scratch) {
+    constexpr std::uint32_t kRange = 4096;
+    scratch.ranges.clear();
+    for (std::uint32_t o = 0; o < frame.valid.size(); ++o) {
+        if (!frame.isActiveMesh(o) || !boxesOnDemand(frame, o)) continue;
+        const auto n = static_cast<std::uint32_t>(frame.surviving[o].size());
+        for (std::uint32_t first = 0; first < n; first += kRange)
+            scratch.ranges.push_back({o, first, std::min(n, first + kRange)});
+    }
+    const double inflate = 0.5 * margin;
+    pool.parallelFor(scratch.ranges.size(), 1, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t r = begin; r < end; ++r) {
+            const TriangleScratch::Range& range = scratch.ranges[r];
+            const TriangleMesh& mesh = frame.meshOf(range.object);
+            const std::vector<std::uint32_t>& list = frame.surviving[range.object];
+            std::vector<Aabb>& boxes = *frame.boxesOf[range.object];
+            for (std::uint32_t k = range.begin; k < range.end; ++k)
+                boxes[list[k]] = triangleBounds(mesh, list[k], inflate);
+        }
+    });
 }
 
 }  // namespace cullide

@@ -31,16 +31,16 @@ struct TriangleScratch {
 /// (frame.gpuLevels) also each active mesh's groups of `groupSize` triangles consecutive in its spatial order
 /// (frame.order, which must be set for every active mesh) with their boxes, into frame.allGroups, and those whose box
 /// overlaps a partner's box (all, without `prepass`) into frame.groups.
-/// The other meshes' triangle boxes are computed as the stages reach their triangles: collectDirect on the CPU path,
-/// collectTriangles and addSurvivingGroupTriangles with GPU levels — a triangle's box is there once it is collected or
-/// survives, and a group's box comes from its vertices.
+/// The other meshes' triangle boxes are computed as the stages reach their triangles: collectDirect on the CPU path;
+/// with GPU levels collectTriangles, and computeSurvivorBoxes once the levels have run. A group's box comes from its
+/// vertices.
 void buildTriangleBoxesAndGroups(FrameState& frame, std::uint32_t groupSize, double margin, bool prepass,
                                  TaskPool& pool, TriangleScratch& scratch, Stats& stats);
 
 /// The triangles of `groups` (each in the object's spatial order, FrameState::order), in group order; with
 /// `prepass`, only those whose box overlaps a partner object's box (tested when the object has at most 16 partners).
 /// Stores the box (inflated by `margin` / 2) of every triangle of the groups that is not kept from an earlier frame.
-void collectTriangles(const FrameState& frame, const std::vector<Group>& groups, bool prepass, double margin,
+void collectTriangles(FrameState& frame, const std::vector<Group>& groups, bool prepass, double margin,
                       TaskPool& pool, TriangleScratch& scratch, std::vector<FrameTriangle>& triangles);
 
 /// The CPU path (no GPU levels), in one pass on every worker: each active mesh's triangle boxes (those not kept from
@@ -51,10 +51,13 @@ void collectDirect(FrameState& frame, std::uint32_t groupSize, double margin, Ta
                    TriangleScratch& scratch);
 
 /// The triangles of `groups` as items (in group order, each group's in the object's spatial order) with alive[i] set,
-/// added to frame.surviving, each list kept sorted, and their boxes (inflated by `margin` / 2) stored where they are
-/// not kept from an earlier frame.
+/// added to frame.surviving; each list kept sorted.
 void addSurvivingGroupTriangles(FrameState& frame, const std::vector<Group>& groups,
-                                const std::vector<std::uint8_t>& alive, double margin);
+                                const std::vector<std::uint8_t>& alive);
+
+/// With GPU levels, once frame.surviving is complete: the boxes (inflated by `margin` / 2) of every surviving triangle
+/// of the meshes whose boxes are computed on demand (all but static meshes), for the exact stage.
+void computeSurvivorBoxes(FrameState& frame, double margin, TaskPool& pool, TriangleScratch& scratch);
 
 /// Adds `triangles` (those with alive[i] set; `alive` empty: all) to frame.surviving and keeps each list sorted.
 void addSurvivingTriangles(FrameState& frame, const std::vector<FrameTriangle>& triangles,

@@ -40,6 +40,7 @@ GLuint compileShader(const ShaderProgram& program, const ShaderPieces& shader) {
 GLuint linkProgram(Program which) {
     const ShaderProgram& p = shaderProgram(which);
     std::vector<GLuint> shaders;
+    shaders.reserve(p.shaders.size());  // push_back cannot throw with a compiled shader in hand
     try {
         for (const ShaderPieces& shader : p.shaders) shaders.push_back(compileShader(p, shader));
     } catch (...) {

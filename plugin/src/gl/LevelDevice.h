@@ -134,7 +134,8 @@ struct LevelDevice {
     std::size_t recordCapacity = 0;
     /// The timer query spans of the frame so far (timers[0 .. spans)); the last one is open while `timing`. A
     /// span runs from a level's first pass to its read-back, or to the end of its issue where it is read back later
-    /// (a deferred level), or where nothing reads it (a level run ahead: its device time is not measured).
+    /// (a deferred level), or where nothing reads it (a level run ahead: its device time is not measured). The device
+    /// exact stage after a deferred level has a span of its own.
     std::size_t spans = 0;
     bool timing = false;
     Clock::time_point timedSpan;  ///< when the last span opened

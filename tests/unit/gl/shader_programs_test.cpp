@@ -1,7 +1,7 @@
 // The GL programs as the culler compiles them (ShaderPrograms.h), checked by a second GLSL front end: Khronos'
-// reference compiler, glslangValidator, compiles and links each one as OpenGL 4.5 GLSL. Mesa's compiler runs them in
-// the GL tests; this holds them to the specification where drivers differ (an NVIDIA or AMD driver never meets them in
-// CI). No GL device is needed.
+// reference compiler, glslangValidator, compiles and links each one as the desktop GLSL its "#version 450 core" line
+// names. Mesa's compiler runs them in the GL tests; this holds them to the specification where drivers differ (an
+// NVIDIA or AMD driver never meets them in CI). No GL device is needed.
 #include "GlTestSupport.h"
 #include "gl/ShaderPrograms.h"
 
@@ -14,6 +14,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <system_error>
 #include <unistd.h>
 
 namespace cullide::test {
@@ -46,6 +47,13 @@ TEST(ShaderPrograms, EveryProgramCompilesAndLinksWithTheReferenceCompiler) {
     }
     const fs::path dir = fs::temp_directory_path() / ("cullide-glsl-" + std::to_string(::getpid()));
     fs::create_directories(dir);
+    struct Removed {
+        fs::path dir;
+        ~Removed() {
+            std::error_code ignored;
+            fs::remove_all(dir, ignored);
+        }
+    } removed{dir};
     for (const gl::ShaderProgram& program : gl::shaderPrograms()) {
         std::string command = "'" + validator + "' -l";
         for (const gl::ShaderPieces& shader : program.shaders) {
@@ -58,11 +66,10 @@ TEST(ShaderPrograms, EveryProgramCompilesAndLinksWithTheReferenceCompiler) {
         const int status = std::system(command.c_str());
         EXPECT_EQ(status, 0) << program.what << ":\n" << readAll(log);
     }
-    fs::remove_all(dir);
 }
 
-/// The table names every stage file and every piece in shaders/: a shader added there is validated here too, and
-/// none is compiled from a list that forgot a piece.
+/// The table uses every stage file and every piece in shaders/, and each is embedded: a shader added there is
+/// compiled, and validated above, only once a program lists it.
 TEST(ShaderPrograms, TheTableUsesEveryShaderFile) {
     std::set<std::string> used;
     for (const gl::ShaderProgram& program : gl::shaderPrograms())
