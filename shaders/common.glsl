@@ -64,6 +64,29 @@ vec3 edgeFunction(vec2 from, vec2 to, float s) {
     return vec3(n, c);
 }
 
+// 1 / x rounded to the nearest float, as the CPU's division rounds it: GLSL allows "/" 2.5 ulp (a driver may divide
+// through an approximate reciprocal), so the quotient is moved to the nearest float by exact residuals. For a float c within a few ulp
+// of 1 / x, c * x is exact in double (48 bits) and so is 1 - c * x (Sterbenz): |1 - c x| / |x| is c's distance from
+// 1 / x. x is finite and not near 0 here (|x| > 1e-3).
+float nearestReciprocal(float x) {
+    precise float q = 1.0 / x;
+    for (int k = 0; k < 4; ++k) {
+        float smaller = uintBitsToFloat(floatBitsToUint(q) - 1u);  // one ulp towards 0
+        float larger = uintBitsToFloat(floatBitsToUint(q) + 1u);   // one ulp away from 0
+        precise double e = abs(1.0lf - double(q) * double(x));
+        precise double eSmaller = abs(1.0lf - double(smaller) * double(x));
+        precise double eLarger = abs(1.0lf - double(larger) * double(x));
+        if (eSmaller < e) {
+            q = smaller;
+        } else if (eLarger < e) {
+            q = larger;
+        } else {
+            break;
+        }
+    }
+    return q;
+}
+
 Prim makePrim(uint index, int axis) {
     Prim p;
     uvec4 entry = prims[index];
@@ -101,7 +124,7 @@ Prim makePrim(uint index, int axis) {
         p.edge0 = edgeFunction(p0.xy, p1.xy, s);
         p.edge1 = edgeFunction(p1.xy, p2.xy, s);
         p.edge2 = edgeFunction(p2.xy, p0.xy, s);
-        precise float invArea = 1.0 / area2;
+        precise float invArea = nearestReciprocal(area2);
         precise float pa = ((p1.z - p0.z) * d2.y - (p2.z - p0.z) * d1.y) * invArea;
         precise float pb = ((p2.z - p0.z) * d1.x - (p1.z - p0.z) * d2.x) * invArea;
         p.plane = vec4(pa, pb, p0.z, 1.0);

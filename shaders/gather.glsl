@@ -90,10 +90,15 @@ void fitView(uint next, uint ownerMax, int resolution) {
         views[next].boxMin[a] = bmin[a];
         views[next].boxMax[a] = bmax[a];
         views[next].lo[a] = float(bmin[a]);
-        views[next].pixelScale[a] = float(res / extent);
-        views[next].depthScale[a] = float(1.0lf / extent);
-        views[next].halfSize[a] = float(0.5lf + margin * res / extent + 1e-3lf + relative * res);
-        views[next].depthPad[a] = float(margin / extent + relative + ldexp(1.0lf, -20));
+        // Each value in a precise temporary first: an expression stored straight into the buffer could be fused.
+        precise double pixelScale = res / extent;
+        precise double depthScale = 1.0lf / extent;
+        precise double halfSize = 0.5lf + margin * res / extent + 1e-3lf + relative * res;
+        precise double depthPad = margin / extent + relative + ldexp(1.0lf, -20);
+        views[next].pixelScale[a] = float(pixelScale);
+        views[next].depthScale[a] = float(depthScale);
+        views[next].halfSize[a] = float(halfSize);
+        views[next].depthPad[a] = float(depthPad);
     }
     // VisibilityLevel.cpp's idBitsFor
     uint bits = 1u;

@@ -23,23 +23,27 @@ void main() {
     if (box >= u_count) return;
     uint first = ranges[2u * box];
     uint count = ranges[2u * box + 1u];  // at least 1 (a group of k triangles, Settings::groupSize <= 4096)
-    precise vec3 lo = vertexAt(indices[3u * ordered[first]]);  // precise: no compare-and-select made a min or max
-    precise vec3 hi = lo;
+    // The bounds as bits, chosen by comparisons: no compiler can form a float min or max of them (which of -0 and
+    // +0 one returns is not specified), so the boxes are the CPU's (allBoxes) bit for bit.
+    uvec3 lo = floatBitsToUint(vertexAt(indices[3u * ordered[first]]));
+    uvec3 hi = lo;
     for (uint k = 0u; k < count; ++k) {
         uint t = 3u * ordered[first + k];
         for (uint c = 0u; c < 3u; ++c) {
             vec3 p = vertexAt(indices[t + c]);
-            // Written out per component (no min/max: which of -0 and +0 they return is not specified).
-            if (p.x < lo.x) lo.x = p.x;
-            if (p.y < lo.y) lo.y = p.y;
-            if (p.z < lo.z) lo.z = p.z;
-            if (p.x > hi.x) hi.x = p.x;
-            if (p.y > hi.y) hi.y = p.y;
-            if (p.z > hi.z) hi.z = p.z;
+            uvec3 bits = floatBitsToUint(p);
+            vec3 l = uintBitsToFloat(lo);
+            vec3 u = uintBitsToFloat(hi);
+            if (p.x < l.x) lo.x = bits.x;
+            if (p.y < l.y) lo.y = bits.y;
+            if (p.z < l.z) lo.z = bits.z;
+            if (p.x > u.x) hi.x = bits.x;
+            if (p.y > u.y) hi.y = bits.y;
+            if (p.z > u.z) hi.z = bits.z;
         }
     }
-    precise vec3 grownLo = lo - vec3(u_inflate);
-    precise vec3 grownHi = hi + vec3(u_inflate);
+    precise vec3 grownLo = uintBitsToFloat(lo) - vec3(u_inflate);
+    precise vec3 grownHi = uintBitsToFloat(hi) + vec3(u_inflate);
     uint b = 6u * (u_first + box);
     boxes[b] = grownLo.x;
     boxes[b + 1u] = grownLo.y;

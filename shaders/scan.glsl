@@ -9,8 +9,12 @@ uint scan(uint index, int axis) {
     Prim p = makePrim(index, axis);
     vec2 h = halfSizeFor(axis);
     // Pixel centres i + 0.5 whose square may touch the rectangle.
-    ivec2 first = max(ivec2(floor(p.rect.xy - h - vec2(0.5))), ivec2(0));
-    ivec2 last = min(ivec2(ceil(p.rect.zw + h - vec2(0.5))), ivec2(u_resolution - 1));
+    // precise: every pass (separate programs) scans the same pixels, so the flag pass may trust the overflow count
+    // of the nearest pass.
+    precise vec2 from = p.rect.xy - h - vec2(0.5);
+    precise vec2 to = p.rect.zw + h - vec2(0.5);
+    ivec2 first = max(ivec2(floor(from)), ivec2(0));
+    ivec2 last = min(ivec2(ceil(to)), ivec2(u_resolution - 1));
     if (last.x < first.x || last.y < first.y) return 0u;
     uint width = uint(last.x - first.x + 1);
     uint total = width * uint(last.y - first.y + 1);

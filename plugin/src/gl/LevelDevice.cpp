@@ -559,6 +559,9 @@ void LevelDevice::forgetSpans() {
 
 void LevelDevice::prepareIteration(std::size_t itemCount) {
     const GLuint empty[2] = {0xFFFFFFFFu, 0u};
+    // The last iteration's image atomics before the clears (a texture update, which SHADER_IMAGE_ACCESS does not
+    // order).
+    glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT);
     glClearTexImage(images[CULLIDE_IMAGE_NEAR1], 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[0]);
     glClearTexImage(images[CULLIDE_IMAGE_NEAR2], 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[0]);
     glClearTexImage(images[CULLIDE_IMAGE_FAR1], 0, GL_RED_INTEGER, GL_UNSIGNED_INT, &empty[1]);
