@@ -10,6 +10,22 @@
 
 namespace cullide {
 
+namespace {
+
+/// Sets values[at + i] = value(i) for i < n, reading first and writing only from the first value that differs: returns
+/// that value's place in `values` (ClusterGeometry's kNone where none does).
+template <typename Value>
+std::size_t writeFromFirstDifference(std::vector<std::uint32_t>& values, std::size_t at, std::size_t n,
+                                     const Value& value) {
+    std::size_t i = 0;
+    while (i < n && values[at + i] == value(i)) ++i;
+    if (i == n) return static_cast<std::size_t>(-1);
+    for (std::size_t k = i; k < n; ++k) values[at + k] = value(k);
+    return at + i;
+}
+
+}  // namespace
+
 void ClusterGeometry::upload(const FrameState& frame, const Cluster& cluster, double margin, PruningBackend& backend,
                              TaskPool& pool, Stats& stats) {
     placeMeshes(frame, cluster);
@@ -147,35 +163,36 @@ ClusterGeometry::Changed ClusterGeometry::writeMesh(const FrameState& frame, con
                                                         m_geometry.local);
         if (first < m_geometry.local.size()) changed.firstLocal = first;
     }
-    std::size_t at = 3 * std::size_t{slot.baseTriangle};
-    for (const auto& t : mesh.triangles) {
-        for (std::uint32_t k : t) {
-            const std::uint32_t global = slot.baseVertex + k;
-            if (changed.firstIndex == Changed::kNone && m_geometry.indices[at] != global) changed.firstIndex = at;
-            m_geometry.indices[at++] = global;
-        }
-    }
+    // Read first, write from the first difference on: a mesh whose topology stays the same costs a read of its
+    // indices and order, no store.
+    static_assert(sizeof(TriangleIndices) == 3 * sizeof(std::uint32_t), "triangles are three packed indices");
+    const std::uint32_t* local = mesh.triangles.empty() ? nullptr : mesh.triangles.front().data();
+    changed.firstIndex = writeFromFirstDifference(m_geometry.indices, 3 * std::size_t{slot.baseTriangle},
+                                                  3 * mesh.triangles.size(),
+                                                  [&](std::size_t i) { return slot.baseVertex + local[i]; });
     const std::vector<std::uint32_t>* order = frame.order.empty() ? nullptr : frame.order[slot.object];
-    for (std::uint32_t k = 0; k < mesh.triangles.size(); ++k) {
-        const std::size_t i = std::size_t{slot.baseTriangle} + k;
-        const std::uint32_t global = slot.baseTriangle + (order != nullptr ? (*order)[k] : k);
-        if (changed.firstOrdered == Changed::kNone && m_geometry.ordered[i] != global) changed.firstOrdered = i;
-        m_geometry.ordered[i] = global;
-    }
+    changed.firstOrdered = writeFromFirstDifference(
+        m_geometry.ordered, slot.baseTriangle, mesh.triangles.size(), [&](std::size_t k) {
+            return slot.baseTriangle + (order != nullptr ? (*order)[k] : static_cast<std::uint32_t>(k));
+        });
     return changed;
 }
 
 void ClusterGeometry::writePositions(const TriangleMesh& world, const MeshSlot& slot, Changed& changed) {
-    std::size_t at = 3 * std::size_t{slot.baseVertex};
-    for (const Vec3& v : world.vertices) {
-        float f[3];
-        devicePosition(v, m_origin, f);
-        for (int a = 0; a < 3; ++a, ++at) {
-            if (changed.firstPosition == Changed::kNone && std::memcmp(&m_geometry.positions[at], &f[a], 4) != 0)
-                changed.firstPosition = at;
-            m_geometry.positions[at] = f[a];
-        }
+    float* out = m_geometry.positions.data() + 3 * std::size_t{slot.baseVertex};
+    const std::size_t n = world.vertices.size();
+    std::size_t v = 0;
+    float f[3];
+    for (; v < n; ++v) {  // read first: a mesh at rest costs no store
+        devicePosition(world.vertices[v], m_origin, f);
+        if (std::memcmp(out + 3 * v, f, sizeof f) != 0) break;
     }
+    if (v == n) return;
+    int a = 0;
+    while (std::memcmp(out + 3 * v + a, f + a, sizeof(float)) == 0) ++a;
+    changed.firstPosition = 3 * (std::size_t{slot.baseVertex} + v) + static_cast<std::size_t>(a);
+    std::memcpy(out + 3 * v, f, sizeof f);
+    for (++v; v < n; ++v) devicePosition(world.vertices[v], m_origin, out + 3 * v);
 }
 
 std::vector<float> allPositions(const GpuGeometry& geometry) {
