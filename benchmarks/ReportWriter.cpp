@@ -231,6 +231,22 @@ void ReportWriter::machines() {
     }
     m_md << "\nThe load average is the machine's (1, 5, 15 min): other builds shared this machine during the run "
             "when it is well above 0; rerun on a quiet machine for clean figures.\n\n";
+    // The floor under a frame of GPU levels on each machine's device (measureGlLatency, medians).
+    std::string latencies;
+    for (const auto& c : m_classes) {
+        const json l = c.machine.value("probe", json::object()).value("latency", json::object());
+        if (!l.contains("fence_us")) continue;
+        const std::string onDevice =
+            l.contains("dispatch_device_us") ? fixed(l.value("dispatch_device_us", 0.0), 2) + " µs on the device, " : "";
+        latencies += "- " + c.name + ": a dependent dispatch " + onDevice +
+                     fixed(l.value("dispatch_issue_us", 0.0), 2) + " µs to issue; a fence after one " +
+                     fixed(l.value("fence_us", 0.0), 2) + " µs; a blocking read-back of 4 bytes " +
+                     fixed(l.value("read_back_us", 0.0), 2) + " µs.\n";
+    }
+    if (!latencies.empty())
+        m_md << "**GL round trips** (`cullide-bench-run --probe`, `measureGlLatency`: medians; on a software renderer "
+                "a dispatch runs as it is issued, so its cost is the issue time):\n\n"
+             << latencies << "\n";
 }
 
 void ReportWriter::targets() {

@@ -6,7 +6,8 @@
 //                     [--iterations N] [--min-prune F] [--threads N]
 //                     [--truth FILE] [--tag TAG] [--out FILE] [--sample-every N]
 //   cullide-bench-run --list-engines | --list-scenes   what this build can run
-//   cullide-bench-run --probe          prints the GL renderer and device CULLIDE's GPU levels run on, as JSON
+//   cullide-bench-run --probe          prints the GL renderer and device CULLIDE's GPU levels run on, and what a
+//                                      dispatch, a fence and a read-back cost there (measureGlLatency), as JSON
 //
 // Frame scenes: the first --warmup frames run untimed, the next --frames are timed. With --engine exact the exact
 // answer (the brute-force reference) of the timed frames is written to --truth; other engines read it from there
@@ -27,6 +28,7 @@
 #endif
 
 #include "cullide/Culler.h"
+#include "cullide/GlLatency.h"
 #include "cullide/Timer.h"
 #include "cullide/scenes/Procedural.h"
 
@@ -116,6 +118,17 @@ int probe() {
     cullide::Result result;
     culler->run(objects, result);
     nlohmann::json j{{"renderer", result.stats.renderer}, {"device", result.stats.device}};
+    try {  // what a round trip to that device costs (the floor under a frame of GPU levels)
+        const cullide::GlLatency l = cullide::measureGlLatency(settings.device);
+        j["latency"] = {{"dispatches", l.dispatches},
+                        {"round_trips", l.roundTrips},
+                        {"dispatch_issue_us", l.dispatchIssueUs},
+                        {"fence_us", l.fenceUs},
+                        {"read_back_us", l.readBackUs}};
+        if (l.dispatchDeviceUs >= 0.0) j["latency"]["dispatch_device_us"] = l.dispatchDeviceUs;
+    } catch (const std::exception& e) {
+        j["latency"] = {{"error", e.what()}};
+    }
     std::cout << j.dump() << std::endl;
     return 0;
 }

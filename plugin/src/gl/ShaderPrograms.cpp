@@ -33,6 +33,7 @@ const std::vector<ShaderProgram>& shaderPrograms() {
          {{S::Compute, {"geometry.glsl", "ranges.glsl", "exact.comp"}}}},
         {Program::Snapshot, "snapshot", "the snapshot program",
          {{S::Vertex, {"snapshot.vert"}}, {S::Fragment, {"snapshot.frag"}}}},
+        {Program::Probe, "probe", "the latency probe's program", {{S::Compute, {"probe.comp"}}}},
     };
     return programs;
 }

@@ -30,6 +30,7 @@ enum class Program {
     Start,       ///< a level described by its objects: its items, start and first view
     Exact,       ///< the device exact stage
     Snapshot,    ///< the snapshot renderer (vertex and fragment)
+    Probe,       ///< measureGlLatency's dependent dispatch
 };
 
 struct ShaderProgram {

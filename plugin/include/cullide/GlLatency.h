@@ -1,0 +1,32 @@
+// What one round trip to the GL device costs, measured on the device CULLIDE's GPU levels would use: the numbers that
+// bound a frame of GPU levels from below (a chain of dependent dispatches, one blocking read-back).
+#pragma once
+
+#include <string>
+
+namespace cullide {
+
+/// measureGlLatency's figures, each the median over its repetitions, in microseconds.
+struct GlLatency {
+    std::string renderer;  ///< GL_RENDERER
+    std::string device;    ///< the EGL device chosen (as Stats::device)
+    int dispatches = 0;    ///< dependent dispatches timed as one batch
+    int roundTrips = 0;    ///< repetitions of each round trip
+    /// Device time per dependent dispatch (a one-invocation dispatch, a storage barrier, the next reading what it
+    /// wrote), from a timer query over the batch; negative where the driver has no plausible timer result.
+    double dispatchDeviceUs = -1.0;
+    /// The calling thread's time to issue one dispatch and its barrier.
+    double dispatchIssueUs = 0.0;
+    /// A fence after one dispatch: glFenceSync then glClientWaitSync (with a flush) until it signals.
+    double fenceUs = 0.0;
+    /// A blocking read-back of 4 bytes that the dispatch before it wrote (glGetNamedBufferSubData).
+    double readBackUs = 0.0;
+};
+
+/// Opens a GL context on `device` (as Settings::device: "" for CULLIDE_GL_DEVICE or automatic, "hardware",
+/// "software", "surfaceless", an index) and measures it: `dispatches` dependent dispatches (at least 1) timed as a
+/// batch, and `roundTrips` (at least 1) fences and read-backs. Throws GlUnavailableError (cullide/Culler.h) where no
+/// usable GL device is there, std::invalid_argument for counts below 1.
+GlLatency measureGlLatency(const std::string& device = "", int dispatches = 256, int roundTrips = 64);
+
+}  // namespace cullide
