@@ -67,10 +67,12 @@ vec3 edgeFunction(vec2 from, vec2 to, float s) {
 // 1 / x rounded to the nearest float, as the CPU's division rounds it: GLSL allows "/" 2.5 ulp (a driver may divide
 // through an approximate reciprocal), so the quotient is moved to the nearest float by exact residuals. For a float c within a few ulp
 // of 1 / x, c * x is exact in double (48 bits) and so is 1 - c * x (Sterbenz): |1 - c x| / |x| is c's distance from
-// 1 / x. x is finite and not near 0 here (|x| > 1e-3).
+// 1 / x. This assumes IEEE double multiplication and subtraction (GLSL promises only single precision for double
+// operations; every GL 4.5 device with native fp64 is IEEE). x is finite and not near 0 here (|x| > 1e-3). A quotient
+// 2.5 ulp off near a power of two may be 5 steps of the finer spacing away: 8 steps are allowed, one is usual.
 float nearestReciprocal(float x) {
     precise float q = 1.0 / x;
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < 8; ++k) {
         float smaller = uintBitsToFloat(floatBitsToUint(q) - 1u);  // one ulp towards 0
         float larger = uintBitsToFloat(floatBitsToUint(q) + 1u);   // one ulp away from 0
         precise double e = abs(1.0lf - double(q) * double(x));

@@ -13,8 +13,10 @@ uint scan(uint index, int axis) {
     // of the nearest pass.
     precise vec2 from = p.rect.xy - h - vec2(0.5);
     precise vec2 to = p.rect.zw + h - vec2(0.5);
-    ivec2 first = max(ivec2(floor(from)), ivec2(0));
-    ivec2 last = min(ivec2(ceil(to)), ivec2(u_resolution - 1));
+    // Clamped before the conversion to int, which is undefined out of range (as ReferenceVisibility's pixelIndex).
+    vec2 span = vec2(float(u_resolution));
+    ivec2 first = max(ivec2(clamp(floor(from), vec2(-1.0), span)), ivec2(0));
+    ivec2 last = min(ivec2(clamp(ceil(to), vec2(-1.0), span)), ivec2(u_resolution - 1));
     if (last.x < first.x || last.y < first.y) return 0u;
     uint width = uint(last.x - first.x + 1);
     uint total = width * uint(last.y - first.y + 1);

@@ -165,11 +165,9 @@ ClusterGeometry::Changed ClusterGeometry::writeMesh(const FrameState& frame, con
     }
     // Read first, write from the first difference on: a mesh whose topology stays the same costs a read of its
     // indices and order, no store.
-    static_assert(sizeof(TriangleIndices) == 3 * sizeof(std::uint32_t), "triangles are three packed indices");
-    const std::uint32_t* local = mesh.triangles.empty() ? nullptr : mesh.triangles.front().data();
-    changed.firstIndex = writeFromFirstDifference(m_geometry.indices, 3 * std::size_t{slot.baseTriangle},
-                                                  3 * mesh.triangles.size(),
-                                                  [&](std::size_t i) { return slot.baseVertex + local[i]; });
+    changed.firstIndex = writeFromFirstDifference(
+        m_geometry.indices, 3 * std::size_t{slot.baseTriangle}, 3 * mesh.triangles.size(),
+        [&](std::size_t i) { return slot.baseVertex + mesh.triangles[i / 3][i % 3]; });
     const std::vector<std::uint32_t>* order = frame.order.empty() ? nullptr : frame.order[slot.object];
     changed.firstOrdered = writeFromFirstDifference(
         m_geometry.ordered, slot.baseTriangle, mesh.triangles.size(), [&](std::size_t k) {

@@ -25,8 +25,10 @@ struct GlLatency {
 
 /// Opens a GL context on `device` (as Settings::device: "" for CULLIDE_GL_DEVICE or automatic, "hardware",
 /// "software", "surfaceless", an index) and measures it: `dispatches` dependent dispatches (at least 1) timed as a
-/// batch, and `roundTrips` (at least 1) fences and read-backs. Throws GlUnavailableError (cullide/Culler.h) where no
-/// usable GL device is there, std::invalid_argument for counts below 1.
+/// batch, and `roundTrips` (at least 1) fences and read-backs; the dispatches' count is checked at every read-back.
+/// Throws GlUnavailableError (cullide/Culler.h) where no usable GL device is there, std::invalid_argument for counts
+/// below 1, std::runtime_error for a GL failure (a program that does not build, a fence that does not signal, a
+/// count that is wrong). Uses a context of its own: afterwards no GL context is current on the calling thread.
 GlLatency measureGlLatency(const std::string& device = "", int dispatches = 256, int roundTrips = 64);
 
 }  // namespace cullide

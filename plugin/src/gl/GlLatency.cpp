@@ -81,11 +81,11 @@ GlLatency measureGlLatency(const std::string& device, int dispatches, int roundT
     }
     glFinish();
 
-    const Clock::time_point issued = Clock::now();
     if (probe.context.hasTimerQueries()) glBeginQuery(GL_TIME_ELAPSED, probe.query);
+    const Clock::time_point issued = Clock::now();
     for (int i = 0; i < dispatches; ++i) dispatchOnce();
-    if (probe.context.hasTimerQueries()) glEndQuery(GL_TIME_ELAPSED);
     result.dispatchIssueUs = usSince(issued) / dispatches;
+    if (probe.context.hasTimerQueries()) glEndQuery(GL_TIME_ELAPSED);
     glFinish();
     if (probe.context.hasTimerQueries()) {
         const double ms = gl::timerResultMs(probe.query, usSince(issued) * 1e-3);
@@ -109,6 +109,9 @@ GlLatency measureGlLatency(const std::string& device, int dispatches, int roundT
         const Clock::time_point readStart = Clock::now();
         glGetNamedBufferSubData(probe.buffer, 0, 4, &word);
         readBacks.push_back(usSince(readStart));
+        // Every dispatch so far ran once: the warm-up, the batch and two per round trip.
+        if (word != static_cast<GLuint>(1 + dispatches + 2 * (i + 1)))
+            throw gl::GlError("measureGlLatency: the dispatches did not all run");
     }
     gl::checkGlError("measureGlLatency");
     result.fenceUs = median(fences);
