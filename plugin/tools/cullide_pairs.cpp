@@ -223,6 +223,7 @@ nlohmann::ordered_json statsToJson(const cullide::Stats& s) {
     j["upload_ms"] = s.uploadMs;
     j["gpu_levels_ms"] = s.gpuLevelsMs;
     j["gpu_ms"] = gpuTime(s.gpuMs, s.gpuTimingValid);
+    j["upload_gpu_ms"] = gpuTime(s.uploadGpuMs, s.gpuTimingValid);
     j["exact_ms"] = s.exactMs;
     j["total_ms"] = s.totalMs;
     return j;

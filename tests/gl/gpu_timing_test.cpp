@@ -65,8 +65,14 @@ void expectValidOrAbsent(const Stats& stats, const std::string& what) {
     if (stats.gpuTimingValid) {
         EXPECT_GE(stats.gpuMs, 0.0) << what;
         EXPECT_LE(stats.gpuMs, bound(stats.totalMs)) << what;
+        // The uploads are part of it, timed apart: where levels ran, an upload did (and built group boxes here).
+        EXPECT_LE(stats.uploadGpuMs, stats.gpuMs) << what;
+        if (!stats.levels.empty()) {
+            EXPECT_GT(stats.uploadGpuMs, 0.0) << what;
+        }
     } else {
         EXPECT_EQ(stats.gpuMs, 0.0) << what;
+        EXPECT_EQ(stats.uploadGpuMs, 0.0) << what;
     }
 }
 

@@ -154,8 +154,13 @@ struct Stats {
     double prepassMs = 0.0;
     double uploadMs = 0.0;
     double gpuLevelsMs = 0.0;  ///< wall time of all GPU levels (0 when none ran: that CPU work is in prepassMs)
-    double gpuMs = 0.0;        ///< GPU time from timer queries, all levels; only meaningful with gpuTimingValid
-    /// false when some GPU level's timing is absent (LevelStats::gpuTimingValid): gpuMs is then 0, not a time.
+    double gpuMs = 0.0;        ///< GPU time from timer queries, all levels and uploads; only with gpuTimingValid
+    /// Of gpuMs, the uploads' (their transfers, and the dispatches that map the transformed meshes and build the
+    /// groups' boxes), each a span of its own read after the next blocking read-back. 0 without GPU levels or where
+    /// gpuTimingValid is false.
+    double uploadGpuMs = 0.0;
+    /// false when some GPU level's or upload's timing is absent (LevelStats::gpuTimingValid): gpuMs is then 0, not a
+    /// time.
     /// true (gpuMs 0) in frames without GPU levels.
     bool gpuTimingValid = true;
     double exactMs = 0.0;

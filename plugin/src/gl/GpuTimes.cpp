@@ -30,10 +30,23 @@ void recordGpuTime(double ms, LevelStats& level, Stats& stats) {
         level.exactGpuMs = 0.0;
         stats.gpuTimingValid = false;
         stats.gpuMs = 0.0;
+        stats.uploadGpuMs = 0.0;
         return;
     }
     if (level.gpuTimingValid) level.gpuMs += ms;
     if (stats.gpuTimingValid) stats.gpuMs += ms;
+}
+
+void recordUploadGpuTime(double ms, Stats& stats) {
+    if (ms < 0.0) {
+        stats.gpuTimingValid = false;
+        stats.gpuMs = 0.0;
+        stats.uploadGpuMs = 0.0;
+        return;
+    }
+    if (!stats.gpuTimingValid) return;
+    stats.gpuMs += ms;
+    stats.uploadGpuMs += ms;
 }
 
 void recordExactGpuTime(double ms, LevelStats& level, Stats& stats) {

@@ -22,4 +22,8 @@ void recordGpuTime(double ms, LevelStats& level, Stats& stats);
 /// recordGpuTime for the span of the device exact stage that followed the level, also counted in its exactGpuMs.
 void recordExactGpuTime(double ms, LevelStats& level, Stats& stats);
 
+/// An upload's span (`ms` < 0: absent) into the frame's gpuMs and uploadGpuMs; absent, it makes the frame's timing
+/// absent.
+void recordUploadGpuTime(double ms, Stats& stats);
+
 }  // namespace cullide::gl

@@ -555,6 +555,12 @@ double LevelDevice::spanMs(std::size_t span, Clock::time_point opened) const {
 void LevelDevice::forgetSpans() {
     endTiming();
     spans = 0;
+    uploadSpans.clear();
+}
+
+void LevelDevice::noteUploadSpans(Stats& stats) {
+    for (const auto& [span, opened] : uploadSpans) recordUploadGpuTime(spanMs(span, opened), stats);
+    uploadSpans.clear();
 }
 
 void LevelDevice::prepareIteration(std::size_t itemCount) {
@@ -646,6 +652,7 @@ bool LevelDevice::readBack(GLuint buffer, std::size_t offset, std::size_t bytes,
     if (readBackDelayMs > 0.0) std::this_thread::sleep_until(delayEnd);  // a slow device's round trip (tests)
     level.waitMs += msSince(waitStart);
     stats.bytesReadBack += bytes;
+    noteUploadSpans(stats);  // the uploads before it are done too
     return true;
 }
 

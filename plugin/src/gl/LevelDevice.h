@@ -18,6 +18,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <memory>
+#include <utility>
 #include <vector>
 
 namespace cullide::gl {
@@ -139,6 +140,9 @@ struct LevelDevice {
     std::size_t spans = 0;
     bool timing = false;
     Clock::time_point timedSpan;  ///< when the last span opened
+    /// The uploads' spans not read yet (span, when it opened): read after the next blocking read-back
+    /// (Stats::uploadGpuMs), forgotten with the frame's spans.
+    std::vector<std::pair<std::size_t, Clock::time_point>> uploadSpans;
     double readBackDelayMs = 0.0;  ///< GlBackendOptions::readBackDelayMs (tests: a slow device's round trip)
     std::shared_ptr<std::vector<float>> positionsAfterUpload;  ///< GlBackendOptions::positionsAfterUpload (tests)
     std::shared_ptr<std::vector<float>> boxesAfterUpload;      ///< GlBackendOptions::boxesAfterUpload (tests)
@@ -223,6 +227,8 @@ struct LevelDevice {
     std::size_t lastSpan() const { return hasTimers && spans > 0 ? spans - 1 : kNoSpan; }
     /// A frame starts (or its deferred levels were collected): the spans' queries may be used again.
     void forgetSpans();
+    /// The uploads' spans (uploadSpans) into Stats::uploadGpuMs: after a blocking read-back, when their work is done.
+    void noteUploadSpans(Stats& stats);
 
     /// Clears the images, the flags and the counters of one iteration and binds what every pass reads and writes.
     void prepareIteration(std::size_t itemCount);

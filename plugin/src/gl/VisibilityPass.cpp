@@ -434,6 +434,8 @@ void VisibilityPass::beginFrame() {
 void VisibilityPass::upload(const GpuGeometry& geometry, Stats& stats) {
     Impl& s = *m_impl;
     s.context.makeCurrent();
+    const bool timed = !s.timing;  // a span of its own (Stats::uploadGpuMs), where none is open
+    if (timed) s.startTiming();
     s.uploadPositions(geometry, stats);
     stats.bytesUploaded += uploadAfterPrefix(s.buffers[kIndices], s.capacity[kIndices], s.valid[kIndices],
                                              geometry.indices.data(), geometry.indices.size() * 4,
@@ -442,6 +444,10 @@ void VisibilityPass::upload(const GpuGeometry& geometry, Stats& stats) {
                                              geometry.ordered.data(), geometry.ordered.size() * 4,
                                              geometry.keptOrdered * 4);
     s.uploadBoxes(geometry, stats);
+    if (timed) {
+        s.endTiming();
+        if (s.lastSpan() != kNoSpan) s.uploadSpans.emplace_back(s.lastSpan(), s.timedSpan);
+    }
     s.geometry = &geometry;
     s.ahead.reset();  // a cluster starts: a level run ahead before belongs to an abandoned frame
 }
