@@ -8,16 +8,23 @@
 namespace cullide {
 namespace {
 
-/// Ranges of at most `range` triangles over the meshes for which take(o) holds, in object and triangle order.
-template <typename Take>
-void splitIntoRanges(const FrameState& frame, const Take& take, std::uint32_t range,
+/// Ranges of at most `range` of count(o) elements (by default the mesh's triangles) over the objects for which take(o)
+/// holds, in object and element order.
+template <typename Take, typename Count>
+void splitIntoRanges(const FrameState& frame, const Take& take, const Count& count, std::uint32_t range,
                      std::vector<TriangleScratch::Range>& ranges) {
     ranges.clear();
     for (std::uint32_t o = 0; o < frame.valid.size(); ++o) {
         if (!take(o)) continue;
-        const auto n = static_cast<std::uint32_t>(frame.meshOf(o).triangles.size());
+        const auto n = static_cast<std::uint32_t>(count(o));
         for (std::uint32_t first = 0; first < n; first += range) ranges.push_back({o, first, std::min(n, first + range)});
     }
+}
+
+template <typename Take>
+void splitIntoRanges(const FrameState& frame, const Take& take, std::uint32_t range,
+                     std::vector<TriangleScratch::Range>& ranges) {
+    splitIntoRanges(frame, take, [&](std::uint32_t o) { return frame.meshOf(o).triangles.size(); }, range, ranges);
 }
 
 /// Whether object o's triangle boxes are computed as the frame's stages reach its triangles: those of every mesh but a
@@ -249,14 +256,9 @@ void addSurvivingGroupTriangles(FrameState& frame, const std::vector<Group>& gro
 }
 
 void computeSurvivorBoxes(FrameState& frame, double margin, TaskPool& pool, TriangleScratch& scratch) {
-    constexpr std::uint32_t kRange = 4096;
-    scratch.ranges.clear();
-    for (std::uint32_t o = 0; o < frame.valid.size(); ++o) {
-        if (!frame.isActiveMesh(o) || !boxesOnDemand(frame, o)) continue;
-        const auto n = static_cast<std::uint32_t>(frame.surviving[o].size());
-        for (std::uint32_t first = 0; first < n; first += kRange)
-            scratch.ranges.push_back({o, first, std::min(n, first + kRange)});
-    }
+    splitIntoRanges(
+        frame, [&](std::uint32_t o) { return frame.isActiveMesh(o) && boxesOnDemand(frame, o); },
+        [&](std::uint32_t o) { return frame.surviving[o].size(); }, 4096, scratch.ranges);  // ranges of the lists
     const double inflate = 0.5 * margin;
     pool.parallelFor(scratch.ranges.size(), 1, [&](std::size_t begin, std::size_t end) {
         for (std::size_t r = begin; r < end; ++r) {

@@ -8,7 +8,7 @@ namespace cullide {
 
 /// measureGlLatency's figures, each the median over its repetitions, in microseconds.
 struct GlLatency {
-    std::string renderer;  ///< GL_RENDERER
+    std::string renderer;  ///< the renderer's name (as Stats::renderer)
     std::string device;    ///< the EGL device chosen (as Stats::device)
     int dispatches = 0;    ///< dependent dispatches timed as one batch
     int roundTrips = 0;    ///< repetitions of each round trip
@@ -17,9 +17,9 @@ struct GlLatency {
     double dispatchDeviceUs = -1.0;
     /// The calling thread's time to issue one dispatch and its barrier.
     double dispatchIssueUs = 0.0;
-    /// A fence after one dispatch: glFenceSync then glClientWaitSync (with a flush) until it signals.
+    /// A fence after one dispatch: inserted, then waited for (with a flush) until it signals.
     double fenceUs = 0.0;
-    /// A blocking read-back of 4 bytes that the dispatch before it wrote (glGetNamedBufferSubData).
+    /// A blocking read-back of 4 bytes that the dispatch before it wrote.
     double readBackUs = 0.0;
 };
 

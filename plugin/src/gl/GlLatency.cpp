@@ -1,6 +1,7 @@
 #include "cullide/GlLatency.h"
 
 #include "cullide/Culler.h"
+#include "cullide/Timer.h"
 #include "gl/EglContext.h"
 #include "gl/GlApi.h"
 #include "gl/GlProgram.h"
@@ -8,18 +9,11 @@
 #include "bindings.h"
 
 #include <algorithm>
-#include <chrono>
 #include <stdexcept>
 #include <vector>
 
 namespace cullide {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double usSince(Clock::time_point start) {
-    return std::chrono::duration<double, std::micro>(Clock::now() - start).count();
-}
 
 double median(std::vector<double> values) {
     std::sort(values.begin(), values.end());
@@ -82,13 +76,13 @@ GlLatency measureGlLatency(const std::string& device, int dispatches, int roundT
     glFinish();
 
     if (probe.context.hasTimerQueries()) glBeginQuery(GL_TIME_ELAPSED, probe.query);
-    const Clock::time_point issued = Clock::now();
+    const Timer issued;
     for (int i = 0; i < dispatches; ++i) dispatchOnce();
-    result.dispatchIssueUs = usSince(issued) / dispatches;
+    result.dispatchIssueUs = issued.ms() * 1e3 / dispatches;
     if (probe.context.hasTimerQueries()) glEndQuery(GL_TIME_ELAPSED);
     glFinish();
     if (probe.context.hasTimerQueries()) {
-        const double ms = gl::timerResultMs(probe.query, usSince(issued) * 1e-3);
+        const double ms = gl::timerResultMs(probe.query, issued.ms());
         if (ms >= 0.0) result.dispatchDeviceUs = ms * 1e3 / dispatches;
     }
 
@@ -96,9 +90,9 @@ GlLatency measureGlLatency(const std::string& device, int dispatches, int roundT
     for (int i = 0; i < roundTrips; ++i) {
         dispatchOnce();
         GLsync fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
-        const Clock::time_point start = Clock::now();
+        const Timer waiting;
         const GLenum waited = glClientWaitSync(fence, GL_SYNC_FLUSH_COMMANDS_BIT, GLuint64{10'000'000'000});
-        fences.push_back(usSince(start));
+        fences.push_back(waiting.ms() * 1e3);
         glDeleteSync(fence);
         if (waited == GL_TIMEOUT_EXPIRED || waited == GL_WAIT_FAILED)
             throw gl::GlError("measureGlLatency: a fence did not signal");
@@ -106,9 +100,9 @@ GlLatency measureGlLatency(const std::string& device, int dispatches, int roundT
         dispatchOnce();
         glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
         GLuint word = 0;
-        const Clock::time_point readStart = Clock::now();
+        const Timer reading;
         glGetNamedBufferSubData(probe.buffer, 0, 4, &word);
-        readBacks.push_back(usSince(readStart));
+        readBacks.push_back(reading.ms() * 1e3);
         // Every dispatch so far ran once: the warm-up, the batch and two per round trip.
         if (word != static_cast<GLuint>(1 + dispatches + 2 * (i + 1)))
             throw gl::GlError("measureGlLatency: the dispatches did not all run");

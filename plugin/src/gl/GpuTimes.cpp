@@ -23,20 +23,6 @@ double timerResultMs(GLuint query, double wallMs) {
     return ms;
 }
 
-void recordGpuTime(double ms, LevelStats& level, Stats& stats) {
-    if (ms < 0.0) {
-        level.gpuTimingValid = false;
-        level.gpuMs = 0.0;
-        level.exactGpuMs = 0.0;
-        stats.gpuTimingValid = false;
-        stats.gpuMs = 0.0;
-        stats.uploadGpuMs = 0.0;
-        return;
-    }
-    if (level.gpuTimingValid) level.gpuMs += ms;
-    if (stats.gpuTimingValid) stats.gpuMs += ms;
-}
-
 void recordUploadGpuTime(double ms, Stats& stats) {
     if (ms < 0.0) {
         stats.gpuTimingValid = false;
@@ -47,6 +33,18 @@ void recordUploadGpuTime(double ms, Stats& stats) {
     if (!stats.gpuTimingValid) return;
     stats.gpuMs += ms;
     stats.uploadGpuMs += ms;
+}
+
+void recordGpuTime(double ms, LevelStats& level, Stats& stats) {
+    if (ms < 0.0) {
+        level.gpuTimingValid = false;
+        level.gpuMs = 0.0;
+        level.exactGpuMs = 0.0;
+        recordUploadGpuTime(ms, stats);  // the frame's time absent too
+        return;
+    }
+    if (level.gpuTimingValid) level.gpuMs += ms;
+    if (stats.gpuTimingValid) stats.gpuMs += ms;
 }
 
 void recordExactGpuTime(double ms, LevelStats& level, Stats& stats) {
