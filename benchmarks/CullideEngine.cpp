@@ -25,9 +25,11 @@ void CullideEngine::setup(const BenchFrame& first) {
                                                      : createGpuCuller(m_settings);
     m_objects.assign(first.world->size(), Object{});
     for (std::size_t i = 0; i < m_objects.size(); ++i) {
-        // Geometry that never changes in world space is declared static (the API's staticKey): the GPU culler keeps
-        // its validation and triangle boxes between frames.
-        if ((*first.motion)[i] == Motion::Static) m_objects[i].staticKey = i + 1;
+        // Geometry that never changes in its own frame is keyed (the API's staticKey): the culler keeps a static
+        // mesh's validation and triangle boxes between frames, and a rigid one's validation and group boxes in its
+        // own frame.
+        const Motion motion = (*first.motion)[i];
+        if (motion == Motion::Static || motion == Motion::Rigid) m_objects[i].staticKey = i + 1;
     }
 }
 

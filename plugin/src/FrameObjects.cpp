@@ -179,22 +179,29 @@ std::vector<ValidatedObject> validateObjects(const std::vector<Object>& objects,
         if (o.transform != nullptr) {
             // The local box becomes the world box of its transformed corners (rounding included); the vertices
             // themselves are mapped later, only for the objects the pre-pass keeps (WorldMeshes).
-            const char* error = !isFinite(*o.transform) ? "transform has a non-finite coefficient" : nullptr;
-            if (error == nullptr) {
-                v.box = transformedBounds(*o.transform, v.box);
-                if (!v.box.isEmpty() && !v.box.isFinite()) error = "transform maps the mesh beyond the double range";
-            }
-            if (error != nullptr) {
-                rejected.push_back({id, error});
-                v.box = Aabb{};
-                continue;
-            }
+            v.localChecked = true;
+            v.localBox = v.box;
+            if (const char* error = placeTransformed(*o.transform, margin, v)) rejected.push_back({id, error});
+            continue;
         }
         v.valid = true;
         v.isMesh = true;
         if (!v.box.isEmpty()) v.box = v.box.inflated(0.5 * margin);
     }
     return out;
+}
+
+const char* placeTransformed(const Transform& t, double margin, ValidatedObject& v) {
+    const char* error = !isFinite(t) ? "transform has a non-finite coefficient" : nullptr;
+    Aabb box;
+    if (error == nullptr) {
+        box = transformedBounds(t, v.localBox);
+        if (!box.isEmpty() && !box.isFinite()) error = "transform maps the mesh beyond the double range";
+    }
+    v.valid = error == nullptr;
+    v.isMesh = v.valid;
+    v.box = error != nullptr || box.isEmpty() ? Aabb{} : box.inflated(0.5 * margin);
+    return error;
 }
 
 bool meshTouchesBox(const TriangleMesh& mesh, const Aabb& box, double margin) {

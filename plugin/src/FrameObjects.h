@@ -16,6 +16,11 @@ struct ValidatedObject {
     bool valid = false;
     bool isMesh = false;
     Aabb box;  ///< world bounds inflated by margin / 2 (empty for meshes without triangles)
+    /// A mesh that came with a transform and passed the checks in its own frame: `localBox` is its box there (not
+    /// inflated), which placeTransformed maps to `box` under any transform (StaticMeshCache keeps it while the
+    /// transform changes).
+    bool localChecked = false;
+    Aabb localBox;
 };
 
 /// Checks every object (finite coordinates, indices in range, finite non-empty proxy boxes); invalid ones go to
@@ -30,6 +35,11 @@ struct ValidatedObject {
 std::vector<ValidatedObject> validateObjects(const std::vector<Object>& objects, double margin,
                                              std::vector<ObjectDiagnostic>& rejected, TaskPool* pool = nullptr,
                                              const std::vector<std::uint8_t>* known = nullptr);
+
+/// The transform step of a mesh checked in its own frame (v.localChecked): v.box becomes the world box of
+/// transformedBounds(t, v.localBox) inflated by margin / 2, and v is valid; or returns why `t` rejects it (not finite,
+/// or it maps the mesh beyond the double range), and v is left invalid with an empty box.
+const char* placeTransformed(const Transform& t, double margin, ValidatedObject& v);
 
 /// All pairs (a < b) of valid objects whose boxes overlap, sorted: sweep and prune along the widest axis.
 std::vector<std::pair<std::uint32_t, std::uint32_t>> overlappingPairs(const std::vector<ValidatedObject>& objects);

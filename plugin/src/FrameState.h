@@ -96,6 +96,8 @@ struct FrameState {
     const TriangleMesh& meshOf(std::uint32_t o) const { return *(*objects)[o].mesh; }
     bool isMesh(std::uint32_t o) const { return valid[o].isMesh; }
     bool isActiveMesh(std::uint32_t o) const { return active[o] && valid[o].isMesh; }
+    /// A keyed mesh whose transform changed since its last frame (StaticLookup::moving), or null.
+    StaticEntry* movingEntry(std::uint32_t o) const { return statics.moving.empty() ? nullptr : statics.moving[o]; }
     bool hasWholeTree(std::uint32_t o) const { return !whole.empty() && whole[o] != 0; }
     bool pairsOnDevice(std::uint32_t o) const { return gpuLevels && !exactOnDevice.empty() && exactOnDevice[o] != 0; }
     bool overlapsPartner(std::uint32_t o, const Aabb& box) const {

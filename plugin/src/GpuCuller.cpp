@@ -149,7 +149,7 @@ private:
         Stats& stats = result.stats;
         m_statics.lookUp(objects, frame.statics);
         frame.valid = validateObjects(objects, m_settings.margin, result.rejected, &m_pool, &frame.statics.known);
-        StaticMeshCache::merge(frame.statics, frame.valid, result, stats);
+        StaticMeshCache::merge(objects, frame.statics, m_settings.margin, frame.valid, result, stats);
         stats.objects = objects.size();
         stats.rejectedObjects = result.rejected.size();
         for (std::size_t i = 0; i < objects.size(); ++i) {

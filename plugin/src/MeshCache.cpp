@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <iterator>
+#include <utility>
 
 namespace cullide {
 namespace {
@@ -12,9 +13,26 @@ bool sameTransform(const StaticEntry& e, const Transform* t) {
     return e.transformed && e.transform.linear == t->linear && e.transform.translation == t->translation;
 }
 
-bool entryHolds(const StaticEntry& e, const Object& o) {
+/// The entry's own-frame part holds for this object: the same mesh, and a transform both times or neither.
+bool ownFrameHolds(const StaticEntry& e, const Object& o) {
     return e.checked && e.version == o.version && e.vertices == o.mesh->vertices.size() &&
-           e.triangles == o.mesh->triangles.size() && sameTransform(e, o.transform);
+           e.triangles == o.mesh->triangles.size() && e.transformed == (o.transform != nullptr);
+}
+
+/// What a moving mesh keeps: its own-frame part, with this frame's transform; its world part starts over.
+void keepOwnFrame(StaticEntry& e, const Transform& t) {
+    StaticEntry kept;
+    kept.version = e.version;
+    kept.vertices = e.vertices;
+    kept.triangles = e.triangles;
+    kept.transformed = true;
+    kept.transform = t;
+    kept.checked = true;
+    kept.valid = e.valid;
+    kept.error = std::move(e.error);
+    kept.groupSize = e.groupSize;
+    kept.localGroupBoxes = std::move(e.localGroupBoxes);
+    e = std::move(kept);
 }
 
 }  // namespace
@@ -24,13 +42,22 @@ void StaticMeshCache::lookUp(const std::vector<Object>& objects, StaticLookup& l
     for (auto it = m_entries.begin(); it != m_entries.end();)
         it = it->second.lastFrame + kKeepFrames < m_frame ? m_entries.erase(it) : std::next(it);
     lookup.entry.assign(objects.size(), nullptr);
+    lookup.moving.assign(objects.size(), nullptr);
     lookup.known.assign(objects.size(), 0);
     for (std::size_t i = 0; i < objects.size(); ++i) {
         const Object& o = objects[i];
         if (o.mesh == nullptr || o.staticKey == 0) continue;
         StaticEntry& e = m_entries[o.staticKey];
         if (e.lastFrame == m_frame) continue;  // a key used twice in one frame: the second is not cached
-        if (!entryHolds(e, o)) {
+        const bool own = ownFrameHolds(e, o);
+        if (own && !sameTransform(e, o.transform)) {
+            keepOwnFrame(e, *o.transform);
+            e.lastFrame = m_frame;
+            lookup.moving[i] = &e;
+            lookup.known[i] = 1;
+            continue;
+        }
+        if (!own) {
             e = StaticEntry{};
             e.version = o.version;
             e.vertices = o.mesh->vertices.size();
@@ -44,13 +71,35 @@ void StaticMeshCache::lookUp(const std::vector<Object>& objects, StaticLookup& l
     }
 }
 
-void StaticMeshCache::merge(const StaticLookup& lookup, std::vector<ValidatedObject>& valid, Result& result,
-                            Stats& stats) {
+namespace {
+
+/// A moving mesh's validation under this frame's transform, from its own frame's (kept in the entry, which then
+/// holds this transform's).
+void placeMoving(StaticEntry& e, const Transform& t, double margin) {
+    if (!e.valid.localChecked) return;  // rejected in its own frame: so it is under any transform
+    const char* error = placeTransformed(t, margin, e.valid);
+    e.error = error != nullptr ? error : "";
+}
+
+}  // namespace
+
+void StaticMeshCache::merge(const std::vector<Object>& objects, const StaticLookup& lookup, double margin,
+                            std::vector<ValidatedObject>& valid, Result& result, Stats& stats) {
     bool added = false;
     for (std::size_t i = 0; i < lookup.entry.size(); ++i) {
         StaticEntry* e = lookup.entry[i];
-        if (e == nullptr) continue;
         const auto id = static_cast<std::uint32_t>(i);
+        if (StaticEntry* m = lookup.moving[i]) {
+            placeMoving(*m, *objects[i].transform, margin);
+            valid[i] = m->valid;
+            if (!m->error.empty()) {
+                result.rejected.push_back({id, m->error});
+                added = true;
+            }
+            ++stats.movingObjectsReused;
+            continue;
+        }
+        if (e == nullptr) continue;
         if (lookup.known[i]) {
             valid[i] = e->valid;
             if (!e->error.empty()) {

@@ -1,5 +1,7 @@
-// What the culler keeps of static meshes (Object::staticKey) between frames: their validation, triangle boxes and box
-// tree (StaticMeshCache), and their place in the device's resident region, sent once (ResidentRegion).
+// What the culler keeps of keyed meshes (Object::staticKey) between frames: for a static one, its validation,
+// triangle boxes and box tree (StaticMeshCache) and its place in the device's resident region, sent once
+// (ResidentRegion); for one whose transform changes, what it derives in the mesh's own frame (its validation and
+// its groups' boxes).
 #pragma once
 
 #include "FrameObjects.h"
@@ -15,17 +17,22 @@
 
 namespace cullide {
 
-/// One static mesh as the culler keeps it: valid while (version, vertex count, triangle count, transform) stay the
-/// same.
+/// One keyed mesh as the culler keeps it. Its own-frame part holds while (version, vertex count, triangle count,
+/// whether it has a transform) stay the same; its world part (boxes, tree, place in the region) while the transform
+/// does too.
 struct StaticEntry {
     std::uint64_t version = 0;
     std::size_t vertices = 0;
     std::size_t triangles = 0;
     bool transformed = false;
-    Transform transform;  ///< when transformed: the one the cached world boxes were built with
+    Transform transform;  ///< when transformed: the one of the last frame that had the key
     bool checked = false;
-    ValidatedObject valid;
+    ValidatedObject valid;  ///< for the last transform (with a transform: localChecked and localBox hold for any)
     std::string error;  ///< the rejection message, if it was rejected
+    /// The box of each group of k triangles of the mesh's spatial order in its own frame (not inflated; k =
+    /// groupSize), for the frames its transform changes (MovingGroupBoxes).
+    std::uint32_t groupSize = 0;
+    std::vector<Aabb> localGroupBoxes;
     bool boxesReady = false;
     std::vector<Aabb> boxes;  ///< every triangle's world box, inflated by margin / 2 (when boxesReady)
     bool treeReady = false;
@@ -37,7 +44,12 @@ struct StaticEntry {
 
 /// The frame's view of the cache, per object.
 struct StaticLookup {
-    std::vector<StaticEntry*> entry;  ///< null: not static, or its key was already used this frame
+    /// A static mesh this frame: keyed, first seen or with the transform of its last frame. Null: not keyed, its key
+    /// was already used this frame, or it moved (`moving`).
+    std::vector<StaticEntry*> entry;
+    /// A keyed mesh with a transform other than its last frame's (a rigid body in motion): this frame it is culled as
+    /// an unkeyed one, except for what holds in its own frame (validation, group boxes). Null otherwise.
+    std::vector<StaticEntry*> moving;
     std::vector<std::uint8_t> known;  ///< 1: validated in an earlier frame (validateObjects skips it)
 };
 
@@ -47,13 +59,15 @@ public:
     /// to the culler by the adapter; it comes back when something approaches).
     static constexpr std::uint64_t kKeepFrames = 240;
 
-    /// Starts a frame: drops stale entries and finds (or makes) each static object's entry. An entry whose mesh
-    /// version, sizes or transform changed starts over.
+    /// Starts a frame: drops stale entries and finds (or makes) each keyed object's entry. An entry whose mesh
+    /// version or sizes changed starts over; one whose transform alone changed keeps its own-frame part (moving).
     void lookUp(const std::vector<Object>& objects, StaticLookup& lookup);
 
-    /// After validateObjects (which skipped the known objects): known entries' validation into the frame (their
-    /// rejections into `result.rejected`, kept sorted by object), new entries' validation into the cache.
-    static void merge(const StaticLookup& lookup, std::vector<ValidatedObject>& valid, Result& result, Stats& stats);
+    /// After validateObjects (which skipped the known objects): known entries' validation into the frame (a moving
+    /// one's placed by this frame's transform, placeTransformed; rejections into `result.rejected`, kept sorted by
+    /// object), new entries' validation into the cache.
+    static void merge(const std::vector<Object>& objects, const StaticLookup& lookup, double margin,
+                      std::vector<ValidatedObject>& valid, Result& result, Stats& stats);
 
     std::size_t size() const { return m_entries.size(); }
 

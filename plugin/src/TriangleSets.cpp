@@ -2,6 +2,7 @@
 
 #include "KeptCapacity.h"
 #include "PoolOrHere.h"
+#include "WorldMeshes.h"
 
 #include <algorithm>
 
@@ -77,15 +78,40 @@ Aabb groupBounds(const TriangleMesh& mesh, const std::vector<std::uint32_t>& ord
     return box;
 }
 
-/// Every group of k triangles of the active meshes, with its box (from the triangle boxes of a static mesh, from the
-/// vertices of any other); kept (frame.groups) when `prepass` is off or its box overlaps a partner's.
+/// Makes room for a moving mesh's own-frame group boxes (StaticEntry::localGroupBoxes) where it has none for groups
+/// of k; returns whether they are computed this frame.
+bool prepareLocalGroupBoxes(StaticEntry& e, std::size_t triangles, std::uint32_t k) {
+    const std::size_t groups = (triangles + k - 1) / k;
+    if (e.groupSize == k && e.localGroupBoxes.size() == groups) return false;
+    e.groupSize = k;
+    e.localGroupBoxes.assign(groups, Aabb{});
+    return true;
+}
+
+/// A moving mesh's group box: the world box of its box in the mesh's own frame (computed now where `compute`), which
+/// holds every transformed vertex of the group (transformedBounds), inflated. It holds the group's triangles' boxes
+/// (an exact box would cost mapping its vertices); only the CPU's box pre-pass reads it: the device builds the groups'
+/// boxes of a mapped mesh from its vertices.
+Aabb movingGroupBox(const FrameState& frame, const Group& g, std::uint32_t k, bool compute, double inflate) {
+    StaticEntry& e = *frame.movingEntry(g.object);
+    const Object& input = (*frame.inputs)[g.object];
+    Aabb& local = e.localGroupBoxes[g.first / k];
+    if (compute) local = groupBounds(*input.mesh, *frame.order[g.object], g.first, g.count, 0.0);
+    return transformedBounds(*input.transform, local).inflated(inflate);
+}
+
+/// Every group of k triangles of the active meshes, with its box (from the triangle boxes of a static mesh, from its
+/// box in the mesh's own frame for a moving one, from the vertices of any other); kept (frame.groups) when `prepass` is
+/// off or its box overlaps a partner's.
 void buildGroups(FrameState& frame, std::uint32_t k, double margin, bool prepass, TaskPool& pool,
                  TriangleScratch& scratch, Stats& stats) {
     std::vector<Group>& candidates = frame.allGroups;
     candidates.clear();
+    scratch.computeLocalGroups.assign(frame.valid.size(), 0);
     for (std::uint32_t o = 0; o < frame.valid.size(); ++o) {
         if (!frame.isActiveMesh(o)) continue;
         const auto n = static_cast<std::uint32_t>(frame.meshOf(o).triangles.size());
+        if (StaticEntry* e = frame.movingEntry(o)) scratch.computeLocalGroups[o] = prepareLocalGroupBoxes(*e, n, k);
         for (std::uint32_t first = 0; first < n; first += k) {
             const auto index = static_cast<std::uint32_t>(candidates.size());
             candidates.push_back({o, first, std::min(k, n - first), {}, index});
@@ -96,7 +122,9 @@ void buildGroups(FrameState& frame, std::uint32_t k, double margin, bool prepass
         for (std::size_t i = begin; i < end; ++i) {
             Group& g = candidates[i];
             const std::vector<std::uint32_t>& order = *frame.order[g.object];
-            if (boxesOnDemand(frame, g.object)) {
+            if (frame.movingEntry(g.object) != nullptr) {
+                g.box = movingGroupBox(frame, g, k, scratch.computeLocalGroups[g.object] != 0, 0.5 * margin);
+            } else if (boxesOnDemand(frame, g.object)) {
                 g.box = groupBounds(frame.meshOf(g.object), order, g.first, g.count, 0.5 * margin);
             } else {
                 const std::vector<Aabb>& boxes = *frame.boxesOf[g.object];

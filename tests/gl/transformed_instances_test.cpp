@@ -4,6 +4,7 @@
 #include "GlTestSupport.h"
 #include "Instances.h"
 #include "VisibilityLockstep.h"
+#include "cullide/scenes/Procedural.h"
 
 #include <Eigen/Geometry>
 
@@ -125,6 +126,94 @@ TEST(TransformedInstances, StaticKeyFollowsTheTransform) {
     }
     EXPECT_GT(pairs, 30u);
     EXPECT_GE(changes, 4u) << "the moves must change the pairs";
+}
+
+// Keyed instances in motion (a rigid body's staticKey, its transform changing every frame) keep their checks in their
+// own frame, and their group boxes there, between frames: the same pairs as unkeyed instances and the exact
+// reference's, every level in lockstep with the reference where GPU levels run; a mesh whose version changes is
+// checked again.
+class KeyedInstancesInMotion : public ::testing::TestWithParam<GpuLevels> {};
+
+TEST_P(KeyedInstancesInMotion, KeepTheirOwnFrameAndMatchTheReference) {
+    Settings settings = lockstepSettings({Pipeline::Auto, Mode::Reliable, Backend::Compute, 64});
+    settings.gpuLevels = GetParam();
+    CULLIDE_GPU_CULLER_OR_SKIP(unkeyed, settings);
+    auto log = std::make_shared<LockstepLog>();
+    std::unique_ptr<Culler> culler = createGpuCuller(settings, lockstepFactory(log));
+    std::unique_ptr<Culler> reference = createReferenceCuller(settings);
+    InstanceScene scene = randomInstances(11, 24, true, 6);
+    std::vector<std::uint64_t> version(scene.meshes.size(), 1);
+    std::size_t pairs = 0, groupsKept = 0;
+    for (int frame = 0; frame < 5; ++frame) {
+        std::vector<Object> objects = scene.instances();
+        std::size_t ofChangedMesh = 0;
+        for (std::size_t i = 0; i < objects.size(); ++i) {
+            objects[i].staticKey = i + 1;
+            objects[i].version = version[scene.meshOf[i]];
+            ofChangedMesh += frame == 3 && scene.meshOf[i] == 0 ? 1 : 0;
+        }
+        Result got, plain;
+        const Comparison c = runAndCompare(*culler, *reference, objects, got);
+        EXPECT_EQ(got.stats.gpuFallbacks, 0u) << got.stats.gpuError;
+        EXPECT_EQ(c.missed, 0u) << "frame " << frame << ": " << c.firstMissed;
+        EXPECT_EQ(c.spurious, 0u) << frame;
+        unkeyed->run(scene.instances(), plain);
+        EXPECT_EQ(trianglePairs(got), trianglePairs(plain)) << frame;
+        EXPECT_EQ(got.stats.movingObjectsReused, frame == 0 ? 0u : objects.size() - ofChangedMesh) << frame;
+        pairs += c.expected;
+        groupsKept += got.stats.prepassGroupsOut;
+        for (Transform& t : scene.transforms) {
+            t.translation += Vec3(0.011, -0.007, 0.005);
+            t.linear = Eigen::AngleAxisd(0.03, Vec3(0.3, 1.0, -0.2).normalized()).toRotationMatrix() * t.linear;
+        }
+        if (frame == 2) {  // a shared mesh deforms in its own frame, and says so
+            for (Vec3& v : scene.meshes[0].vertices) v = Vec3(1.2 * v.x(), v.y(), 0.8 * v.z());
+            ++version[0];
+        }
+        scene.refreshWorldMeshes();
+    }
+    EXPECT_EQ(log->mismatches, 0u) << log->summary();
+    EXPECT_GT(pairs, 20u) << "too sparse to test anything";
+    if (GetParam() == GpuLevels::Always) {
+        EXPECT_GT(log->itemsPruned, 0u) << log->summary();
+        EXPECT_GT(groupsKept, 0u);
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Levels, KeyedInstancesInMotion, ::testing::Values(GpuLevels::Never, GpuLevels::Always));
+
+// A moving keyed mesh that changes in its own frame (a new version) gets its own-frame group boxes again: kept ones
+// would let the CPU's box pre-pass drop the groups that now reach another object.
+TEST(KeyedInstancesInMotion, AVersionChangeRecomputesTheOwnFrameGroupBoxes) {
+    Settings settings = withLevels(GpuLevels::Always, Pipeline::Auto);
+    CULLIDE_GPU_CULLER_OR_SKIP(culler, settings);
+    auto reference = createReferenceCuller(settings);
+    TriangleMesh sphere = scenes::makeSphere(1.0, 32, 16);
+    // A slab in a corner of the sphere's box, outside the sphere until the sphere moves in its own frame.
+    TriangleMesh slab = scenes::makeBox(Vec3(0.1, 0.2, 0.2));
+    for (Vec3& v : slab.vertices) v += Vec3(1.05, 0.8, 0.8);
+    Transform t;
+    std::size_t pairsAfter = 0;
+    for (int frame = 0; frame < 4; ++frame) {
+        if (frame == 2)
+            for (Vec3& v : sphere.vertices) v += Vec3(0.3, 0.3, 0.3);
+        t.translation = Vec3(0.0, 1e-3 * frame, 0.0);  // it moves every frame
+        Object body;
+        body.mesh = &sphere;
+        body.transform = &t;
+        body.staticKey = 1;
+        body.version = frame < 2 ? 1 : 2;
+        Object other;
+        other.mesh = &slab;
+        const std::vector<Object> objects = {body, other};
+        Result got;
+        const Comparison c = runAndCompare(*culler, *reference, objects, got);
+        EXPECT_EQ(got.stats.gpuFallbacks, 0u) << got.stats.gpuError;
+        EXPECT_EQ(c.missed, 0u) << "frame " << frame << ": " << c.firstMissed;
+        EXPECT_EQ(got.stats.movingObjectsReused, frame == 1 || frame == 3 ? 1u : 0u) << frame;
+        if (frame >= 2) pairsAfter += c.expected;
+    }
+    EXPECT_GT(pairsAfter, 0u) << "the sphere must reach the slab";
 }
 
 }  // namespace

@@ -17,6 +17,15 @@
 namespace cullide::test {
 namespace {
 
+/// A validated object (the fields the tests set).
+ValidatedObject validated(bool valid, bool isMesh, const Aabb& box) {
+    ValidatedObject v;
+    v.valid = valid;
+    v.isMesh = isMesh;
+    v.box = box;
+    return v;
+}
+
 using scenes::makeBox;
 using scenes::transformMesh;
 
@@ -57,9 +66,9 @@ TEST(ClusterGeometry, StaticMeshesAreSentOnceAndOthersEveryUpload) {
     const std::vector<Object> objects = {staticObject(ground, 1), Object{}, staticObject(body, 0)};
     FrameState frame;
     frame.objects = &objects;
-    frame.valid = {ValidatedObject{true, true, {Vec3(-4, -4, -0.5), Vec3(4, 4, 0.5)}},
-                   ValidatedObject{true, false, {Vec3(3, 3, 0), Vec3(5, 5, 1)}},
-                   ValidatedObject{true, true, {Vec3(-0.5, -0.5, 0.4), Vec3(0.5, 0.5, 1.4)}}};
+    frame.valid = {validated(true, true, {Vec3(-4, -4, -0.5), Vec3(4, 4, 0.5)}),
+                   validated(true, false, {Vec3(3, 3, 0), Vec3(5, 5, 1)}),
+                   validated(true, true, {Vec3(-0.5, -0.5, 0.4), Vec3(0.5, 0.5, 1.4)})};
     Cluster cluster;
     cluster.objects = {0, 1, 2};
     frame.allGroups = {Group{2, 0, 12, frame.valid[2].box, 0}};
@@ -106,8 +115,8 @@ TEST(ClusterGeometry, OnlyWhatChangedSinceTheLastUploadIsSent) {
     const std::vector<Object> objects = {staticObject(ground, 1), staticObject(body, 0)};
     FrameState frame;
     frame.objects = &objects;
-    frame.valid = {ValidatedObject{true, true, {Vec3(-4, -4, -0.5), Vec3(4, 4, 0.5)}},
-                   ValidatedObject{true, true, {Vec3(-0.5, -0.5, -0.5), Vec3(0.5, 0.5, 0.5)}}};
+    frame.valid = {validated(true, true, {Vec3(-4, -4, -0.5), Vec3(4, 4, 0.5)}),
+                   validated(true, true, {Vec3(-0.5, -0.5, -0.5), Vec3(0.5, 0.5, 0.5)})};
     Cluster cluster;
     cluster.objects = {0, 1};
     StaticMeshCache cache;
@@ -152,7 +161,7 @@ TEST(ClusterGeometry, MeshesKeepTheirPlacesWhileOthersComeAndGo) {
     frame.objects = &objects;
     for (std::size_t i = 0; i < 3; ++i) {
         objects[i].mesh = &meshes[i];
-        frame.valid.push_back(ValidatedObject{true, true, {Vec3::Constant(-0.5), Vec3::Constant(0.5)}});
+        frame.valid.push_back(validated(true, true, {Vec3::Constant(-0.5), Vec3::Constant(0.5)}));
     }
     StaticMeshCache cache;
     ClusterGeometry geometry;
@@ -192,8 +201,8 @@ TEST(ClusterGeometry, GroupBoxesStayInPlaceWhateverThePrepassKeeps) {
     objects[1].mesh = &b;  // not static
     FrameState frame;
     frame.objects = &objects;
-    frame.valid = {ValidatedObject{true, true, {Vec3::Constant(-0.5), Vec3::Constant(0.5)}},
-                   ValidatedObject{true, true, {Vec3(0.1, -0.5, -0.5), Vec3(1.1, 0.5, 0.5)}}};
+    frame.valid = {validated(true, true, {Vec3::Constant(-0.5), Vec3::Constant(0.5)}),
+                   validated(true, true, {Vec3(0.1, -0.5, -0.5), Vec3(1.1, 0.5, 0.5)})};
     StaticMeshCache cache;
     // Three groups of four triangles per mesh, a box apiece that tells them apart.
     for (std::uint32_t k = 0; k < 6; ++k) {
@@ -281,8 +290,8 @@ TEST(ClusterGeometry, AMeshWithATransformGoesInItsOwnFrameAndMapsToItsWorldTwin)
             world.vertices[v] = transformPoint(t, local.vertices[v]);
             localBox.grow(local.vertices[v]);
         }
-        const std::vector<ValidatedObject> valid = {ValidatedObject{true, true, {Vec3(-4, -4, -0.5), Vec3(4, 4, 0.5)}},
-                                                    ValidatedObject{true, true, transformedBounds(t, localBox)}};
+        const std::vector<ValidatedObject> valid = {validated(true, true, {Vec3(-4, -4, -0.5), Vec3(4, 4, 0.5)}),
+                                                    validated(true, true, transformedBounds(t, localBox))};
         mappedFrame.valid = valid;
         twinFrame.valid = valid;
         mappedFrame.statics = lookUpAndCheck(mappedCache, inputs);

@@ -6,6 +6,9 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
+#include <limits>
 #include <vector>
 
 namespace cullide::test {
@@ -39,9 +42,71 @@ TEST(StaticMeshCache, KeepsAnEntryUntilItsMeshOrTransformChanges) {
     EXPECT_EQ(lookUpAndCheck(cache, objects).known[0], 1);
     Transform same = moved;  // another Transform with the same coefficients: the same entry
     objects[0].transform = &same;
-    EXPECT_EQ(lookUpAndCheck(cache, objects).known[0], 1);
-    same.translation[2] = 1e-300;
+    const StaticLookup kept = lookUpAndCheck(cache, objects);
+    EXPECT_EQ(kept.known[0], 1);
+    EXPECT_NE(kept.entry[0], nullptr);
+    EXPECT_EQ(kept.moving[0], nullptr);
+    kept.entry[0]->boxesReady = true;
+    same.translation[2] = 1e-300;  // moved: its checks in its own frame hold, its world boxes do not
+    const StaticLookup moving = lookUpAndCheck(cache, objects);
+    EXPECT_EQ(moving.known[0], 1);
+    EXPECT_EQ(moving.entry[0], nullptr);
+    ASSERT_NE(moving.moving[0], nullptr);
+    EXPECT_FALSE(moving.moving[0]->boxesReady);
+    const StaticLookup rests = lookUpAndCheck(cache, objects);  // the same transform again: static once more
+    EXPECT_EQ(rests.known[0], 1);
+    EXPECT_NE(rests.entry[0], nullptr);
+    EXPECT_EQ(rests.moving[0], nullptr);
+    objects[0].transform = nullptr;  // the mesh now in world space: another mesh, under the same key
     EXPECT_EQ(lookUpAndCheck(cache, objects).known[0], 0);
+}
+
+namespace {
+
+/// One frame through the cache and validation, as the culler runs them.
+std::vector<ValidatedObject> validateFrame(StaticMeshCache& cache, const std::vector<Object>& objects, double margin,
+                                           Result& result) {
+    StaticLookup lookup;
+    cache.lookUp(objects, lookup);
+    std::vector<ValidatedObject> valid = validateObjects(objects, margin, result.rejected, nullptr, &lookup.known);
+    StaticMeshCache::merge(objects, lookup, margin, valid, result, result.stats);
+    return valid;
+}
+
+}  // namespace
+
+TEST(StaticMeshCache, AMovingMeshIsPlacedByEachFramesTransform) {
+    const TriangleMesh box = makeBox(Vec3(1, 2, 3));
+    TriangleMesh broken = makeBox(Vec3::Ones());
+    broken.vertices[2][0] = std::numeric_limits<double>::quiet_NaN();
+    Transform t;
+    t.translation = Vec3(10, 0, 0);
+    Transform u = t;
+    StaticMeshCache cache;
+    std::vector<Object> objects = {staticObject(box, 1, 1, &t), staticObject(broken, 2, 1, &u)};
+    const double margin = 0.25;
+    for (int frame = 0; frame < 5; ++frame) {
+        Result result;
+        const std::vector<ValidatedObject> valid = validateFrame(cache, objects, margin, result);
+        Result fresh;  // the same frame validated from scratch
+        const std::vector<ValidatedObject> expected = validateObjects(objects, margin, fresh.rejected);
+        EXPECT_EQ(result.stats.movingObjectsReused, frame == 0 ? 0u : 2u) << frame;
+        ASSERT_EQ(result.rejected.size(), fresh.rejected.size()) << frame;
+        for (std::size_t i = 0; i < result.rejected.size(); ++i) {
+            EXPECT_EQ(result.rejected[i].object, fresh.rejected[i].object) << frame;
+            EXPECT_EQ(result.rejected[i].message, fresh.rejected[i].message) << frame;
+        }
+        for (std::size_t i = 0; i < objects.size(); ++i) {
+            EXPECT_EQ(valid[i].valid, expected[i].valid) << frame << " object " << i;
+            EXPECT_EQ(valid[i].box.min, expected[i].box.min) << frame << " object " << i;
+            EXPECT_EQ(valid[i].box.max, expected[i].box.max) << frame << " object " << i;
+        }
+        // Both move every frame; in frame 2 the first one's transform is not finite.
+        t.linear = Eigen::AngleAxisd(0.4 * (frame + 1), Vec3(1, 2, 3).normalized()).toRotationMatrix();
+        t.translation += Vec3(0.5, -0.25, 2.0);
+        t.translation[1] = frame == 1 ? std::numeric_limits<double>::infinity() : 0.0;
+        u.translation += Vec3(1, 1, 1);
+    }
 }
 
 TEST(StaticMeshCache, AKeyUsedTwiceInOneFrameIsCachedForTheFirstOnly) {
@@ -76,7 +141,7 @@ TEST(StaticMeshCache, MergeReplaysRejectionsInObjectOrder) {
         cache.lookUp(objects, lookup);
         Result result;
         std::vector<ValidatedObject> valid = validateObjects(objects, 0.0, result.rejected, nullptr, &lookup.known);
-        StaticMeshCache::merge(lookup, valid, result, result.stats);
+        StaticMeshCache::merge(objects, lookup, 0.0, valid, result, result.stats);
         ASSERT_EQ(result.rejected.size(), 1u) << frame;
         EXPECT_EQ(result.rejected[0].object, 1u);
         EXPECT_FALSE(valid[1].valid);

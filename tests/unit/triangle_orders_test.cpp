@@ -15,10 +15,19 @@
 namespace cullide::test {
 namespace {
 
+/// A validated object (the fields the tests set).
+ValidatedObject validated(bool valid, bool isMesh, const Aabb& box) {
+    ValidatedObject v;
+    v.valid = valid;
+    v.isMesh = isMesh;
+    v.box = box;
+    return v;
+}
+
 /// A frame in which every object is a valid, active mesh (what TriangleOrders::assign looks at).
 FrameState activeFrame(std::size_t objects) {
     FrameState frame;
-    frame.valid.assign(objects, ValidatedObject{true, true, Aabb{}});
+    frame.valid.assign(objects, validated(true, true, Aabb{}));
     frame.active.assign(objects, 1);
     return frame;
 }

@@ -70,10 +70,17 @@ CulledObject& CullFrame::enter(btBroadphaseProxy* p, std::uint64_t step, Cullide
                 c.worldValid = false;
             }
             // The shape's local mesh and this step's transform: the culler maps the vertices only if the object
-            // comes near another one (the same arithmetic as updateWorld, see toTransform).
+            // comes near another one (the same arithmetic as updateWorld, see toTransform). Keyed: the culler keeps
+            // its checks in its own frame while it moves.
             c.toWorld = toTransform(obj->getWorldTransform());
             o.mesh = &c.geometry->local;
             o.transform = &c.toWorld;
+            if (c.keyedGeometry.lock() != c.geometry) {
+                ++c.version;
+                c.keyedGeometry = c.geometry;
+            }
+            o.staticKey = c.key;
+            o.version = c.version;
         }
         for (int k = 0; k < 3; ++k)
             entry.coordinate = std::max({entry.coordinate, std::fabs(double(p->m_aabbMin[k])),

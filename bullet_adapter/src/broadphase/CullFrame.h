@@ -1,6 +1,7 @@
 // What the broadphase hands to the culler each step: the objects of the pairs that go through it (meshes in their
-// own frame with their transform, shared per shape; static ones world-space, kept between steps with the culler's
-// static cache; box proxies for the rest), those pairs by object index, and what the margin rule needs of each.
+// own frame with their transform, shared per shape, keyed so that the culler keeps their checks there; static ones
+// world-space, kept between steps with the culler's static cache; box proxies for the rest), those pairs by object
+// index, and what the margin rule needs of each.
 #pragma once
 
 #include "broadphase/CullingPolicy.h"
@@ -35,7 +36,10 @@ struct CulledObject {
     /// object that moved since is culled as a moving one (local mesh + transform, no world-space copy kept).
     btTransform lastFrom;
     bool seen = false;
+    /// The culler's Object::version under `key`: bumped when the world-space copy changes, and when the geometry
+    /// handed over in its own frame is another than the one the culler last had under the key (keyedGeometry).
     std::uint64_t version = 0;
+    std::weak_ptr<const ShapeTriangles> keyedGeometry;
     // This step.
     std::uint64_t step = 0;       ///< the last step it entered the culling frame
     std::uint32_t cullIndex = 0;  ///< its index in that step's objects

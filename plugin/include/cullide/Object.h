@@ -22,14 +22,19 @@ struct Object {
     const Transform* transform = nullptr;
     /// Box-only proxy (used when mesh == nullptr). Must be finite.
     Aabb box;
-    /// Non-zero: a caller-chosen identity for a mesh that does not change between frames (static geometry), with
-    /// `version` changed by the caller whenever its vertices or triangles do. The culler keeps what it derives from
-    /// such a mesh (its validation, its triangle boxes, its box tree: about 80 bytes per triangle) between frames and
-    /// recomputes it only when (staticKey, version, vertex count, triangle count, transform) differ: changing the mesh
-    /// without changing `version` is an error (stale boxes can miss contacts). Entries unused for 240 frames are
-    /// dropped. A key used by two objects of one frame is cached for the first only. When GPU levels run, such a mesh
-    /// is sent to the device once and kept there while the scene stays around the same place (see
-    /// docs/architecture.md).
+    /// Non-zero: a caller-chosen identity for a mesh that does not change between frames, with `version` changed by
+    /// the caller whenever its vertices or triangles do: changing the mesh without changing `version` is an error
+    /// (stale boxes can miss contacts). The culler keeps what it derives from such a mesh between frames:
+    /// - while (staticKey, version, vertex count, triangle count, transform) stay the same (static geometry): its
+    ///   validation, its triangle boxes and its box tree (about 80 bytes per triangle). When GPU levels run, the mesh
+    ///   is sent to the device once and kept there while the scene stays around the same place (see
+    ///   docs/architecture.md).
+    /// - with a transform that changes (a rigid body in motion): what holds in the mesh's own frame, its validation
+    ///   and, when GPU levels run, its groups' boxes there (a few bytes per triangle); the frame it keeps its last
+    ///   frame's transform, it counts as static geometry again.
+    /// Everything is recomputed when key, version or counts change, or when the mesh comes with a transform where it
+    /// came without one (or the other way round). Entries unused for 240 frames are dropped. A key used by two
+    /// objects of one frame is cached for the first only.
     std::uint64_t staticKey = 0;
     std::uint64_t version = 0;
 };

@@ -133,6 +133,9 @@ struct Stats {
     /// why. The next frame tries the GPU again.
     std::size_t gpuFallbacks = 0;
     std::size_t staticObjectsReused = 0;  ///< static meshes (Object::staticKey) whose checks and boxes were kept
+    /// Keyed meshes whose transform changed since their last frame: their checks in their own frame were kept (and,
+    /// with GPU levels, their groups' boxes there), not their world boxes.
+    std::size_t movingObjectsReused = 0;
     std::string gpuError;
     std::size_t bytesUploaded = 0;
     /// What the culler holds on its GL device after the frame: buffer capacities plus the view images.

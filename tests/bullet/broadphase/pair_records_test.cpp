@@ -7,6 +7,7 @@
 // orientation, sorted; other kept pairs get no record; interpenetrating GImpact pairs skip the culler for
 // kPenetrationRecheck steps; records go with their proxy and with the step.
 #include "BulletTestWorld.h"
+#include "ProxyBody.h"
 #include "broadphase/CullFrame.h"
 #include "broadphase/PairRecords.h"
 
@@ -35,25 +36,7 @@ namespace {
 using bullet::CullFrame;
 using bullet::PairRecords;
 
-/// A collision object with its broadphase proxy, its unique id chosen by the test (the record's key, and which
-/// object is the record's first: the lower id).
-struct Body {
-    btCollisionObject object;
-    btBroadphaseProxy proxy;
-
-    Body(btCollisionShape* shape, const btTransform& t, int uniqueId) {
-        object.setCollisionShape(shape);
-        object.setWorldTransform(t);
-        object.setCollisionFlags(0);  // a moving body
-        btVector3 min, max;
-        shape->getAabb(t, min, max);
-        proxy = btBroadphaseProxy(min, max, &object, 1, -1);
-        proxy.m_uniqueId = uniqueId;
-        object.setBroadphaseHandle(&proxy);
-    }
-    Body(const Body&) = delete;
-    Body& operator=(const Body&) = delete;
-};
+using Body = ProxyBody;
 
 /// find() for the two bodies' own wrappers (the object's shape and world transform), x as wrapper 0.
 const PairTriangles* lookUp(const PairRecords& records, const Body& x, const Body& y, bool& swapped) {
