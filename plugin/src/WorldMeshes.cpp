@@ -3,6 +3,8 @@
 #include "KeptCapacity.h"
 #include "PoolOrHere.h"
 
+#include <algorithm>
+
 namespace cullide {
 
 Vec3 transformPoint(const Transform& t, const Vec3& p) {
@@ -40,30 +42,46 @@ const std::vector<Object>& WorldMeshes::resolve(const std::vector<Object>& objec
                                                 const std::vector<std::uint8_t>& needed, TaskPool* pool) {
     m_objects = objects;
     m_meshes.resize(objects.size());
-    std::vector<std::uint32_t> todo;
+    // Ranges of vertices, so that one large mesh is mapped on every worker; a mesh's triangles are copied with its
+    // first range.
+    struct Range {
+        std::uint32_t object;
+        std::size_t begin;
+        std::size_t end;
+    };
+    std::vector<Range> ranges;
+    std::size_t vertices = 0;
+    for (std::size_t i = 0; i < objects.size(); ++i) {
+        const Object& o = objects[i];
+        if (o.mesh != nullptr && o.transform != nullptr && needed[i]) vertices += o.mesh->vertices.size();
+    }
+    const std::size_t chunk = chunkFor(pool, vertices, 2048, 16384);
     for (std::size_t i = 0; i < objects.size(); ++i) {
         Object& o = m_objects[i];
         if (o.mesh == nullptr || o.transform == nullptr || !needed[i]) {
             if (m_meshes[i].vertices.capacity() != 0) m_meshes[i] = TriangleMesh{};  // bounded memory: release
             continue;
         }
-        todo.push_back(static_cast<std::uint32_t>(i));
+        const std::size_t n = o.mesh->vertices.size();
+        resizeKeeping(m_meshes[i].vertices, n);
+        for (std::size_t first = 0; first == 0 || first < n; first += chunk)
+            ranges.push_back({static_cast<std::uint32_t>(i), first, std::min(n, first + chunk)});
     }
     auto build = [&](std::size_t begin, std::size_t end) {
         for (std::size_t k = begin; k < end; ++k) {
-            const std::uint32_t i = todo[k];
-            const Object& in = objects[i];
-            TriangleMesh& world = m_meshes[i];
-            resizeKeeping(world.vertices, in.mesh->vertices.size());
-            for (std::size_t v = 0; v < world.vertices.size(); ++v)
+            const Range& r = ranges[k];
+            const Object& in = objects[r.object];
+            TriangleMesh& world = m_meshes[r.object];
+            for (std::size_t v = r.begin; v < r.end; ++v)
                 world.vertices[v] = transformPoint(*in.transform, in.mesh->vertices[v]);
-            world.triangles = in.mesh->triangles;
+            if (r.begin == 0) world.triangles = in.mesh->triangles;
         }
     };
-    parallelForOrHere(pool, todo.size(), 1, build);
-    for (const std::uint32_t i : todo) {
-        m_objects[i].mesh = &m_meshes[i];
-        m_objects[i].transform = nullptr;
+    parallelForOrHere(pool, ranges.size(), 1, build);
+    for (const Range& r : ranges) {
+        if (r.begin != 0) continue;
+        m_objects[r.object].mesh = &m_meshes[r.object];
+        m_objects[r.object].transform = nullptr;
     }
     return m_objects;
 }
