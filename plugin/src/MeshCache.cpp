@@ -27,7 +27,7 @@ void keepOwnFrame(StaticEntry& e, const Transform& t) {
     kept.triangles = e.triangles;
     kept.transformed = true;
     kept.transform = t;
-    kept.checked = true;
+    kept.checked = e.checked;
     kept.valid = e.valid;
     kept.error = std::move(e.error);
     kept.groupSize = e.groupSize;
@@ -50,24 +50,23 @@ void StaticMeshCache::lookUp(const std::vector<Object>& objects, StaticLookup& l
         StaticEntry& e = m_entries[o.staticKey];
         if (e.lastFrame == m_frame) continue;  // a key used twice in one frame: the second is not cached
         const bool own = ownFrameHolds(e, o);
-        if (own && !sameTransform(e, o.transform)) {
-            keepOwnFrame(e, *o.transform);
-            e.lastFrame = m_frame;
-            lookup.moving[i] = &e;
-            lookup.known[i] = 1;
-            continue;
-        }
         if (!own) {
             e = StaticEntry{};
             e.version = o.version;
             e.vertices = o.mesh->vertices.size();
             e.triangles = o.mesh->triangles.size();
             e.transformed = o.transform != nullptr;
-            if (e.transformed) e.transform = *o.transform;
         }
         e.lastFrame = m_frame;
-        lookup.entry[i] = &e;
         lookup.known[i] = e.checked ? 1 : 0;
+        // A mesh with a transform is static geometry once it keeps its transform from one frame to the next; until
+        // then (first seen, or moved) only its own-frame part is kept: a moving body pays for no world part.
+        if (o.transform != nullptr && (!own || !sameTransform(e, o.transform))) {
+            keepOwnFrame(e, *o.transform);
+            lookup.moving[i] = &e;
+        } else {
+            lookup.entry[i] = &e;
+        }
     }
 }
 
@@ -87,32 +86,24 @@ void StaticMeshCache::merge(const std::vector<Object>& objects, const StaticLook
                             std::vector<ValidatedObject>& valid, Result& result, Stats& stats) {
     bool added = false;
     for (std::size_t i = 0; i < lookup.entry.size(); ++i) {
-        StaticEntry* e = lookup.entry[i];
-        const auto id = static_cast<std::uint32_t>(i);
-        if (StaticEntry* m = lookup.moving[i]) {
-            placeMoving(*m, *objects[i].transform, margin);
-            valid[i] = m->valid;
-            if (!m->error.empty()) {
-                result.rejected.push_back({id, m->error});
-                added = true;
-            }
-            ++stats.movingObjectsReused;
-            continue;
-        }
+        StaticEntry* e = lookup.entry[i] != nullptr ? lookup.entry[i] : lookup.moving[i];
         if (e == nullptr) continue;
-        if (lookup.known[i]) {
-            valid[i] = e->valid;
-            if (!e->error.empty()) {
-                result.rejected.push_back({id, e->error});
-                added = true;
-            }
-            ++stats.staticObjectsReused;
+        const auto id = static_cast<std::uint32_t>(i);
+        if (!lookup.known[i]) {  // validated this frame: kept
+            e->checked = true;
+            e->valid = valid[i];
+            for (const ObjectDiagnostic& d : result.rejected)
+                if (d.object == id) e->error = d.message;
             continue;
         }
-        e->checked = true;
-        e->valid = valid[i];
-        for (const ObjectDiagnostic& d : result.rejected)
-            if (d.object == id) e->error = d.message;
+        const bool moving = lookup.moving[i] != nullptr;
+        if (moving) placeMoving(*e, *objects[i].transform, margin);
+        valid[i] = e->valid;
+        if (!e->error.empty()) {
+            result.rejected.push_back({id, e->error});
+            added = true;
+        }
+        ++(moving ? stats.movingObjectsReused : stats.staticObjectsReused);
     }
     if (added)
         std::stable_sort(result.rejected.begin(), result.rejected.end(),

@@ -44,11 +44,12 @@ struct StaticEntry {
 
 /// The frame's view of the cache, per object.
 struct StaticLookup {
-    /// A static mesh this frame: keyed, first seen or with the transform of its last frame. Null: not keyed, its key
-    /// was already used this frame, or it moved (`moving`).
+    /// A static mesh this frame: keyed, in world space or with the transform it had in its last frame. Null: not
+    /// keyed, its key was already used this frame, or it is `moving`.
     std::vector<StaticEntry*> entry;
-    /// A keyed mesh with a transform other than its last frame's (a rigid body in motion): this frame it is culled as
-    /// an unkeyed one, except for what holds in its own frame (validation, group boxes). Null otherwise.
+    /// A keyed mesh with a transform, first seen or with another transform than in its last frame (a rigid body in
+    /// motion): this frame it is culled as an unkeyed one, except for what holds in its own frame (validation, group
+    /// boxes), kept. Null otherwise.
     std::vector<StaticEntry*> moving;
     std::vector<std::uint8_t> known;  ///< 1: validated in an earlier frame (validateObjects skips it)
 };
@@ -60,7 +61,8 @@ public:
     static constexpr std::uint64_t kKeepFrames = 240;
 
     /// Starts a frame: drops stale entries and finds (or makes) each keyed object's entry. An entry whose mesh
-    /// version or sizes changed starts over; one whose transform alone changed keeps its own-frame part (moving).
+    /// version or sizes changed starts over; one whose transform alone changed keeps its own-frame part (moving). A
+    /// mesh with a transform is static from the second frame in a row with the same transform.
     void lookUp(const std::vector<Object>& objects, StaticLookup& lookup);
 
     /// After validateObjects (which skipped the known objects): known entries' validation into the frame (a moving

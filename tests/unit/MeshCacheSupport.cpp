@@ -15,8 +15,9 @@ Object staticObject(const TriangleMesh& mesh, std::uint64_t key, std::uint64_t v
 StaticLookup lookUpAndCheck(StaticMeshCache& cache, const std::vector<Object>& objects) {
     StaticLookup lookup;
     cache.lookUp(objects, lookup);
-    for (StaticEntry* e : lookup.entry)
-        if (e != nullptr) e->checked = true;
+    for (const std::vector<StaticEntry*>* entries : {&lookup.entry, &lookup.moving})
+        for (StaticEntry* e : *entries)
+            if (e != nullptr) e->checked = true;
     return lookup;
 }
 

@@ -37,8 +37,11 @@ TEST(StaticMeshCache, KeepsAnEntryUntilItsMeshOrTransformChanges) {
 
     Transform moved;
     moved.translation = Vec3(1, 0, 0);
-    objects[0].transform = &moved;
-    EXPECT_EQ(lookUpAndCheck(cache, objects).known[0], 0);
+    objects[0].transform = &moved;  // a mesh with a transform: another mesh, and not static before its second frame
+    const StaticLookup placed = lookUpAndCheck(cache, objects);
+    EXPECT_EQ(placed.known[0], 0);
+    EXPECT_EQ(placed.entry[0], nullptr);
+    EXPECT_NE(placed.moving[0], nullptr);
     EXPECT_EQ(lookUpAndCheck(cache, objects).known[0], 1);
     Transform same = moved;  // another Transform with the same coefficients: the same entry
     objects[0].transform = &same;

@@ -75,12 +75,13 @@ CulledObject& CullFrame::enter(btBroadphaseProxy* p, std::uint64_t step, Cullide
             c.toWorld = toTransform(obj->getWorldTransform());
             o.mesh = &c.geometry->local;
             o.transform = &c.toWorld;
+            if (c.localKey == 0) c.localKey = ++m_nextKey;
             if (c.keyedGeometry.lock() != c.geometry) {
-                ++c.version;
+                ++c.localVersion;
                 c.keyedGeometry = c.geometry;
             }
-            o.staticKey = c.key;
-            o.version = c.version;
+            o.staticKey = c.localKey;
+            o.version = c.localVersion;
         }
         for (int k = 0; k < 3; ++k)
             entry.coordinate = std::max({entry.coordinate, std::fabs(double(p->m_aabbMin[k])),

@@ -26,7 +26,12 @@ namespace cullide::bullet {
 /// shape), the transform that places it for the culler, and a world-space copy (static objects, kept between
 /// steps with the culler's static cache; and pairs whose triangles the broadphase itself tests, built on demand).
 struct CulledObject {
-    std::uint64_t key = 0;  ///< staticKey for the culler (never reused)
+    std::uint64_t key = 0;  ///< staticKey of its world-space copy for the culler (never reused)
+    /// staticKey of its shape's local mesh, handed over while it moves (never reused), and the version that goes
+    /// with it: changed when the geometry is another than the one the culler last had under the key (keyedGeometry).
+    std::uint64_t localKey = 0;
+    std::uint64_t localVersion = 0;
+    std::weak_ptr<const ShapeTriangles> keyedGeometry;
     std::shared_ptr<ShapeTriangles> geometry;
     Transform toWorld;
     TriangleMesh world;
@@ -36,10 +41,7 @@ struct CulledObject {
     /// object that moved since is culled as a moving one (local mesh + transform, no world-space copy kept).
     btTransform lastFrom;
     bool seen = false;
-    /// The culler's Object::version under `key`: bumped when the world-space copy changes, and when the geometry
-    /// handed over in its own frame is another than the one the culler last had under the key (keyedGeometry).
-    std::uint64_t version = 0;
-    std::weak_ptr<const ShapeTriangles> keyedGeometry;
+    std::uint64_t version = 0;  ///< of the world-space copy under `key`: bumped whenever the copy changes
     // This step.
     std::uint64_t step = 0;       ///< the last step it entered the culling frame
     std::uint32_t cullIndex = 0;  ///< its index in that step's objects
