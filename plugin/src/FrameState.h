@@ -68,6 +68,7 @@ struct FrameState {
     /// for every active mesh when GPU levels run (their groups follow it); on the CPU path for the meshes whose
     /// surviving triangles are a large part of them (their box trees follow it).
     std::vector<const std::vector<std::uint32_t>*> order;
+    std::vector<std::uint64_t> orderSerial;  ///< per object: which computation its order is (TriangleOrders)
     /// Per active non-static mesh: storage of its triangle boxes (static ones are in their StaticEntry).
     std::vector<std::vector<Aabb>> ownBoxes;
     /// Per active mesh: triangle boxes (inflated by margin / 2), of every triangle (static meshes) or only of those

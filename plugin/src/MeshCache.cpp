@@ -31,6 +31,7 @@ void keepOwnFrame(StaticEntry& e, const Transform& t) {
     kept.valid = e.valid;
     kept.error = std::move(e.error);
     kept.groupSize = e.groupSize;
+    kept.groupOrder = e.groupOrder;
     kept.localGroupBoxes = std::move(e.localGroupBoxes);
     e = std::move(kept);
 }

@@ -29,9 +29,10 @@ struct StaticEntry {
     bool checked = false;
     ValidatedObject valid;  ///< for the last transform (with a transform: localChecked and localBox hold for any)
     std::string error;  ///< the rejection message, if it was rejected
-    /// The box of each group of k triangles of the mesh's spatial order in its own frame (not inflated; k =
-    /// groupSize), for the frames its transform changes (MovingGroupBoxes).
+    /// The box of each group of k triangles of the mesh's spatial order (that of serial groupOrder, TriangleOrders) in
+    /// its own frame (not inflated; k = groupSize), for the frames its transform changes.
     std::uint32_t groupSize = 0;
+    std::uint64_t groupOrder = 0;
     std::vector<Aabb> localGroupBoxes;
     bool boxesReady = false;
     std::vector<Aabb> boxes;  ///< every triangle's world box, inflated by margin / 2 (when boxesReady)

@@ -50,8 +50,8 @@ void spatialOrder(const TriangleMesh& mesh, std::vector<std::uint32_t>& order, T
 bool TriangleOrders::current(const Entry& e, const Object& object) const {
     const TriangleMesh& mesh = *object.mesh;
     if (!e.ready || e.vertices != mesh.vertices.size() || e.triangles != mesh.triangles.size()) return false;
-    if (e.staticKey != object.staticKey || e.version != object.version) return false;
-    return object.staticKey != 0 || m_frame < e.dueFrame;
+    if (object.staticKey != 0 && e.staticKey == object.staticKey) return e.version == object.version;
+    return m_frame < e.dueFrame;  // unkeyed, or an instance with another key: as an unkeyed mesh
 }
 
 void TriangleOrders::beginFrame(std::size_t objectCount, FrameState& frame) {
@@ -59,6 +59,7 @@ void TriangleOrders::beginFrame(std::size_t objectCount, FrameState& frame) {
     for (auto it = m_entries.begin(); it != m_entries.end();)
         it = m_frame - it->second.lastFrame > kKeepFrames ? m_entries.erase(it) : std::next(it);
     frame.order.assign(objectCount, nullptr);
+    frame.orderSerial.assign(objectCount, 0);
 }
 
 std::size_t TriangleOrders::assign(const std::vector<Object>& objects, FrameState& frame,
@@ -82,10 +83,11 @@ std::size_t TriangleOrders::assign(const std::vector<Object>& objects, FrameStat
             e.version = object.version;
             e.ready = false;  // until computed below
             due.push_back({object.mesh, &e});
-            ++m_computed;
+            e.serial = ++m_computed;
         }
         e.lastFrame = m_frame;
         frame.order[o] = &e.order;
+        frame.orderSerial[o] = e.serial;
     }
     // The source meshes: a transformed object's world copy has the same triangles, in the same order.
     std::vector<Due> small;

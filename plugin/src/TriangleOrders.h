@@ -36,7 +36,10 @@ public:
     /// or due; other entries are left as they are (assign may run more than once a frame, for different meshes).
     /// Orders are kept by the caller's mesh, objects[o].mesh (instances of one mesh share one order; a transformed
     /// object's order is that of its mesh, which the transform does not change), and recomputed when its vertex or
-    /// triangle count, staticKey or version changes.
+    /// triangle count changes, or its version for the staticKey it was computed for; kRefreshFrames after it was
+    /// computed for an unkeyed mesh, or for an instance with another key (instances with keys of their own share it
+    /// as unkeyed ones do). frame.orderSerial[o] tells one
+    /// computation from another: what is derived from an order holds while its serial does.
     /// Returns how many orders it computed.
     std::size_t assign(const std::vector<Object>& objects, FrameState& frame,
                        const std::function<bool(std::uint32_t)>& wanted, TaskPool& pool);
@@ -52,6 +55,7 @@ private:
         std::uint64_t staticKey = 0;
         std::uint64_t version = 0;
         std::uint64_t dueFrame = 0;  ///< recomputed at this frame (meshes without staticKey)
+        std::uint64_t serial = 0;    ///< which computation `order` is (m_computed after it)
         std::uint64_t lastFrame = 0;
         bool ready = false;
         std::vector<std::uint32_t> order;

@@ -79,11 +79,12 @@ Aabb groupBounds(const TriangleMesh& mesh, const std::vector<std::uint32_t>& ord
 }
 
 /// Makes room for a moving mesh's own-frame group boxes (StaticEntry::localGroupBoxes) where it has none for groups
-/// of k; returns whether they are computed this frame.
-bool prepareLocalGroupBoxes(StaticEntry& e, std::size_t triangles, std::uint32_t k) {
+/// of k in the spatial order of serial `order`; returns whether they are computed this frame.
+bool prepareLocalGroupBoxes(StaticEntry& e, std::size_t triangles, std::uint32_t k, std::uint64_t order) {
     const std::size_t groups = (triangles + k - 1) / k;
-    if (e.groupSize == k && e.localGroupBoxes.size() == groups) return false;
+    if (e.groupSize == k && e.groupOrder == order && e.localGroupBoxes.size() == groups) return false;
     e.groupSize = k;
+    e.groupOrder = order;
     e.localGroupBoxes.assign(groups, Aabb{});
     return true;
 }
@@ -111,7 +112,8 @@ void buildGroups(FrameState& frame, std::uint32_t k, double margin, bool prepass
     for (std::uint32_t o = 0; o < frame.valid.size(); ++o) {
         if (!frame.isActiveMesh(o)) continue;
         const auto n = static_cast<std::uint32_t>(frame.meshOf(o).triangles.size());
-        if (StaticEntry* e = frame.movingEntry(o)) scratch.computeLocalGroups[o] = prepareLocalGroupBoxes(*e, n, k);
+        if (StaticEntry* e = frame.movingEntry(o))
+            scratch.computeLocalGroups[o] = prepareLocalGroupBoxes(*e, n, k, frame.orderSerial[o]);
         for (std::uint32_t first = 0; first < n; first += k) {
             const auto index = static_cast<std::uint32_t>(candidates.size());
             candidates.push_back({o, first, std::min(k, n - first), {}, index});

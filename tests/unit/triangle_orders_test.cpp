@@ -145,6 +145,28 @@ TEST(TriangleOrders, RecomputedWhenTheMeshMayHaveChanged) {
     EXPECT_EQ(framesUntilRecomputed(1), 1u);
 }
 
+TEST(TriangleOrders, InstancesWithKeysOfTheirOwnShareTheOrderAsUnkeyedOnesDo) {
+    // Two moving instances of one mesh, each keyed (the Bullet adapter keys every body), the first in the frame
+    // changing from frame to frame: the order is not recomputed for each, and each order has a serial of its own.
+    const TriangleMesh sphere = scenes::makeSphere(1.0, 20, 10);
+    std::vector<Object> objects(2);
+    objects[0].mesh = objects[1].mesh = &sphere;
+    TaskPool pool(1);
+    TriangleOrders orders;
+    FrameState frame = activeFrame(objects.size());
+    std::uint64_t firstSerial = 0;
+    for (std::uint64_t f = 0; f < 2 * TriangleOrders::kRefreshFrames; ++f) {
+        objects[0].staticKey = f % 2 == 0 ? 1 : 2;
+        objects[1].staticKey = f % 2 == 0 ? 2 : 1;
+        nextFrame(orders, objects, frame, [](std::uint32_t) { return true; }, pool);
+        EXPECT_EQ(frame.orderSerial[0], frame.orderSerial[1]) << f;
+        if (f == 0) firstSerial = frame.orderSerial[0];
+    }
+    EXPECT_LE(orders.computed(), 3u) << "recomputed for each instance in turn";
+    EXPECT_GE(orders.computed(), 2u) << "an unkeyed use refreshes the order";
+    EXPECT_NE(frame.orderSerial[0], firstSerial);
+}
+
 TEST(TriangleOrders, AssignedTwiceInAFrameForDifferentMeshes) {
     // The CPU path asks for the whole trees' orders first, then for the survivors' trees: both stay set, and a mesh
     // asked for twice is not ordered twice.
