@@ -19,14 +19,15 @@ bool ownFrameHolds(const StaticEntry& e, const Object& o) {
            e.triangles == o.mesh->triangles.size() && e.transformed == (o.transform != nullptr);
 }
 
-/// What a moving mesh keeps: its own-frame part, with this frame's transform; its world part starts over.
-void keepOwnFrame(StaticEntry& e, const Transform& t) {
+/// What a moving mesh keeps: its own-frame part; its world part starts over. Its transform stays that of its
+/// validation until merge places it by this frame's (a frame that ends before then leaves the entry consistent).
+void keepOwnFrame(StaticEntry& e) {
     StaticEntry kept;
     kept.version = e.version;
     kept.vertices = e.vertices;
     kept.triangles = e.triangles;
     kept.transformed = true;
-    kept.transform = t;
+    kept.transform = e.transform;
     kept.checked = e.checked;
     kept.valid = e.valid;
     kept.error = std::move(e.error);
@@ -63,7 +64,7 @@ void StaticMeshCache::lookUp(const std::vector<Object>& objects, StaticLookup& l
         // A mesh with a transform is static geometry once it keeps its transform from one frame to the next; until
         // then (first seen, or moved) only its own-frame part is kept: a moving body pays for no world part.
         if (o.transform != nullptr && (!own || !sameTransform(e, o.transform))) {
-            keepOwnFrame(e, *o.transform);
+            keepOwnFrame(e);
             lookup.moving[i] = &e;
         } else {
             lookup.entry[i] = &e;
@@ -76,6 +77,7 @@ namespace {
 /// A moving mesh's validation under this frame's transform, from its own frame's (kept in the entry, which then
 /// holds this transform's).
 void placeMoving(StaticEntry& e, const Transform& t, double margin) {
+    e.transform = t;
     if (!e.valid.localChecked) return;  // rejected in its own frame: so it is under any transform
     const char* error = placeTransformed(t, margin, e.valid);
     e.error = error != nullptr ? error : "";
@@ -93,6 +95,7 @@ void StaticMeshCache::merge(const std::vector<Object>& objects, const StaticLook
         if (!lookup.known[i]) {  // validated this frame: kept
             e->checked = true;
             e->valid = valid[i];
+            if (lookup.moving[i] != nullptr) e->transform = *objects[i].transform;
             for (const ObjectDiagnostic& d : result.rejected)
                 if (d.object == id) e->error = d.message;
             continue;

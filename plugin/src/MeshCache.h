@@ -25,7 +25,7 @@ struct StaticEntry {
     std::size_t vertices = 0;
     std::size_t triangles = 0;
     bool transformed = false;
-    Transform transform;  ///< when transformed: the one of the last frame that had the key
+    Transform transform;  ///< when transformed: the one `valid` was placed by
     bool checked = false;
     ValidatedObject valid;  ///< for the last transform (with a transform: localChecked and localBox hold for any)
     std::string error;  ///< the rejection message, if it was rejected

@@ -1,6 +1,7 @@
 // Spatial orders of whole meshes, kept between frames: the order the visibility levels group triangles in, and
 // the order the exact stage's box trees take their leaves in (a refit instead of a sort). An order only affects
-// speed, never a result, so a kept order may be stale: it is recomputed now and then.
+// speed, never a result, so a kept order may be stale: it is recomputed now and then. What is kept from an order
+// between frames (a moving mesh's own-frame group boxes) follows its serial (FrameState::orderSerial).
 #pragma once
 
 #include "FrameState.h"

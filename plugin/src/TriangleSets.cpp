@@ -91,8 +91,9 @@ bool prepareLocalGroupBoxes(StaticEntry& e, std::size_t triangles, std::uint32_t
 
 /// A moving mesh's group box: the world box of its box in the mesh's own frame (computed now where `compute`), which
 /// holds every transformed vertex of the group (transformedBounds), inflated. It holds the group's triangles' boxes
-/// (an exact box would cost mapping its vertices); only the CPU's box pre-pass reads it: the device builds the groups'
-/// boxes of a mapped mesh from its vertices.
+/// (an exact box would cost mapping its vertices); in the Auto pipeline only the CPU's box pre-pass reads it (the
+/// device builds the groups' boxes of a mapped mesh from its vertices), so it decides which groups the levels see,
+/// never what they prune.
 Aabb movingGroupBox(const FrameState& frame, const Group& g, std::uint32_t k, bool compute, double inflate) {
     StaticEntry& e = *frame.movingEntry(g.object);
     const Object& input = (*frame.inputs)[g.object];
@@ -102,8 +103,9 @@ Aabb movingGroupBox(const FrameState& frame, const Group& g, std::uint32_t k, bo
 }
 
 /// Every group of k triangles of the active meshes, with its box (from the triangle boxes of a static mesh, from its
-/// box in the mesh's own frame for a moving one, from the vertices of any other); kept (frame.groups) when `prepass` is
-/// off or its box overlaps a partner's.
+/// box in the mesh's own frame for a moving one when `prepass` is on, from the vertices of any other); kept
+/// (frame.groups) when `prepass` is off or its box overlaps a partner's. (Without `prepass`, the paper's pipeline,
+/// group boxes are its group level's item boxes: exact ones, so that its sets do not depend on keys.)
 void buildGroups(FrameState& frame, std::uint32_t k, double margin, bool prepass, TaskPool& pool,
                  TriangleScratch& scratch, Stats& stats) {
     std::vector<Group>& candidates = frame.allGroups;
@@ -112,8 +114,8 @@ void buildGroups(FrameState& frame, std::uint32_t k, double margin, bool prepass
     for (std::uint32_t o = 0; o < frame.valid.size(); ++o) {
         if (!frame.isActiveMesh(o)) continue;
         const auto n = static_cast<std::uint32_t>(frame.meshOf(o).triangles.size());
-        if (StaticEntry* e = frame.movingEntry(o))
-            scratch.computeLocalGroups[o] = prepareLocalGroupBoxes(*e, n, k, frame.orderSerial[o]);
+        StaticEntry* e = prepass ? frame.movingEntry(o) : nullptr;
+        if (e != nullptr) scratch.computeLocalGroups[o] = 1 + prepareLocalGroupBoxes(*e, n, k, frame.orderSerial[o]);
         for (std::uint32_t first = 0; first < n; first += k) {
             const auto index = static_cast<std::uint32_t>(candidates.size());
             candidates.push_back({o, first, std::min(k, n - first), {}, index});
@@ -124,8 +126,8 @@ void buildGroups(FrameState& frame, std::uint32_t k, double margin, bool prepass
         for (std::size_t i = begin; i < end; ++i) {
             Group& g = candidates[i];
             const std::vector<std::uint32_t>& order = *frame.order[g.object];
-            if (frame.movingEntry(g.object) != nullptr) {
-                g.box = movingGroupBox(frame, g, k, scratch.computeLocalGroups[g.object] != 0, 0.5 * margin);
+            if (const std::uint8_t moving = scratch.computeLocalGroups[g.object]; moving != 0) {
+                g.box = movingGroupBox(frame, g, k, moving == 2, 0.5 * margin);
             } else if (boxesOnDemand(frame, g.object)) {
                 g.box = groupBounds(frame.meshOf(g.object), order, g.first, g.count, 0.5 * margin);
             } else {

@@ -25,7 +25,8 @@ struct TriangleScratch {
     std::vector<std::vector<FrameTriangle>> taskTriangles;
     std::vector<Aabb> partnerUnion;
     std::vector<std::uint8_t> needBoxes;
-    std::vector<std::uint8_t> computeLocalGroups;  ///< per object: a moving mesh's own-frame group boxes are due
+    /// Per object: 1 where its group boxes come from its own-frame ones (a moving mesh), 2 where those are computed now.
+    std::vector<std::uint8_t> computeLocalGroups;
 };
 
 /// Sets frame.boxesOf for every active mesh and computes the triangle boxes of new static meshes; with GPU levels
@@ -34,7 +35,8 @@ struct TriangleScratch {
 /// overlaps a partner's box (all, without `prepass`) into frame.groups.
 /// The other meshes' triangle boxes are computed as the stages reach their triangles: collectDirect on the CPU path;
 /// with GPU levels collectTriangles, and computeSurvivorBoxes once the levels have run. A group's box comes from its
-/// vertices; a moving keyed mesh's (StaticLookup::moving) from its box in the mesh's own frame, kept between frames.
+/// vertices; with `prepass`, a moving keyed mesh's (StaticLookup::moving) from its box in the mesh's own frame, kept
+/// between frames.
 void buildTriangleBoxesAndGroups(FrameState& frame, std::uint32_t groupSize, double margin, bool prepass,
                                  TaskPool& pool, TriangleScratch& scratch, Stats& stats);
 

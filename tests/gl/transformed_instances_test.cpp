@@ -132,11 +132,18 @@ TEST(TransformedInstances, StaticKeyFollowsTheTransform) {
 // own frame, and their group boxes there, between frames: the same pairs as unkeyed instances and the exact
 // reference's, every level in lockstep with the reference where GPU levels run; a mesh whose version changes is
 // checked again.
-class KeyedInstancesInMotion : public ::testing::TestWithParam<GpuLevels> {};
+class KeyedInstancesInMotion : public ::testing::TestWithParam<Case> {};
+
+/// The potentially colliding triangles of each object.
+std::size_t pcsTriangles(const Result& r) {
+    std::size_t n = 0;
+    for (const auto& list : r.pcsTriangles) n += list.size();
+    return n;
+}
 
 TEST_P(KeyedInstancesInMotion, KeepTheirOwnFrameAndMatchTheReference) {
-    Settings settings = lockstepSettings({Pipeline::Auto, Mode::Reliable, Backend::Compute, 64});
-    settings.gpuLevels = GetParam();
+    Settings settings = lockstepSettings({GetParam().pipeline, Mode::Reliable, Backend::Compute, 64});
+    settings.gpuLevels = GetParam().levels;
     CULLIDE_GPU_CULLER_OR_SKIP(unkeyed, settings);
     auto log = std::make_shared<LockstepLog>();
     std::unique_ptr<Culler> culler = createGpuCuller(settings, lockstepFactory(log));
@@ -159,6 +166,10 @@ TEST_P(KeyedInstancesInMotion, KeepTheirOwnFrameAndMatchTheReference) {
         EXPECT_EQ(c.spurious, 0u) << frame;
         unkeyed->run(scene.instances(), plain);
         EXPECT_EQ(trianglePairs(got), trianglePairs(plain)) << frame;
+        // The paper's pipeline takes exact group boxes as its items' boxes: the same sets as without keys.
+        if (GetParam().pipeline == Pipeline::Paper) {
+            EXPECT_EQ(pcsTriangles(got), pcsTriangles(plain)) << frame;
+        }
         EXPECT_EQ(got.stats.movingObjectsReused, frame == 0 ? 0u : objects.size() - ofChangedMesh) << frame;
         pairs += c.expected;
         groupsKept += got.stats.prepassGroupsOut;
@@ -174,13 +185,16 @@ TEST_P(KeyedInstancesInMotion, KeepTheirOwnFrameAndMatchTheReference) {
     }
     EXPECT_EQ(log->mismatches, 0u) << log->summary();
     EXPECT_GT(pairs, 20u) << "too sparse to test anything";
-    if (GetParam() == GpuLevels::Always) {
+    if (GetParam().levels == GpuLevels::Always) {
         EXPECT_GT(log->itemsPruned, 0u) << log->summary();
         EXPECT_GT(groupsKept, 0u);
     }
 }
 
-INSTANTIATE_TEST_SUITE_P(Levels, KeyedInstancesInMotion, ::testing::Values(GpuLevels::Never, GpuLevels::Always));
+INSTANTIATE_TEST_SUITE_P(Pipelines, KeyedInstancesInMotion,
+                         ::testing::Values(Case{GpuLevels::Never, Pipeline::Auto},
+                                           Case{GpuLevels::Always, Pipeline::Auto},
+                                           Case{GpuLevels::Always, Pipeline::Paper}));
 
 // A moving keyed mesh that changes in its own frame (a new version) gets its own-frame group boxes again: kept ones
 // would let the CPU's box pre-pass drop the groups that now reach another object.
@@ -215,6 +229,48 @@ TEST(KeyedInstancesInMotion, AVersionChangeRecomputesTheOwnFrameGroupBoxes) {
     }
     EXPECT_GT(pairsAfter, 0u) << "the sphere must reach the slab";
 }
+
+// A keyed mesh that rests, moves and rests at its new place, beside a static ground that keeps the device's resident
+// region where it is: when it rests again, its boxes, tree and place in the region are those of the new place.
+class KeyedMeshAtRest : public ::testing::TestWithParam<GpuLevels> {};
+
+TEST_P(KeyedMeshAtRest, GetsItsWorldPartAgainAfterMoving) {
+    Settings settings = withLevels(GetParam(), Pipeline::Auto);
+    CULLIDE_GPU_CULLER_OR_SKIP(culler, settings);
+    auto reference = createReferenceCuller(settings);
+    const TriangleMesh sphere = scenes::makeSphere(1.0, 32, 16);
+    TriangleMesh slab = scenes::makeBox(Vec3(0.2, 0.2, 0.2));
+    for (Vec3& v : slab.vertices) v += Vec3(1.3, 0.0, 0.0);
+    TriangleMesh ground = scenes::makeBox(Vec3(10.0, 10.0, 0.2));
+    for (Vec3& v : ground.vertices) v += Vec3(0.0, 0.0, -0.95);
+    Transform t;
+    std::size_t pairs = 0, reused = 0;
+    for (int frame = 0; frame < 6; ++frame) {
+        t.translation = Vec3(frame < 2 ? 0.0 : 0.5, 0.0, 0.0);  // rests, moves once, rests at the new place
+        Object body;
+        body.mesh = &sphere;
+        body.transform = &t;
+        body.staticKey = 1;
+        body.version = 1;
+        Object other;
+        other.mesh = &slab;
+        Object floor;
+        floor.mesh = &ground;
+        floor.staticKey = 2;
+        floor.version = 1;
+        Result got;
+        const Comparison c = runAndCompare(*culler, *reference, {body, other, floor}, got);
+        EXPECT_EQ(got.stats.gpuFallbacks, 0u) << got.stats.gpuError;
+        EXPECT_EQ(c.missed, 0u) << "frame " << frame << ": " << c.firstMissed;
+        EXPECT_EQ(c.spurious, 0u) << frame;
+        pairs += c.expected;
+        reused += got.stats.staticObjectsReused;
+    }
+    EXPECT_GT(pairs, 0u);
+    EXPECT_GE(reused, 7u) << "the ground from its second frame, the body at rest";
+}
+
+INSTANTIATE_TEST_SUITE_P(Levels, KeyedMeshAtRest, ::testing::Values(GpuLevels::Never, GpuLevels::Always));
 
 }  // namespace
 }  // namespace cullide::test

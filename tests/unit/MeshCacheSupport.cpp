@@ -15,9 +15,13 @@ Object staticObject(const TriangleMesh& mesh, std::uint64_t key, std::uint64_t v
 StaticLookup lookUpAndCheck(StaticMeshCache& cache, const std::vector<Object>& objects) {
     StaticLookup lookup;
     cache.lookUp(objects, lookup);
-    for (const std::vector<StaticEntry*>* entries : {&lookup.entry, &lookup.moving})
-        for (StaticEntry* e : *entries)
-            if (e != nullptr) e->checked = true;
+    for (std::size_t i = 0; i < objects.size(); ++i) {
+        if (lookup.entry[i] != nullptr) lookup.entry[i]->checked = true;
+        if (StaticEntry* e = lookup.moving[i]) {  // placed by this frame's transform
+            e->checked = true;
+            e->transform = *objects[i].transform;
+        }
+    }
     return lookup;
 }
 

@@ -14,7 +14,7 @@ namespace cullide::test {
 Object staticObject(const TriangleMesh& mesh, std::uint64_t key, std::uint64_t version = 1,
                     const Transform* transform = nullptr);
 
-/// One frame's lookUp, with the entries marked checked as merge() would after validation.
+/// One frame's lookUp, with the entries marked checked (and moving ones placed) as merge() would after validation.
 StaticLookup lookUpAndCheck(StaticMeshCache& cache, const std::vector<Object>& objects);
 
 }  // namespace cullide::test

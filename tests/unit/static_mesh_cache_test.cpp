@@ -78,6 +78,25 @@ std::vector<ValidatedObject> validateFrame(StaticMeshCache& cache, const std::ve
 
 }  // namespace
 
+TEST(StaticMeshCache, AFrameEndedBeforeMergeLeavesAMovingEntryConsistent) {
+    const TriangleMesh box = makeBox(Vec3(1, 2, 3));
+    Transform t;
+    StaticMeshCache cache;
+    const std::vector<Object> objects = {staticObject(box, 1, 1, &t)};
+    for (int frame = 0; frame < 2; ++frame) {  // seen, then static
+        Result result;
+        validateFrame(cache, objects, 0.0, result);
+    }
+    t.translation = Vec3(4, 0, 0);
+    StaticLookup abandoned;  // a frame that ends (an exception) between lookUp and merge
+    cache.lookUp(objects, abandoned);
+    Result result, fresh;
+    const std::vector<ValidatedObject> valid = validateFrame(cache, objects, 0.0, result);
+    const std::vector<ValidatedObject> expected = validateObjects(objects, 0.0, fresh.rejected);
+    EXPECT_EQ(valid[0].box.min, expected[0].box.min) << "a box of the last transform placed";
+    EXPECT_EQ(valid[0].box.max, expected[0].box.max);
+}
+
 TEST(StaticMeshCache, AMovingMeshIsPlacedByEachFramesTransform) {
     const TriangleMesh box = makeBox(Vec3(1, 2, 3));
     TriangleMesh broken = makeBox(Vec3::Ones());
@@ -101,6 +120,7 @@ TEST(StaticMeshCache, AMovingMeshIsPlacedByEachFramesTransform) {
         }
         for (std::size_t i = 0; i < objects.size(); ++i) {
             EXPECT_EQ(valid[i].valid, expected[i].valid) << frame << " object " << i;
+            EXPECT_EQ(valid[i].isMesh, expected[i].isMesh) << frame << " object " << i;
             EXPECT_EQ(valid[i].box.min, expected[i].box.min) << frame << " object " << i;
             EXPECT_EQ(valid[i].box.max, expected[i].box.max) << frame << " object " << i;
         }
