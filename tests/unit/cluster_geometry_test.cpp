@@ -2,6 +2,7 @@
 // with every upload.
 #include "ClusterGeometry.h"
 #include "MeshCacheSupport.h"
+#include "ValidatedObjects.h"
 #include "WorldMeshes.h"
 #include "cullide/scenes/Procedural.h"
 
@@ -16,15 +17,6 @@
 
 namespace cullide::test {
 namespace {
-
-/// A validated object (the fields the tests set).
-ValidatedObject validated(bool valid, bool isMesh, const Aabb& box) {
-    ValidatedObject v;
-    v.valid = valid;
-    v.isMesh = isMesh;
-    v.box = box;
-    return v;
-}
 
 using scenes::makeBox;
 using scenes::transformMesh;

@@ -2,6 +2,7 @@
 // instances, only for active meshes that are wanted, recomputed when a mesh may have changed, unused ones dropped.
 #include "TriangleOrders.h"
 #include "TriangleRow.h"
+#include "ValidatedObjects.h"
 #include "cullide/scenes/Procedural.h"
 
 #include <gtest/gtest.h>
@@ -14,15 +15,6 @@
 
 namespace cullide::test {
 namespace {
-
-/// A validated object (the fields the tests set).
-ValidatedObject validated(bool valid, bool isMesh, const Aabb& box) {
-    ValidatedObject v;
-    v.valid = valid;
-    v.isMesh = isMesh;
-    v.box = box;
-    return v;
-}
 
 /// A frame in which every object is a valid, active mesh (what TriangleOrders::assign looks at).
 FrameState activeFrame(std::size_t objects) {
