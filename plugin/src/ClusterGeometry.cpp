@@ -125,7 +125,8 @@ void ClusterGeometry::placeMeshes(const FrameState& frame, const Cluster& cluste
         StaticEntry* e = frame.statics.entry[o];
         if (!frame.isMesh(o) || e == nullptr) continue;
         const TriangleMesh& mesh = frame.meshOf(o);
-        const ResidentRegion::Place p = m_region.place(*e, mesh.vertices.size(), mesh.triangles.size());
+        const std::uint64_t order = frame.orderSerial.empty() ? 0 : frame.orderSerial[o];
+        const ResidentRegion::Place p = m_region.place(*e, mesh.vertices.size(), mesh.triangles.size(), order);
         if (p.appended) m_written.push_back({o, p.baseVertex, p.baseTriangle});
         m_baseTriangle[o] = p.baseTriangle;
     }

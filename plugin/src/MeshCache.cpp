@@ -128,12 +128,14 @@ Vec3 ResidentRegion::fit(const Vec3& centre, double extent, std::size_t staticTr
     return m_origin;
 }
 
-ResidentRegion::Place ResidentRegion::place(StaticEntry& entry, std::size_t vertices, std::size_t triangles) {
+ResidentRegion::Place ResidentRegion::place(StaticEntry& entry, std::size_t vertices, std::size_t triangles,
+                                            std::uint64_t order) {
     Place p;
-    if (entry.regionEpoch != m_epoch) {
+    if (entry.regionEpoch != m_epoch || entry.regionOrder != order) {  // another order: the old place goes stale
         p.appended = true;
         p.baseVertex = static_cast<std::uint32_t>(m_vertices);
         entry.regionEpoch = m_epoch;
+        entry.regionOrder = order;
         entry.regionBaseTriangle = static_cast<std::uint32_t>(m_triangles);
         m_vertices += vertices;
         m_triangles += triangles;

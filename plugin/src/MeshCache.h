@@ -40,6 +40,7 @@ struct StaticEntry {
     BoxTree tree;  ///< the CPU path's tree of every triangle (MeshTrees; when treeReady)
     std::uint64_t lastFrame = 0;
     std::uint64_t regionEpoch = 0;  ///< == ResidentRegion::epoch(): its triangles are in the device's region
+    std::uint64_t regionOrder = 0;  ///< the serial of the spatial order written with them (TriangleOrders)
     std::uint32_t regionBaseTriangle = 0;
 };
 
@@ -89,14 +90,14 @@ public:
     /// `staticTriangles` static triangles. Returns the origin the cluster's coordinates are relative to.
     Vec3 fit(const Vec3& centre, double extent, std::size_t staticTriangles);
 
-    /// The base triangle of a static mesh: where it already is, or appended now (then `appended` is set and the
-    /// caller writes it at `baseVertex`, `baseTriangle`).
+    /// The base triangle of a static mesh: where it already is with the spatial order of serial `order`, or appended
+    /// now (then `appended` is set and the caller writes it, its order included, at `baseVertex`, `baseTriangle`).
     struct Place {
         bool appended = false;
         std::uint32_t baseVertex = 0;
         std::uint32_t baseTriangle = 0;
     };
-    Place place(StaticEntry& entry, std::size_t vertices, std::size_t triangles);
+    Place place(StaticEntry& entry, std::size_t vertices, std::size_t triangles, std::uint64_t order = 0);
 
     std::size_t vertices() const { return m_vertices; }
     std::size_t triangles() const { return m_triangles; }

@@ -39,8 +39,8 @@ public:
     /// object's order is that of its mesh, which the transform does not change), and recomputed when its vertex or
     /// triangle count changes, or its version for the staticKey it was computed for; kRefreshFrames after it was
     /// computed for an unkeyed mesh, or for an instance with another key (instances with keys of their own share it
-    /// as unkeyed ones do). frame.orderSerial[o] tells one
-    /// computation from another: what is derived from an order holds while its serial does.
+    /// as unkeyed ones do). frame.orderSerial[o] tells one computation from another: what is derived from an order
+    /// holds while its serial does.
     /// Returns how many orders it computed.
     std::size_t assign(const std::vector<Object>& objects, FrameState& frame,
                        const std::function<bool(std::uint32_t)>& wanted, TaskPool& pool);

@@ -80,13 +80,20 @@ Aabb groupBounds(const TriangleMesh& mesh, const std::vector<std::uint32_t>& ord
 
 /// Makes room for a moving mesh's own-frame group boxes (StaticEntry::localGroupBoxes) where it has none for groups
 /// of k in the spatial order of serial `order`; returns whether they are computed this frame.
+/// They hold for that order only once computed (finishLocalGroupBoxes): a frame that ends before leaves none.
 bool prepareLocalGroupBoxes(StaticEntry& e, std::size_t triangles, std::uint32_t k, std::uint64_t order) {
     const std::size_t groups = (triangles + k - 1) / k;
     if (e.groupSize == k && e.groupOrder == order && e.localGroupBoxes.size() == groups) return false;
     e.groupSize = k;
-    e.groupOrder = order;
+    e.groupOrder = 0;
     e.localGroupBoxes.assign(groups, Aabb{});
     return true;
+}
+
+/// After the group pass: the own-frame group boxes computed in it hold for their order.
+void finishLocalGroupBoxes(const FrameState& frame, const TriangleScratch& scratch) {
+    for (std::uint32_t o = 0; o < scratch.computeLocalGroups.size(); ++o)
+        if (scratch.computeLocalGroups[o] == 2) frame.movingEntry(o)->groupOrder = frame.orderSerial[o];
 }
 
 /// A moving mesh's group box: the world box of its box in the mesh's own frame (computed now where `compute`), which
@@ -137,6 +144,7 @@ void buildGroups(FrameState& frame, std::uint32_t k, double margin, bool prepass
             scratch.groupKept[i] = !prepass || frame.overlapsPartner(g.object, g.box);
         }
     });
+    finishLocalGroupBoxes(frame, scratch);
     stats.prepassGroupsIn += candidates.size();
     frame.groups.clear();
     for (std::size_t i = 0; i < candidates.size(); ++i)

@@ -25,7 +25,8 @@ struct TriangleScratch {
     std::vector<std::vector<FrameTriangle>> taskTriangles;
     std::vector<Aabb> partnerUnion;
     std::vector<std::uint8_t> needBoxes;
-    /// Per object: 1 where its group boxes come from its own-frame ones (a moving mesh), 2 where those are computed now.
+    /// Per object: 1 where its group boxes come from its own-frame ones (a moving mesh), 2 where those are computed
+    /// now.
     std::vector<std::uint8_t> computeLocalGroups;
 };
 

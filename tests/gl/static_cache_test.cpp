@@ -2,10 +2,15 @@
 // frames and recomputes them when (key, version, counts) change; results always equal the reference culler's.
 #include "Compare.h"
 #include "GlTestSupport.h"
+#include "TriangleOrders.h"
+#include "cullide/scenes/Procedural.h"
+
+#include <Eigen/Geometry>
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 
 namespace cullide::test {
 namespace {
@@ -120,6 +125,35 @@ TEST(StaticCache, RejectedStaticMeshStaysRejectedInObjectOrder) {
         EXPECT_EQ(result.rejected[1].object, 4u);
     }
     EXPECT_EQ(result.stats.staticObjectsReused, 1u);
+}
+
+// A mesh edited in place (same counts) that comes back under another key takes the spatial order kept for its mesh
+// as an instance with another key does, until that order is recomputed: the device's resident region, which holds a
+// static mesh's order with its triangles, then takes the mesh again.
+TEST(StaticCache, TheResidentRegionFollowsTheMeshsSpatialOrder) {
+    Settings settings;
+    settings.resolution = 64;
+    settings.gpuLevels = GpuLevels::Always;
+    settings.exactThreshold = 0;
+    CULLIDE_GPU_CULLER_OR_SKIP(culler, settings);
+    TriangleMesh mesh = scenes::makeSphere(1.0, 48, 24);
+    TriangleMesh partner = scenes::makeSphere(1.0, 32, 16);
+    for (Vec3& v : partner.vertices) v += Vec3(1.3, 0.2, 0.1);
+    const std::uint64_t frames = 2 * TriangleOrders::kRefreshFrames + 2;
+    for (std::uint64_t frame = 0; frame < frames; ++frame) {
+        if (frame == 1) {  // turned in place, and handed over under a new key
+            const Eigen::Matrix3d turn = Eigen::AngleAxisd(1.3, Vec3(0.3, 0.5, 1).normalized()).toRotationMatrix();
+            for (Vec3& v : mesh.vertices) v = turn * v;
+        }
+        std::vector<Object> objects(2);
+        objects[0].mesh = &mesh;
+        objects[0].staticKey = frame == 0 ? 1 : 2;
+        objects[0].version = frame == 0 ? 1 : 2;
+        objects[1].mesh = &partner;
+        Result result;
+        expectSameAsReference(objects, *culler, result, ("frame " + std::to_string(frame)).c_str());
+        EXPECT_EQ(result.stats.gpuFallbacks, 0u) << result.stats.gpuError;
+    }
 }
 
 TEST(StaticCache, KeyUsedTwiceInOneFrameIsNotConfused) {

@@ -86,11 +86,16 @@ TEST(MovingGroupBoxes, HoldTheirTrianglesInEverySpatialOrder) {
     ASSERT_EQ(m.entry.localGroupBoxes.size(), m.frame.allGroups.size());
     m.expectGroupsHoldTheirTriangles();
 
+    EXPECT_EQ(m.entry.groupOrder, 1u);
+
     m.transform.translation += Vec3(0.5, 0.25, 0);  // it moves: the kept boxes, mapped again
     for (std::size_t v = 0; v < m.local.vertices.size(); ++v)
         m.world.vertices[v] = transformPoint(m.transform, m.local.vertices[v]);
+    const Aabb marked{Vec3::Constant(-50), Vec3::Constant(50)};  // a kept box the frame must not compute again
+    m.entry.localGroupBoxes[0] = marked;
     m.build(first, 1, pool);
     m.expectGroupsHoldTheirTriangles();
+    EXPECT_EQ(m.entry.localGroupBoxes[0].min, marked.min) << "kept boxes computed again under the same order";
 
     std::vector<std::uint32_t> second(first.rbegin(), first.rend());  // another order of the same mesh
     m.build(second, 2, pool);

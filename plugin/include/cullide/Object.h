@@ -30,8 +30,9 @@ struct Object {
     ///   is sent to the device once and kept there while the scene stays around the same place (see
     ///   docs/architecture.md).
     /// - with a transform that changes (a rigid body in motion): what holds in the mesh's own frame, its validation
-    ///   and, when GPU levels run, its groups' boxes there (a few bytes per triangle). A mesh with a transform counts
-    ///   as static geometry from the second frame in a row with the same transform.
+    ///   and, when GPU levels run the Auto pipeline, its groups' boxes there (a few bytes per triangle). A mesh with a
+    ///   transform counts as static geometry (and costs as much) from the second frame in a row with the same
+    ///   transform: a body at rest keeps all of its boxes.
     /// Everything is recomputed when key, version or counts change, or when the mesh comes with a transform where it
     /// came without one (or the other way round). Entries unused for 240 frames are dropped. A key used by two
     /// objects of one frame is cached for the first only.

@@ -103,8 +103,9 @@ struct Stats {
     /// static mesh, Object::staticKey: built once).
     std::size_t exactTreesWhole = 0;
     std::size_t exactTreesKept = 0;
-    /// Spatial orders of whole meshes computed this frame (kept between frames; recomputed every 16 frames for
-    /// meshes without Object::staticKey, and when a mesh's counts, key or version change).
+    /// Spatial orders of whole meshes computed this frame (kept between frames; recomputed when a mesh's counts
+    /// change or its version for the Object::staticKey the order was computed for, and every 16 frames for meshes
+    /// without a key, or shared by instances with keys of their own).
     std::size_t meshOrdersComputed = 0;
     std::size_t intersectingTrianglePairs = 0;  ///< exact pairs found (0 with Settings::exactTriangles false)
     std::size_t draws = 0;
@@ -134,7 +135,7 @@ struct Stats {
     std::size_t gpuFallbacks = 0;
     std::size_t staticObjectsReused = 0;  ///< static meshes (Object::staticKey) whose checks and boxes were kept
     /// Keyed meshes whose transform changed since their last frame: their checks in their own frame were kept (and,
-    /// with GPU levels, their groups' boxes there), not their world boxes.
+    /// when GPU levels run the Auto pipeline, their groups' boxes there), not their world boxes.
     std::size_t movingObjectsReused = 0;
     std::string gpuError;
     std::size_t bytesUploaded = 0;
