@@ -5,6 +5,7 @@
 #include "PoolOrHere.h"
 
 #include <algorithm>
+#include <utility>
 
 namespace cullide {
 namespace {
@@ -67,8 +68,10 @@ std::size_t TriangleOrders::assign(const std::vector<Object>& objects, FrameStat
     struct Due {
         const TriangleMesh* mesh;
         Entry* entry;
+        std::vector<std::uint32_t> order;  ///< computed now
     };
     std::vector<Due> due;  // meshes ordered now, each once
+    std::vector<std::pair<std::uint32_t, const Entry*>> assigned;
     for (std::uint32_t o = 0; o < objects.size(); ++o) {
         if (!frame.isActiveMesh(o) || frame.order[o] != nullptr || !wanted(o)) continue;
         const Object& object = objects[o];
@@ -82,25 +85,33 @@ std::size_t TriangleOrders::assign(const std::vector<Object>& objects, FrameStat
             e.staticKey = object.staticKey;
             e.version = object.version;
             e.ready = false;  // until computed below
-            due.push_back({object.mesh, &e});
-            e.serial = ++m_computed;
+            due.push_back({object.mesh, &e, {}});
+            ++m_computed;
         }
         e.lastFrame = m_frame;
         frame.order[o] = &e.order;
-        frame.orderSerial[o] = e.serial;
+        assigned.emplace_back(o, &e);
     }
     // The source meshes: a transformed object's world copy has the same triangles, in the same order.
-    std::vector<Due> small;
-    for (const Due& d : due) {
-        if (d.mesh->triangles.size() < kSpreadTriangles)
-            small.push_back(d);
+    std::vector<std::size_t> small;
+    for (std::size_t i = 0; i < due.size(); ++i) {
+        if (due[i].mesh->triangles.size() < kSpreadTriangles)
+            small.push_back(i);
         else
-            spatialOrder(*d.mesh, d.entry->order, &pool);
+            spatialOrder(*due[i].mesh, due[i].order, &pool);
     }
     pool.parallelFor(small.size(), 1, [&](std::size_t begin, std::size_t end) {
-        for (std::size_t i = begin; i < end; ++i) spatialOrder(*small[i].mesh, small[i].entry->order);
+        for (std::size_t i = begin; i < end; ++i) spatialOrder(*due[small[i]].mesh, due[small[i]].order);
     });
-    for (const Due& d : due) d.entry->ready = true;
+    for (Due& d : due) {
+        // The same permutation again (a refresh of a mesh that did not change) keeps its serial, and what follows it.
+        if (d.order != d.entry->order) {
+            d.entry->order.swap(d.order);
+            d.entry->serial = ++m_serial;
+        }
+        d.entry->ready = true;
+    }
+    for (const auto& [o, e] : assigned) frame.orderSerial[o] = e->serial;
     return due.size();
 }
 

@@ -39,8 +39,8 @@ public:
     /// object's order is that of its mesh, which the transform does not change), and recomputed when its vertex or
     /// triangle count changes, or its version for the staticKey it was computed for; kRefreshFrames after it was
     /// computed for an unkeyed mesh, or for an instance with another key (instances with keys of their own share it
-    /// as unkeyed ones do). frame.orderSerial[o] tells one computation from another: what is derived from an order
-    /// holds while its serial does.
+    /// as unkeyed ones do). frame.orderSerial[o] tells one permutation from another (a computation that gives the
+    /// same one keeps its serial): what is derived from an order holds while its serial does.
     /// Returns how many orders it computed.
     std::size_t assign(const std::vector<Object>& objects, FrameState& frame,
                        const std::function<bool(std::uint32_t)>& wanted, TaskPool& pool);
@@ -56,7 +56,7 @@ private:
         std::uint64_t staticKey = 0;
         std::uint64_t version = 0;
         std::uint64_t dueFrame = 0;  ///< recomputed at this frame (meshes without staticKey)
-        std::uint64_t serial = 0;    ///< which computation `order` is (m_computed after it)
+        std::uint64_t serial = 0;    ///< which permutation `order` is: a new one whenever a computation changes it
         std::uint64_t lastFrame = 0;
         bool ready = false;
         std::vector<std::uint32_t> order;
@@ -66,6 +66,7 @@ private:
     std::unordered_map<const TriangleMesh*, Entry> m_entries;
     std::uint64_t m_frame = 0;
     std::uint64_t m_computed = 0;
+    std::uint64_t m_serial = 0;
 };
 
 }  // namespace cullide

@@ -139,8 +139,9 @@ TEST(TriangleOrders, RecomputedWhenTheMeshMayHaveChanged) {
 
 TEST(TriangleOrders, InstancesWithKeysOfTheirOwnShareTheOrderAsUnkeyedOnesDo) {
     // Two moving instances of one mesh, each keyed (the Bullet adapter keys every body), the first in the frame
-    // changing from frame to frame: the order is not recomputed for each, and each order has a serial of its own.
-    const TriangleMesh sphere = scenes::makeSphere(1.0, 20, 10);
+    // changing from frame to frame: the order is not recomputed for each, and a refresh that gives the same
+    // permutation keeps its serial (what follows the order, a static mesh's place on the device, stays).
+    TriangleMesh sphere = scenes::makeSphere(1.0, 20, 10);
     std::vector<Object> objects(2);
     objects[0].mesh = objects[1].mesh = &sphere;
     TaskPool pool(1);
@@ -156,7 +157,18 @@ TEST(TriangleOrders, InstancesWithKeysOfTheirOwnShareTheOrderAsUnkeyedOnesDo) {
     }
     EXPECT_LE(orders.computed(), 3u) << "recomputed for each instance in turn";
     EXPECT_GE(orders.computed(), 2u) << "an unkeyed use refreshes the order";
-    EXPECT_NE(frame.orderSerial[0], firstSerial);
+    EXPECT_NE(firstSerial, 0u);
+    EXPECT_EQ(frame.orderSerial[0], firstSerial) << "the same permutation under a new serial";
+
+    for (Vec3& v : sphere.vertices) v.x() += 0.5 * v.y() * v.y();  // bent in place: another permutation
+    objects[0].version = objects[1].version = 1;
+    const std::uint64_t before = orders.computed();
+    for (std::uint64_t f = 0; f < 2 * TriangleOrders::kRefreshFrames && orders.computed() == before; ++f)
+        nextFrame(orders, objects, frame, [](std::uint32_t) { return true; }, pool);
+    std::vector<std::uint32_t> bent;
+    spatialOrder(sphere, bent);
+    ASSERT_EQ(*frame.order[0], bent);
+    EXPECT_NE(frame.orderSerial[0], firstSerial) << "another permutation under the old serial";
 }
 
 TEST(TriangleOrders, AssignedTwiceInAFrameForDifferentMeshes) {
