@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <iterator>
-#include <utility>
 
 namespace cullide {
 namespace {
@@ -19,25 +18,17 @@ bool ownFrameHolds(const StaticEntry& e, const Object& o) {
            e.triangles == o.mesh->triangles.size() && e.transformed == (o.transform != nullptr);
 }
 
-/// What a moving mesh keeps: its own-frame part; its world part starts over. Its transform stays that of its
-/// validation until merge places it by this frame's (a frame that ends before then leaves the entry consistent).
-void keepOwnFrame(StaticEntry& e) {
-    StaticEntry kept;
-    kept.version = e.version;
-    kept.vertices = e.vertices;
-    kept.triangles = e.triangles;
-    kept.transformed = true;
-    kept.transform = e.transform;
-    kept.checked = e.checked;
-    kept.valid = e.valid;
-    kept.error = std::move(e.error);
-    kept.groupSize = e.groupSize;
-    kept.groupOrder = e.groupOrder;
-    kept.localGroupBoxes = std::move(e.localGroupBoxes);
-    e = std::move(kept);
-}
-
 }  // namespace
+
+void StaticEntry::dropWorldPart() {
+    boxesReady = false;
+    boxes = {};
+    treeReady = false;
+    tree = BoxTree{};
+    regionEpoch = 0;
+    regionOrder = 0;
+    regionBaseTriangle = 0;
+}
 
 void StaticMeshCache::lookUp(const std::vector<Object>& objects, StaticLookup& lookup) {
     ++m_frame;
@@ -64,7 +55,7 @@ void StaticMeshCache::lookUp(const std::vector<Object>& objects, StaticLookup& l
         // A mesh with a transform is static geometry once it keeps its transform from one frame to the next; until
         // then (first seen, or moved) only its own-frame part is kept: a moving body pays for no world part.
         if (o.transform != nullptr && (!own || !sameTransform(e, o.transform))) {
-            keepOwnFrame(e);
+            e.dropWorldPart();  // its transform stays that of its validation until merge places it by this frame's
             lookup.moving[i] = &e;
         } else {
             lookup.entry[i] = &e;

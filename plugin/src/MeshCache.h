@@ -42,6 +42,9 @@ struct StaticEntry {
     std::uint64_t regionEpoch = 0;  ///< == ResidentRegion::epoch(): its triangles are in the device's region
     std::uint64_t regionOrder = 0;  ///< the serial of the spatial order written with them (TriangleOrders)
     std::uint32_t regionBaseTriangle = 0;
+
+    /// A mesh that moved: its world part (boxes, tree, place in the region) starts over, its own-frame part stays.
+    void dropWorldPart();
 };
 
 /// The frame's view of the cache, per object.

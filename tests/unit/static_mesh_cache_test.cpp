@@ -143,6 +143,23 @@ TEST(StaticMeshCache, AKeyUsedTwiceInOneFrameIsCachedForTheFirstOnly) {
     EXPECT_EQ(cache.size(), 1u);
 }
 
+TEST(StaticMeshCache, AMovingKeyIsKeptWhileUsedAndCachedForItsFirstObjectOnly) {
+    const TriangleMesh a = makeBox(Vec3::Ones());
+    const TriangleMesh b = makeBox(Vec3::Constant(2.0));  // the same counts
+    Transform t, u;
+    StaticMeshCache cache;
+    const std::vector<Object> objects = {staticObject(a, 3, 1, &t), staticObject(b, 3, 1, &u)};
+    for (std::uint64_t frame = 0; frame < StaticMeshCache::kKeepFrames + 2; ++frame) {
+        t.translation[0] = u.translation[1] = static_cast<double>(frame);  // both move every frame
+        const StaticLookup lookup = lookUpAndCheck(cache, objects);
+        ASSERT_NE(lookup.moving[0], nullptr) << frame;
+        EXPECT_EQ(lookup.known[0], frame == 0 ? 0 : 1) << frame << ": dropped while in use";
+        EXPECT_EQ(lookup.moving[1], nullptr) << frame << ": the second object with the key";
+        EXPECT_EQ(lookup.entry[1], nullptr) << frame;
+    }
+    EXPECT_EQ(cache.size(), 1u);
+}
+
 TEST(StaticMeshCache, DropsEntriesUnusedForKeepFrames) {
     const TriangleMesh box = makeBox(Vec3::Ones());
     StaticMeshCache cache;
