@@ -92,8 +92,9 @@ bool prepareLocalGroupBoxes(StaticEntry& e, std::size_t triangles, std::uint32_t
 
 /// After the group pass: the own-frame group boxes computed in it hold for their order.
 void finishLocalGroupBoxes(const FrameState& frame, const TriangleScratch& scratch) {
-    for (std::uint32_t o = 0; o < scratch.computeLocalGroups.size(); ++o)
-        if (scratch.computeLocalGroups[o] == 2) frame.movingEntry(o)->groupOrder = frame.orderSerial[o];
+    for (std::uint32_t o = 0; o < scratch.groupBoxSource.size(); ++o)
+        if (scratch.groupBoxSource[o] == TriangleScratch::kLocalComputed)
+            frame.movingEntry(o)->groupOrder = frame.orderSerial[o];
 }
 
 /// A moving mesh's group box: the world box of its box in the mesh's own frame (computed now where `compute`), which
@@ -117,12 +118,15 @@ void buildGroups(FrameState& frame, std::uint32_t k, double margin, bool prepass
                  TriangleScratch& scratch, Stats& stats) {
     std::vector<Group>& candidates = frame.allGroups;
     candidates.clear();
-    scratch.computeLocalGroups.assign(frame.valid.size(), 0);
+    scratch.groupBoxSource.assign(frame.valid.size(), TriangleScratch::kOwnVertices);
     for (std::uint32_t o = 0; o < frame.valid.size(); ++o) {
         if (!frame.isActiveMesh(o)) continue;
         const auto n = static_cast<std::uint32_t>(frame.meshOf(o).triangles.size());
         StaticEntry* e = prepass ? frame.movingEntry(o) : nullptr;
-        if (e != nullptr) scratch.computeLocalGroups[o] = 1 + prepareLocalGroupBoxes(*e, n, k, frame.orderSerial[o]);
+        if (e != nullptr)
+            scratch.groupBoxSource[o] = prepareLocalGroupBoxes(*e, n, k, frame.orderSerial[o])
+                                            ? TriangleScratch::kLocalComputed
+                                            : TriangleScratch::kLocalKept;
         for (std::uint32_t first = 0; first < n; first += k) {
             const auto index = static_cast<std::uint32_t>(candidates.size());
             candidates.push_back({o, first, std::min(k, n - first), {}, index});
@@ -133,8 +137,8 @@ void buildGroups(FrameState& frame, std::uint32_t k, double margin, bool prepass
         for (std::size_t i = begin; i < end; ++i) {
             Group& g = candidates[i];
             const std::vector<std::uint32_t>& order = *frame.order[g.object];
-            if (const std::uint8_t moving = scratch.computeLocalGroups[g.object]; moving != 0) {
-                g.box = movingGroupBox(frame, g, k, moving == 2, 0.5 * margin);
+            if (const std::uint8_t source = scratch.groupBoxSource[g.object]; source != TriangleScratch::kOwnVertices) {
+                g.box = movingGroupBox(frame, g, k, source == TriangleScratch::kLocalComputed, 0.5 * margin);
             } else if (boxesOnDemand(frame, g.object)) {
                 g.box = groupBounds(frame.meshOf(g.object), order, g.first, g.count, 0.5 * margin);
             } else {

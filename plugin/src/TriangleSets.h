@@ -25,9 +25,10 @@ struct TriangleScratch {
     std::vector<std::vector<FrameTriangle>> taskTriangles;
     std::vector<Aabb> partnerUnion;
     std::vector<std::uint8_t> needBoxes;
-    /// Per object: 1 where its group boxes come from its own-frame ones (a moving mesh), 2 where those are computed
-    /// now.
-    std::vector<std::uint8_t> computeLocalGroups;
+    /// Per object, where its group boxes come from (buildGroups): its vertices or kept triangle boxes (kOwnVertices),
+    /// or a moving mesh's own-frame group boxes, kept (kLocalKept) or computed now (kLocalComputed).
+    enum GroupBoxSource : std::uint8_t { kOwnVertices, kLocalKept, kLocalComputed };
+    std::vector<std::uint8_t> groupBoxSource;
 };
 
 /// Sets frame.boxesOf for every active mesh and computes the triangle boxes of new static meshes; with GPU levels

@@ -2,6 +2,7 @@
 // frames and recomputes them when (key, version, counts) change; results always equal the reference culler's.
 #include "Compare.h"
 #include "GlTestSupport.h"
+#include "ReliableSettings.h"
 #include "TriangleOrders.h"
 #include "cullide/scenes/Procedural.h"
 
@@ -131,11 +132,7 @@ TEST(StaticCache, RejectedStaticMeshStaysRejectedInObjectOrder) {
 // as an instance with another key does, until that order is recomputed: the device's resident region, which holds a
 // static mesh's order with its triangles, then takes the mesh again.
 TEST(StaticCache, TheResidentRegionFollowsTheMeshsSpatialOrder) {
-    Settings settings;
-    settings.resolution = 64;
-    settings.gpuLevels = GpuLevels::Always;
-    settings.exactThreshold = 0;
-    CULLIDE_GPU_CULLER_OR_SKIP(culler, settings);
+    CULLIDE_GPU_CULLER_OR_SKIP(culler, reliable(64));
     TriangleMesh mesh = scenes::makeSphere(1.0, 48, 24);
     TriangleMesh partner = scenes::makeSphere(1.0, 32, 16);
     for (Vec3& v : partner.vertices) v += Vec3(1.3, 0.2, 0.1);
