@@ -79,8 +79,10 @@ void CullideEngine::run(const BenchFrame& frame, FrameOutput& out) {
                                 {"idle_iterations", l.idleIterations},
                                 {"blocking_read_backs", l.blockingReadBacks}, {"deferred", l.deferred},
                                 {"wait_ms", l.waitMs}};
-        if (l.gpuTimingValid) level["gpu_ms"] = l.gpuMs;
-        if (l.gpuTimingValid) level["exact_gpu_ms"] = l.exactGpuMs;
+        if (l.gpuTimingValid) {
+            level["gpu_ms"] = l.gpuMs;
+            level["exact_gpu_ms"] = l.exactGpuMs;
+        }
         out.levels.push_back(level);
     }
     for (const ObjectPair& p : m_result.pairs) {
